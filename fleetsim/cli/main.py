@@ -1,0 +1,107 @@
+"""Argument parsing and the error boundary of the ``fleetsim`` command.
+
+Commands live in :mod:`fleetsim.cli.commands`; here a user's mistake becomes a one-line located error and
+exit status 1, never a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+
+from fleetsim import __version__
+from fleetsim.cli import commands
+from fleetsim.enums import ConflictModel
+from fleetsim.errors import FleetsimError
+from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, ScenarioSettings
+
+__all__ = ["build_parser", "main"]
+
+_DEFAULTS = ScenarioSettings()
+
+
+def _positive(text: str) -> float:
+    value = float(text)
+    if not value > 0:
+        msg = f"must be > 0, got {text!r}"
+        raise argparse.ArgumentTypeError(msg)
+    return value
+
+
+def _non_negative(text: str) -> float:
+    value = float(text)
+    if not value >= 0:
+        msg = f"must be >= 0, got {text!r}"
+        raise argparse.ArgumentTypeError(msg)
+    return value
+
+
+def _add_layout_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--radius",
+        type=_non_negative,
+        default=DEFAULT_VEHICLE_TYPE.swept_radius,
+        help="vehicle circle radius in metres for conflicts (default: %(default).3f, the default "
+        "vehicle type's half diagonal)",
+    )
+    parser.add_argument("--safety-margin", type=_non_negative, default=_DEFAULTS.safety_margin, help="metres (default: %(default)s)")
+    parser.add_argument(
+        "--conflict-model",
+        choices=[m.value for m in ConflictModel],
+        default=_DEFAULTS.conflict_model.value,
+        help="swept circles or the thesis's bounding boxes (default: %(default)s)",
+    )
+    parser.add_argument(
+        "--connection-tolerance", type=_positive, default=_DEFAULTS.connection_tolerance, help="metres (default: %(default)s)"
+    )
+    parser.add_argument(
+        "--joint-angle-tolerance", type=_positive, default=_DEFAULTS.joint_angle_tolerance, help="degrees (default: %(default)s)"
+    )
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="fleetsim",
+        description="Check fleet route planners against scenarios drawn in Tiled.",
+    )
+    parser.add_argument("--version", action="version", version=f"fleetsim {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    validate = sub.add_parser("validate", help="load suites completely and print layout lint", description=commands.validate.__doc__)
+    validate.add_argument("suites", nargs="+", metavar="SUITE", help="*.fleetsim.yaml files or folders holding them")
+    validate.set_defaults(run=commands.validate)
+
+    inspect = sub.add_parser("inspect", help="segments, connections and conflicts of a map", description=commands.inspect.__doc__)
+    inspect.add_argument("map", metavar="MAP", help="a Tiled map (.json, .tmj or .tmx)")
+    inspect.add_argument("--json", action="store_true", help="print one JSON document instead of text")
+    _add_layout_options(inspect)
+    inspect.set_defaults(run=commands.inspect)
+
+    render = sub.add_parser("render", help="draw a map as SVG", description=commands.render.__doc__)
+    render.add_argument("map", metavar="MAP", help="a Tiled map (.json, .tmj or .tmx)")
+    render.add_argument("-o", "--output", required=True, metavar="OUT.svg", help="where to write the picture")
+    render.add_argument(
+        "--highlight", type=int, metavar="ID", help="draw this segment yellow, its successors green, its conflicts grey"
+    )
+    _add_layout_options(render)
+    render.set_defaults(run=commands.render)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return int(args.run(args))
+    except FleetsimError as error:
+        print(f"fleetsim: error: {error}", file=sys.stderr)
+        return 1
+    except OSError as error:
+        print(f"fleetsim: error: {error.filename}: {error.strerror}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        return 130
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

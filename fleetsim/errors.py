@@ -1,0 +1,72 @@
+"""One error hierarchy for everything fleetsim rejects.
+
+Every error says *where* (file, line, column or field, object id) and *what* is wrong, showing the
+offending value's repr. Each class also subclasses the builtin it resembles so callers may catch either.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+__all__ = [
+    "FleetsimError",
+    "LayoutError",
+    "LoadError",
+    "Location",
+    "MapError",
+    "ScenarioFileError",
+    "SuiteError",
+]
+
+
+@dataclass(frozen=True, slots=True)
+class Location:
+    """A place in a user's file: ``path[:line[:column]]`` plus the field or object concerned."""
+
+    path: Path | str
+    line: int | None = None
+    column: int | None = None
+    field: str | None = None
+    object_id: int | None = None
+
+    def __str__(self) -> str:
+        text = str(self.path)
+        if self.line is not None:
+            text += f":{self.line}"
+            if self.column is not None:
+                text += f":{self.column}"
+        if self.object_id is not None:
+            text += f": object {self.object_id}"
+        if self.field is not None:
+            text += f": field {self.field!r}"
+        return text
+
+
+class FleetsimError(Exception):
+    """Root of every error fleetsim raises about user input or a run."""
+
+
+class LoadError(FleetsimError, ValueError):
+    """A file could not be loaded; ``location`` says where and ``problem`` says what is wrong."""
+
+    def __init__(self, problem: str, location: Location | None = None) -> None:
+        self.problem = problem
+        self.location = location
+        super().__init__(f"{location}: {problem}" if location is not None else problem)
+
+
+class MapError(LoadError):
+    """A Tiled map (or one of its templates) is unusable."""
+
+
+class ScenarioFileError(LoadError):
+    """``vehicles.csv`` or ``tasks.csv`` is malformed or refers to something that does not exist."""
+
+
+class SuiteError(LoadError):
+    """A ``*.fleetsim.yaml`` suite is malformed or violates the suite schema."""
+
+
+class LayoutError(FleetsimError, ValueError):
+    """Segments cannot form a layout (for example two segments share an id)."""

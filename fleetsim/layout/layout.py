@@ -1,0 +1,185 @@
+"""The immutable layout planners receive: segments, connections, state graph and conflicts (SPEC §4).
+
+Build one with :func:`build_layout`. Everything a planner can reach is read-only: the segment mapping is a
+``MappingProxyType``, the graph is ``networkx.freeze``-d and query results are tuples and frozensets.
+
+Asking about a segment id the layout does not have raises :class:`~fleetsim.errors.LayoutError` (a
+``ValueError``) naming the id, not ``KeyError``: an unknown id is a bad argument from a planner, and the
+message says which id and how many segments exist.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import defaultdict
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from types import MappingProxyType
+
+import networkx as nx
+
+from fleetsim.enums import ConflictModel, JointKind, Traverse
+from fleetsim.errors import LayoutError
+from fleetsim.layout.conflicts import conflict_sets
+from fleetsim.layout.connections import Connection, find_connections, traverse_rank
+from fleetsim.layout.lint import LintFinding, lint_layout
+from fleetsim.layout.segment import Segment
+
+__all__ = ["Connection", "Layout", "Step", "build_layout"]
+
+Step = tuple[int, Traverse, JointKind]  # (next or previous segment, its traverse, joint kind)
+StepIndex = Mapping[tuple[int, int], tuple[Step, ...]]
+
+
+@dataclass(frozen=True, slots=True, eq=False, repr=False)
+class Layout:
+    """Segments, how they connect and which of them conflict; built by :func:`build_layout`."""
+
+    segments: Mapping[int, Segment]
+    connections: tuple[Connection, ...]
+    graph: nx.DiGraph
+    connection_tolerance: float
+    joint_angle_tolerance: float
+    vehicle_radius: float
+    safety_margin: float
+    conflict_model: ConflictModel
+    source: Path | None
+    _successors: StepIndex
+    _predecessors: StepIndex
+    _conflicts: Mapping[int, frozenset[int]]
+
+    def __repr__(self) -> str:
+        where = f", source={str(self.source)!r}" if self.source is not None else ""
+        return f"Layout({len(self.segments)} segments, {len(self.connections)} connections{where})"
+
+    def _require(self, segment: int) -> None:
+        if segment not in self.segments:
+            where = f" of {self.source}" if self.source is not None else ""
+            msg = f"segment={segment!r} is not in the layout{where} ({len(self.segments)} segments)"
+            raise LayoutError(msg)
+
+    def successors(self, segment: int, traverse: Traverse) -> tuple[Step, ...]:
+        """Where a vehicle driving ``segment`` with ``traverse`` may go next, with the joint kind.
+
+        A traverse the segment does not allow has no successors (empty tuple).
+        """
+        self._require(segment)
+        return self._successors.get((segment, traverse_rank(Traverse(traverse))), ())
+
+    def predecessors(self, segment: int, traverse: Traverse) -> tuple[Step, ...]:
+        """The states from which a vehicle may enter ``segment`` driving ``traverse``."""
+        self._require(segment)
+        return self._predecessors.get((segment, traverse_rank(Traverse(traverse))), ())
+
+    def conflicts(self, segment: int) -> frozenset[int]:
+        """Segments a vehicle on ``segment`` could collide with, ``segment`` itself included."""
+        self._require(segment)
+        return self._conflicts[segment]
+
+    def lint(self) -> tuple[LintFinding, ...]:
+        """Warnings about the map's drawing (dangling ends, near misses, ...); see :mod:`.lint`."""
+        return lint_layout(self)
+
+
+def _check_setting(name: str, value: float, *, upper: float | None = None) -> float:
+    value = float(value)
+    if upper is None and not (math.isfinite(value) and value >= 0.0):
+        msg = f"{name}={value!r} must be a finite number >= 0"
+        raise LayoutError(msg)
+    if upper is not None and not (0.0 < value < upper):
+        msg = f"{name}={value!r} must be between 0 and {upper:g} degrees (exclusive)"
+        raise LayoutError(msg)
+    return value
+
+
+def _check_model(model: ConflictModel | str) -> ConflictModel:
+    try:
+        return ConflictModel(model)
+    except ValueError:
+        choices = ", ".join(m.value for m in ConflictModel)
+        msg = f"conflict_model={model!r} must be one of {choices}"
+        raise LayoutError(msg) from None
+
+
+def _sorted_segments(segments: Iterable[Segment], source: Path | None) -> dict[int, Segment]:
+    by_id: dict[int, Segment] = {}
+    where = f" in {source}" if source is not None else ""
+    for segment in segments:
+        if segment.id in by_id:
+            msg = f"duplicate segment id {segment.id!r}{where}: segment ids must be unique"
+            raise LayoutError(msg)
+        if not all(math.isfinite(c) for point in segment.waypoints for c in point):
+            msg = f"segment {segment.id!r}{where} has a non-finite waypoint: {segment.waypoints!r}"
+            raise LayoutError(msg)
+        by_id[segment.id] = segment
+    return {sid: by_id[sid] for sid in sorted(by_id)}
+
+
+def _state_graph(segments: Mapping[int, Segment], connections: tuple[Connection, ...]) -> nx.DiGraph:
+    graph = nx.DiGraph()
+    graph.add_nodes_from((sid, t) for sid, segment in segments.items() for t in Traverse if segment.allows(t))
+    graph.add_edges_from(
+        ((c.from_segment, c.from_traverse), (c.to_segment, c.to_traverse), {"joint": c.joint})
+        for c in connections
+    )
+    return nx.freeze(graph)
+
+
+def _step_index(connections: tuple[Connection, ...]) -> tuple[StepIndex, StepIndex]:
+    """Successor and predecessor tuples per state, keyed by ``(segment, traverse_rank)``.
+
+    Integer keys because hashing a ``Traverse`` runs Python code, and maps hold 10,000+ segments.
+    ``connections`` are sorted by (from state, to state), so each tuple comes out sorted as well.
+    """
+    forward: defaultdict[tuple[int, int], list[Step]] = defaultdict(list)
+    backward: defaultdict[tuple[int, int], list[Step]] = defaultdict(list)
+    for c in connections:
+        from_key = (c.from_segment, traverse_rank(c.from_traverse))
+        to_key = (c.to_segment, traverse_rank(c.to_traverse))
+        forward[from_key].append((c.to_segment, c.to_traverse, c.joint))
+        backward[to_key].append((c.from_segment, c.from_traverse, c.joint))
+    return (
+        MappingProxyType({key: tuple(steps) for key, steps in forward.items()}),
+        MappingProxyType({key: tuple(steps) for key, steps in backward.items()}),
+    )
+
+
+def build_layout(
+    segments: Iterable[Segment],
+    *,
+    vehicle_radius: float,
+    connection_tolerance: float = 0.05,
+    joint_angle_tolerance: float = 30.0,
+    safety_margin: float = 0.0,
+    conflict_model: ConflictModel = ConflictModel.SWEPT,
+    source: Path | None = None,
+) -> Layout:
+    """Connect the segments, build the state graph and compute conflicts.
+
+    ``vehicle_radius`` is the largest swept radius over the scenario's vehicle types. Raises
+    :class:`~fleetsim.errors.LayoutError` for duplicate segment ids or invalid settings.
+    """
+    radius = _check_setting("vehicle_radius", vehicle_radius)
+    tolerance = _check_setting("connection_tolerance", connection_tolerance)
+    angle = _check_setting("joint_angle_tolerance", joint_angle_tolerance, upper=90.0)
+    margin = _check_setting("safety_margin", safety_margin)
+    model = _check_model(conflict_model)
+    by_id = _sorted_segments(segments, source)
+    ordered = tuple(by_id.values())
+    connections = find_connections(ordered, tolerance, angle)
+    successors, predecessors = _step_index(connections)
+    return Layout(
+        segments=MappingProxyType(by_id),
+        connections=connections,
+        graph=_state_graph(by_id, connections),
+        connection_tolerance=tolerance,
+        joint_angle_tolerance=angle,
+        vehicle_radius=radius,
+        safety_margin=margin,
+        conflict_model=model,
+        source=source,
+        _successors=successors,
+        _predecessors=predecessors,
+        _conflicts=MappingProxyType(conflict_sets(ordered, model, radius, margin, tolerance)),
+    )

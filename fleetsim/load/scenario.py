@@ -1,0 +1,191 @@
+"""Assembling a complete :class:`~fleetsim.scenario.Scenario`: map, vehicles, layout, tasks, checks.
+
+The order is forced by the data: the vehicle rows are checked against the map's segments, the layout's
+conflict radius depends on the vehicle types those rows use, and the start-conflict check needs the
+layout. Nothing is returned half loaded: either a whole scenario or one located error.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+from types import MappingProxyType
+
+from fleetsim.enums import ConflictModel
+from fleetsim.errors import Location, ScenarioFileError, SuiteError
+from fleetsim.layout.layout import Layout, build_layout
+from fleetsim.load.scenario_files import (
+    MAP_FILE_NAMES,
+    TASKS_FILE_NAME,
+    VEHICLES_FILE_NAME,
+    map_candidates,
+    read_tasks,
+    read_vehicles_with_lines,
+)
+from fleetsim.load.suite import ScenarioSpec, Suite
+from fleetsim.load.tiled import load_map
+from fleetsim.scenario import (
+    DEFAULT_VEHICLE_TYPE,
+    Expectations,
+    Scenario,
+    ScenarioSettings,
+    Vehicle,
+    VehicleType,
+)
+
+__all__ = ["default_vehicle_type", "load_scenario", "load_scenario_dir"]
+
+
+def load_scenario(spec: ScenarioSpec, suite: Suite) -> Scenario:
+    """Load the files of one suite entry into a complete scenario."""
+    return _assemble(
+        spec.name,
+        (spec.map_path, spec.vehicles_path, spec.tasks_path),
+        suite.vehicle_types,
+        spec.settings,
+        spec.expect,
+        Location(spec.suite_path, line=spec.line),
+    )
+
+
+def load_scenario_dir(
+    directory: Path | str,
+    *,
+    vehicle_types: Mapping[str, VehicleType] | None = None,
+    settings: ScenarioSettings | None = None,
+) -> Scenario:
+    """Load a scenario folder (map.json|map.tmj|map.tmx, vehicles.csv, tasks.csv) without a suite.
+
+    The scenario is named after the folder. Without ``vehicle_types`` every vehicle is the built-in
+    default type; expectations are the defaults (all tasks, no collisions, no rejections).
+    """
+    directory = Path(directory)
+    if not directory.is_dir():
+        raise ScenarioFileError("no such directory", Location(directory))
+    candidates = map_candidates(directory)
+    if len(candidates) != 1:
+        found = " and ".join(c.name for c in candidates) if candidates else "none"
+        msg = f"a scenario folder needs exactly one of {', '.join(MAP_FILE_NAMES)}; found {found}"
+        raise ScenarioFileError(msg, Location(directory))
+    types = dict(vehicle_types) if vehicle_types else {DEFAULT_VEHICLE_TYPE.name: DEFAULT_VEHICLE_TYPE}
+    return _assemble(
+        directory.resolve().name,
+        (candidates[0], directory / VEHICLES_FILE_NAME, directory / TASKS_FILE_NAME),
+        MappingProxyType(types),
+        settings if settings is not None else ScenarioSettings(),
+        Expectations(),
+        Location(directory),
+    )
+
+
+def default_vehicle_type(
+    vehicle_types: Mapping[str, VehicleType], settings: ScenarioSettings, where: Location | None = None
+) -> VehicleType | None:
+    """The type of vehicles whose row names none: ``settings.vehicle_type``, else the only type, else None."""
+    if settings.vehicle_type is None:
+        return next(iter(vehicle_types.values())) if len(vehicle_types) == 1 else None
+    for name, vehicle_type in vehicle_types.items():
+        if name.casefold() == settings.vehicle_type.casefold():
+            return vehicle_type
+    known = ", ".join(vehicle_types)
+    msg = f"vehicle_type={settings.vehicle_type!r} is not one of the vehicle types ({known})"
+    raise ScenarioFileError(msg, where)
+
+
+def _assemble(
+    name: str,
+    paths: tuple[Path, Path, Path],
+    vehicle_types: Mapping[str, VehicleType],
+    settings: ScenarioSettings,
+    expect: Expectations,
+    origin: Location,
+) -> Scenario:
+    map_path, vehicles_path, tasks_path = paths
+    tiled = load_map(map_path)
+    segments = {segment.id: segment for segment in tiled.segments}
+    default_type = default_vehicle_type(vehicle_types, settings, origin)
+    located = read_vehicles_with_lines(
+        vehicles_path, segments, vehicle_types, default_type, map_name=map_path.name
+    )
+    vehicles = tuple(vehicle for vehicle, _ in located)
+    layout = build_layout(
+        tiled.segments,
+        vehicle_radius=_vehicle_radius(vehicles, default_type, vehicle_types, settings.conflict_model),
+        connection_tolerance=settings.connection_tolerance,
+        joint_angle_tolerance=settings.joint_angle_tolerance,
+        safety_margin=settings.safety_margin,
+        conflict_model=settings.conflict_model,
+        source=map_path,
+    )
+    tasks = read_tasks(
+        tasks_path, segments, vehicles, map_name=map_path.name, vehicles_name=vehicles_path.name
+    )
+    if not settings.allow_start_conflicts:
+        _reject_start_conflicts(located, layout, vehicles_path)
+    _check_expected_collisions(name, expect, layout, map_path, origin)
+    return Scenario(
+        name=name,
+        layout=layout,
+        vehicle_types=vehicle_types,
+        vehicles=vehicles,
+        tasks=tasks,
+        settings=settings,
+        expect=expect,
+        map_path=map_path,
+        vehicles_path=vehicles_path,
+        tasks_path=tasks_path,
+    )
+
+
+def _vehicle_radius(
+    vehicles: tuple[Vehicle, ...],
+    default_type: VehicleType | None,
+    vehicle_types: Mapping[str, VehicleType],
+    model: ConflictModel,
+) -> float:
+    """The conflict radius: the largest over the types this scenario's vehicles use.
+
+    With no vehicles the default type counts; with no default either, every type of the suite (a
+    conflict set that is too large is safer than one that is too small).
+    """
+    used = [vehicle.type for vehicle in vehicles]
+    if not used:
+        used = [default_type] if default_type is not None else list(vehicle_types.values())
+    if not used:
+        used = [DEFAULT_VEHICLE_TYPE]
+    if model is ConflictModel.BBOX:
+        return max(vehicle_type.bbox_radius for vehicle_type in used)
+    return max(vehicle_type.swept_radius for vehicle_type in used)
+
+
+def _reject_start_conflicts(
+    located: tuple[tuple[Vehicle, int], ...], layout: Layout, vehicles_path: Path
+) -> None:
+    """Two vehicles may not start on conflicting segments: their very first plans would collide."""
+    placed: dict[int, tuple[Vehicle, int]] = {}  # start segment → first vehicle on it, with its line
+    for vehicle, line in located:
+        hits = [placed[segment] for segment in layout.conflicts(vehicle.start_segment) if segment in placed]
+        if hits:
+            other, other_line = min(hits, key=lambda hit: hit[1])
+            msg = (
+                f"vehicles {other.id} (line {other_line}, segment {other.start_segment}) and "
+                f"{vehicle.id} (line {line}, segment {vehicle.start_segment}) start on conflicting "
+                "segments; move one, or set allow_start_conflicts: true for this scenario"
+            )
+            raise ScenarioFileError(msg, Location(vehicles_path, line=line, field="start_segment_id"))
+        placed.setdefault(vehicle.start_segment, (vehicle, line))
+
+
+def _check_expected_collisions(
+    name: str, expect: Expectations, layout: Layout, map_path: Path, origin: Location
+) -> None:
+    # A typo in expect.collisions would make the scenario impossible to pass, for a confusing reason.
+    if isinstance(expect.collisions, str):
+        return
+    unknown = [segment for segment in expect.collisions if segment not in layout.segments]
+    if unknown:
+        msg = (
+            f"scenario {name!r}: expect.collisions names segment {unknown[0]}, "
+            f"which is not in {map_path.name}"
+        )
+        raise SuiteError(msg, origin)

@@ -1,0 +1,170 @@
+"""Checking suite data against ``suite.schema.json`` and saying what is wrong in a user's words.
+
+jsonschema's own messages talk about schemas ("is not valid under any of the given schemas"); a suite
+author wants the key, the bad value and what would be accepted, at the line and column of the value.
+"""
+
+from __future__ import annotations
+
+import functools
+import importlib.resources
+import json
+import math
+from collections.abc import Hashable, Iterable, Sequence
+from typing import Any
+
+from jsonschema import Draft202012Validator
+from jsonschema.exceptions import ValidationError, best_match
+
+from fleetsim.errors import Location, SuiteError
+from fleetsim.load.scenario_files import did_you_mean
+from fleetsim.load.yaml_source import Locate
+
+__all__ = ["check_against_schema", "dotted_path", "suite_error", "suite_schema"]
+
+_KINDS = {
+    "object": "a mapping",
+    "array": "a list",
+    "string": "a string",
+    "number": "a number",
+    "integer": "a whole number",
+    "boolean": "true or false",
+    "null": "empty",
+}
+_BOUNDS = {"minimum": ">=", "exclusiveMinimum": ">", "maximum": "<=", "exclusiveMaximum": "<"}
+_ALTERNATIVES = ("oneOf", "anyOf")
+
+
+@functools.cache
+def suite_schema() -> dict[str, Any]:
+    """The suite JSON Schema shipped inside the package."""
+    text = (importlib.resources.files("fleetsim") / "schemas" / "suite.schema.json").read_text("utf-8")
+    schema: dict[str, Any] = json.loads(text)
+    return schema
+
+
+@functools.cache
+def _validator() -> Draft202012Validator:
+    return Draft202012Validator(suite_schema())
+
+
+def check_against_schema(data: Any, locate: Locate) -> None:
+    """Raise one :class:`SuiteError` for the most relevant schema violation in ``data``, if any."""
+    _reject_non_finite(data, (), locate)
+    error = _most_relevant(_validator().iter_errors(data), locate)
+    if error is None:
+        return
+    path: tuple[Hashable, ...] = tuple(error.absolute_path)
+    problem, key = _describe(error)
+    if "propertyNames" in error.absolute_schema_path:  # the error is about a key of this mapping
+        key = error.instance
+    where = locate(path) if key is None else locate((*path, key), key=True)
+    raise suite_error(problem, path, where)
+
+
+def _most_relevant(errors: Iterable[ValidationError], locate: Locate) -> ValidationError | None:
+    """The one error to report.
+
+    Like best_match's own choice (shallow errors first, oneOf/anyOf last), but ties go to the error
+    earliest in the file rather than the last sibling, so a mistake repeated in every scenario is
+    reported at its first occurrence.
+    """
+
+    def position(error: ValidationError) -> tuple[int, int]:
+        location = locate(tuple(error.absolute_path))
+        return (location.line or 0, location.column or 0)
+
+    in_file_order = sorted(errors, key=position)
+    top = max(in_file_order, key=lambda e: (-len(e.path), e.validator not in _ALTERNATIVES), default=None)
+    if top is None:
+        return None
+    error: ValidationError = best_match([top])  # descends into oneOf/anyOf to the branch that fits best
+    # When that branch's error is about the same value, "is not one of A, B or C" (every alternative)
+    # says more than why branch B failed.
+    while error.parent is not None and error.parent.validator in _ALTERNATIVES and not error.relative_path:
+        error = error.parent
+    return error
+
+
+def suite_error(problem: str, path: Sequence[Hashable], where: Location) -> SuiteError:
+    """``scenarios[1].expect.tasks: <problem>`` located at ``where``."""
+    dotted = dotted_path(path)
+    return SuiteError(f"{dotted}: {problem}" if dotted else problem, where)
+
+
+def dotted_path(path: Sequence[Hashable]) -> str:
+    """``scenarios[1].expect.collisions`` for ("scenarios", 1, "expect", "collisions")."""
+    text = ""
+    for step in path:
+        text += f"[{step}]" if isinstance(step, int) else f".{step}" if text else str(step)
+    return text
+
+
+def _reject_non_finite(value: Any, path: tuple[Hashable, ...], locate: Locate) -> None:
+    # Schema bounds cannot catch .nan (every comparison with it is false), so check first.
+    if isinstance(value, float) and not math.isfinite(value):
+        raise suite_error(f"{value!r} is not a finite number", path, locate(path))
+    if isinstance(value, (dict, list)):
+        for key, child in value.items() if isinstance(value, dict) else enumerate(value):
+            _reject_non_finite(child, (*path, key), locate)
+
+
+def _show(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _either(choices: Sequence[str]) -> str:
+    return choices[0] if len(choices) == 1 else f"{', '.join(choices[:-1])} or {choices[-1]}"
+
+
+def _kind_of(value: Any) -> str:
+    for kind, python_type in (("boolean", bool), ("integer", int), ("number", float), ("string", str)):
+        if isinstance(value, python_type):
+            return _KINDS[kind]
+    if isinstance(value, dict):
+        return _KINDS["object"]
+    return _KINDS["array"] if isinstance(value, list) else _KINDS["null"]
+
+
+def _alternatives(schemas: Sequence[dict[str, Any]]) -> str:
+    values = [repr(v) for schema in schemas for v in schema.get("enum", ())]
+    titles = [schema["title"] for schema in schemas if "title" in schema]
+    return ("one of " if values else "") + _either(values + titles)
+
+
+def _describe(error: ValidationError) -> tuple[str, Hashable | None]:
+    """(problem text, the key of ``error.instance`` it is about, if it is about a key)."""
+    value, rule, schema = error.instance, error.validator_value, error.schema
+    title = schema.get("title") if isinstance(schema, dict) else None
+    kind = error.validator
+    if kind == "required":
+        missing = next(key for key in rule if key not in value)
+        if "then" in error.relative_schema_path:
+            return f"give 'dir', or all of 'map', 'vehicles' and 'tasks' ({missing!r} is missing)", None
+        return f"missing required key {missing!r}", None
+    if kind == "additionalProperties":
+        known = list(schema.get("properties", {}))
+        extra = next(key for key in value if key not in known)
+        return f"unknown key {extra!r}{did_you_mean(str(extra), known)}", extra
+    if kind in _ALTERNATIVES:
+        return f"{_show(value)} is not {_alternatives(rule)}", None
+    if kind == "enum":
+        return f"{_show(value)} is not {_alternatives([schema])}", None
+    if kind == "const":
+        return f"{_show(value)} must be {title or repr(rule)}", None
+    if kind == "type":
+        expected = _either([_KINDS[t] for t in ([rule] if isinstance(rule, str) else rule)])
+        return f"{_show(value)} is not {expected} (it is {_kind_of(value)})", None
+    if kind in _BOUNDS:
+        return f"{_show(value)} must be {_BOUNDS[kind]} {rule}", None
+    if kind in ("minItems", "minProperties", "minLength") and rule == 1:
+        return "must not be empty", None
+    if kind == "uniqueItems":
+        repeated = next(item for index, item in enumerate(value) if item in value[:index])
+        return f"lists {_show(repeated)} more than once", None
+    if kind == "pattern":
+        return f"{_show(value)} is not {title or f'matching {rule!r}'}", None
+    if kind == "not":
+        return f"{_show(value)} must not be {rule.get('title', 'this value')}", None
+    return error.message, None

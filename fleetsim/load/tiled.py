@@ -1,0 +1,326 @@
+"""Load a driving map drawn in Tiled (TMX or JSON) into segments in world metres (SPEC §3).
+
+Parsed by hand with :mod:`json` and :mod:`xml.etree` because the available Tiled parsers mishandle object
+templates. The pipeline: read the document → walk (nested) object layers summing offsets → resolve each
+object against its template → keep visible polylines whose class is a shape → transform to the world
+frame (origin at the map centre, y up, so RViz shows what Tiled shows).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import xml.etree.ElementTree as ET
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+from fleetsim.enums import Direction, Shape
+from fleetsim.errors import Location, MapError
+from fleetsim.layout.segment import Point, Segment
+from fleetsim.load.tiled_templates import (
+    ObjectFields,
+    PropertyValue,
+    TemplateCache,
+    as_bool,
+    as_int,
+    as_number,
+    json_properties,
+    parse_json,
+    parse_xml,
+    read_json_object,
+    read_text,
+    read_xml_object,
+    xml_properties,
+)
+
+__all__ = ["MAP_SUFFIXES", "TiledMap", "load_map", "parse_direction", "parse_shape"]
+
+MAP_SUFFIXES = (".json", ".tmj", ".tmx")
+
+_SHAPES = {"straight": Shape.STRAIGHT, "curve": Shape.CURVE, "s_curve": Shape.S_CURVE,
+           "scurve": Shape.S_CURVE}
+_DIRECTIONS = {"both": Direction.BOTH, "bidirectional": Direction.BOTH, "two_way": Direction.BOTH,
+               "forward": Direction.FORWARD, "backward": Direction.BACKWARD}
+# The order of the values of the `direction` enum in fleetsim.tiled-project (int storage = index).
+_DIRECTION_ENUM = (Direction.BOTH, Direction.FORWARD, Direction.BACKWARD)
+
+
+@dataclass(frozen=True, slots=True)
+class TiledMap:
+    """A loaded map: its segments (sorted by id, world metres) and what the loader had to say."""
+
+    path: Path
+    segments: tuple[Segment, ...]
+    meters_per_pixel: float
+    width_px: float
+    height_px: float
+    warnings: tuple[str, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class _Header:
+    """The map-level facts the world transform needs."""
+
+    width_px: float
+    height_px: float
+    meters_per_pixel: float
+
+
+@dataclass(frozen=True, slots=True)
+class _Placed:
+    """An object as read from its layer, with the summed offsets of the layers around it."""
+
+    fields: ObjectFields
+    offset: Point
+    layer: str  # "group/layer", for messages
+    index: int  # position within its layer, for messages about objects without an id
+
+
+def _word(text: str) -> str:
+    return text.strip().lower().replace("-", "_")
+
+
+def parse_shape(shape_class: str) -> Shape | None:
+    """The shape a Tiled class names (case-insensitive, ``scurve``/``s-curve`` too), else ``None``."""
+    return _SHAPES.get(_word(shape_class))
+
+
+def parse_direction(raw: PropertyValue, where: Location) -> Direction:
+    """A ``direction`` property value: a name (or alias), or an index into the Tiled enum."""
+    if raw is None:
+        return Direction.BOTH
+    if isinstance(raw, int) and not isinstance(raw, bool):
+        if 0 <= raw < len(_DIRECTION_ENUM):
+            return _DIRECTION_ENUM[raw]
+        msg = f"direction={raw!r} must be an enum index 0, 1 or 2 (both, forward, backward)"
+        raise MapError(msg, where)
+    direction = _DIRECTIONS.get(_word(raw)) if isinstance(raw, str) else None
+    if direction is not None:
+        return direction
+    msg = f"unknown direction {raw!r} (expected both, forward or backward)"
+    raise MapError(msg, where)
+
+
+def load_map(path: str | os.PathLike[str]) -> TiledMap:
+    """Load a Tiled map; every problem with the file is a :class:`~fleetsim.errors.MapError`."""
+    map_path = Path(path)
+    suffix = map_path.suffix.lower()
+    if suffix not in MAP_SUFFIXES:
+        msg = f"suffix={map_path.suffix!r} must be one of {', '.join(MAP_SUFFIXES)}"
+        raise MapError(msg, Location(map_path))
+    text = read_text(map_path, Location(map_path))
+    if suffix == ".tmx":
+        header, placed = _read_tmx(text, map_path)
+    else:
+        header, placed = _read_json(text, map_path)
+    segments, warnings = _segments(placed, header, map_path)
+    return TiledMap(
+        path=map_path,
+        segments=segments,
+        meters_per_pixel=header.meters_per_pixel,
+        width_px=header.width_px,
+        height_px=header.height_px,
+        warnings=warnings,
+    )
+
+
+# --- map header ----------------------------------------------------------------------------------
+
+
+def _positive_int(raw: object, name: str, where: Location) -> int:
+    if raw is None:
+        raise MapError(f"map attribute {name!r} is missing", where)
+    value = as_int(raw, name, where)
+    if value <= 0:
+        raise MapError(f"{name}={raw!r} must be a positive integer", where)
+    return value
+
+
+def _header(attrs: Mapping[str, object], properties: Mapping[str, PropertyValue],
+            path: Path) -> _Header:
+    where = Location(path)
+    orientation = attrs.get("orientation")
+    if orientation != "orthogonal":
+        msg = f"orientation={orientation!r} must be 'orthogonal' (other orientations are not supported)"
+        raise MapError(msg, where)
+    infinite = attrs.get("infinite", False)
+    if as_bool(infinite, "infinite", where):
+        msg = f"infinite={infinite!r} must be false (infinite maps are not supported)"
+        raise MapError(msg, where)
+    width, height, tile_width, tile_height = (
+        _positive_int(attrs.get(name), name, where)
+        for name in ("width", "height", "tilewidth", "tileheight"))
+    scale = 1.0 / tile_width  # default: one tile is one metre
+    raw_scale = properties.get("meters_per_pixel")
+    if raw_scale is not None:
+        scale = as_number(raw_scale, "meters_per_pixel", where)
+        if scale <= 0:
+            raise MapError(f"meters_per_pixel={raw_scale!r} must be a positive number", where)
+    return _Header(float(width * tile_width), float(height * tile_height), scale)
+
+
+# --- documents -----------------------------------------------------------------------------------
+
+
+def _read_tmx(text: str, path: Path) -> tuple[_Header, list[_Placed]]:
+    root = parse_xml(text, path)
+    if root.tag != "map":
+        raise MapError(f"root element <{root.tag}> must be <map>", Location(path))
+    header = _header(root.attrib, xml_properties(root, Location(path)), path)
+    return header, list(_tmx_layers(root, (0.0, 0.0), "", path))
+
+
+def _layer_offset(attrs: Mapping[str, object], offset: Point, name: str,
+                  where: Location) -> Point:
+    dx = as_number(attrs.get("offsetx", 0), f"layer {name!r} offsetx", where)
+    dy = as_number(attrs.get("offsety", 0), f"layer {name!r} offsety", where)
+    return (offset[0] + dx, offset[1] + dy)
+
+
+def _tmx_layers(parent: ET.Element, offset: Point, prefix: str, path: Path) -> Iterator[_Placed]:
+    where = Location(path)
+    for layer in parent:
+        if layer.tag not in ("group", "objectgroup"):
+            continue  # tile and image layers carry no segments
+        name = prefix + layer.get("name", "")
+        if not as_bool(layer.get("visible", "1"), f"layer {name!r} visible", where):
+            continue
+        inner = _layer_offset(layer.attrib, offset, name, where)
+        if layer.tag == "group":
+            yield from _tmx_layers(layer, inner, name + "/", path)
+            continue
+        for index, element in enumerate(layer.findall("object")):
+            yield _Placed(read_xml_object(element, path), inner, name, index)
+
+
+def _read_json(text: str, path: Path) -> tuple[_Header, list[_Placed]]:
+    document = parse_json(text, path)
+    where = Location(path)
+    if not isinstance(document, dict):
+        raise MapError("a JSON map must be an object", where)
+    if document.get("type", "map") != "map":
+        raise MapError(f"type={document.get('type')!r} must be 'map'", where)
+    header = _header(document, json_properties(document.get("properties"), where), path)
+    return header, list(_json_layers(document, (0.0, 0.0), "", path))
+
+
+def _json_list(container: Mapping[str, object], key: str, where: Location) -> list[object]:
+    value = container.get(key, [])
+    if not isinstance(value, list):
+        raise MapError(f"{key}={value!r} must be a list", where)
+    return value
+
+
+def _json_layers(parent: Mapping[str, object], offset: Point, prefix: str,
+                 path: Path) -> Iterator[_Placed]:
+    where = Location(path)
+    for layer in _json_list(parent, "layers", where):
+        if not isinstance(layer, dict):
+            raise MapError(f"layer {layer!r} must be a JSON object", where)
+        kind = layer.get("type")
+        if kind not in ("group", "objectgroup"):
+            continue  # tile and image layers carry no segments
+        name = prefix + str(layer.get("name", ""))
+        if not as_bool(layer.get("visible", True), f"layer {name!r} visible", where):
+            continue
+        inner = _layer_offset(layer, offset, name, where)
+        if kind == "group":
+            yield from _json_layers(layer, inner, name + "/", path)
+            continue
+        for index, obj in enumerate(_json_list(layer, "objects", where)):
+            yield _Placed(read_json_object(obj, path), inner, name, index)
+
+
+# --- segments ------------------------------------------------------------------------------------
+
+
+def _describe(placed: _Placed) -> str:
+    return f"object #{placed.index + 1} in layer {placed.layer!r}"
+
+
+def _check_unique_ids(placed: list[_Placed], path: Path) -> None:
+    first_with: dict[int, _Placed] = {}
+    for item in placed:
+        object_id = item.fields.id
+        if object_id is None:
+            continue
+        if object_id in first_with:
+            msg = (f"id={object_id!r} is used by two objects ({_describe(first_with[object_id])} and "
+                   f"{_describe(item)}); object ids must be unique")
+            raise MapError(msg, Location(path, object_id=object_id))
+        first_with[object_id] = item
+
+
+def _world_points(polyline: tuple[Point, ...], fields: ObjectFields, offset: Point,
+                  header: _Header) -> tuple[Point, ...]:
+    """Rotate the polyline about the object's origin (clockwise on screen), shift, scale, flip y."""
+    x = (fields.x or 0.0) + offset[0]
+    y = (fields.y or 0.0) + offset[1]
+    cos, sin = _cos_sin(fields.rotation or 0.0)
+    half_w, half_h, s = header.width_px / 2, header.height_px / 2, header.meters_per_pixel
+    # In Tiled's y-down frame the usual rotation matrix turns clockwise on screen.
+    return tuple(((x + px * cos - py * sin - half_w) * s, (half_h - (y + px * sin + py * cos)) * s)
+                 for px, py in polyline)
+
+
+_QUARTER_TURNS = {0.0: (1.0, 0.0), 90.0: (0.0, 1.0), 180.0: (-1.0, 0.0), 270.0: (0.0, -1.0)}
+
+
+def _cos_sin(degrees: float) -> tuple[float, float]:
+    """Exact for quarter turns, so a rotated straight stays exactly axis-aligned."""
+    exact = _QUARTER_TURNS.get(degrees % 360.0)
+    if exact is not None:
+        return exact
+    radians = math.radians(degrees)
+    return math.cos(radians), math.sin(radians)
+
+
+def _segment(fields: ObjectFields, shape: Shape, placed: _Placed, header: _Header,
+             path: Path) -> Segment:
+    if fields.id is None:
+        raise MapError(f"{_describe(placed)} is a {shape.value} polyline without an id", Location(path))
+    where = Location(path, object_id=fields.id)
+    if fields.id <= 0:
+        raise MapError(f"id={fields.id!r} must be a positive integer", where)
+    polyline = fields.polyline or ()
+    if len(polyline) < 2:
+        msg = f"polyline has {len(polyline)} point(s); a segment needs at least 2"
+        raise MapError(msg, where)
+    if polyline.count(polyline[0]) == len(polyline):
+        msg = f"polyline has zero length (all {len(polyline)} points at {polyline[0]!r})"
+        raise MapError(msg, where)
+    direction = parse_direction(fields.properties.get("direction"), where)
+    return Segment(fields.id, shape, direction,
+                   _world_points(polyline, fields, placed.offset, header))
+
+
+def _segments(placed: list[_Placed], header: _Header,
+              path: Path) -> tuple[tuple[Segment, ...], tuple[str, ...]]:
+    _check_unique_ids(placed, path)
+    templates = TemplateCache(path)
+    segments: list[Segment] = []
+    warnings: list[str] = []
+    for item in placed:
+        fields = templates.resolve(item.fields)
+        if fields.visible is False:
+            continue
+        shape = parse_shape(fields.shape_class) if fields.shape_class else None
+        name = f"{path}: object {fields.id}"
+        if fields.geometry != "polyline":
+            if shape is not None:
+                geometry = fields.geometry or "rectangle"
+                warnings.append(f"{name}: class {fields.shape_class!r} on a {geometry}, not a "
+                                "polyline; ignored")
+            continue
+        if shape is None:
+            if fields.shape_class:
+                warnings.append(f"{name}: unknown class {fields.shape_class!r} on a polyline; ignored "
+                                "(expected straight, curve or s_curve)")
+            continue
+        segments.append(_segment(fields, shape, item, header, path))
+    if not segments:
+        msg = "the map has no segments (visible polyline objects of class straight, curve or s_curve)"
+        raise MapError(msg, Location(path))
+    segments.sort(key=lambda segment: segment.id)
+    return tuple(segments), tuple(warnings)

@@ -1,0 +1,170 @@
+"""SVG pictures of a layout: segment ids, direction arrows and a highlighted neighbourhood.
+
+With a highlighted segment the picture is the thesis's figure 24: the segment in yellow, the segments
+it leads to in green, and the segments it conflicts with (a vehicle on one could hit a vehicle on the
+other) in grey.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from xml.sax.saxutils import escape
+
+from fleetsim.enums import Traverse
+from fleetsim.errors import LayoutError
+from fleetsim.layout.layout import Layout
+from fleetsim.layout.segment import Point, Segment
+
+__all__ = ["render_layout_svg"]
+
+_PLAIN = "#3b4a6b"
+_HIGHLIGHT = "#f2c200"
+_SUCCESSOR = "#2e9e3f"
+_CONFLICT = "#9a9a9a"
+
+
+@dataclass(frozen=True, slots=True)
+class _Frame:
+    """World metres (y up) to SVG user units (y down), with a margin around the layout."""
+
+    min_x: float
+    max_y: float
+    scale: float
+    width: float
+    height: float
+
+    def point(self, p: Point) -> tuple[float, float]:
+        return (p[0] - self.min_x) * self.scale, (self.max_y - p[1]) * self.scale
+
+
+def _frame(layout: Layout, margin: float, pixels_per_metre: float) -> _Frame:
+    xs = [x for seg in layout.segments.values() for x, _ in seg.waypoints]
+    ys = [y for seg in layout.segments.values() for _, y in seg.waypoints]
+    min_x, max_x = min(xs) - margin, max(xs) + margin
+    min_y, max_y = min(ys) - margin, max(ys) + margin
+    return _Frame(
+        min_x=min_x,
+        max_y=max_y,
+        scale=pixels_per_metre,
+        width=(max_x - min_x) * pixels_per_metre,
+        height=(max_y - min_y) * pixels_per_metre,
+    )
+
+
+def _point_at(segment: Segment, fraction: float) -> tuple[Point, float]:
+    """The point ``fraction`` of the way along the polyline and the heading (radians) there."""
+    target = fraction * segment.length
+    travelled = 0.0
+    for a, b in zip(segment.waypoints, segment.waypoints[1:]):
+        piece = math.dist(a, b)
+        if piece > 0 and travelled + piece >= target:
+            t = (target - travelled) / piece
+            return (a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])), math.atan2(b[1] - a[1], b[0] - a[0])
+        travelled += piece
+    a, b = segment.waypoints[-2], segment.waypoints[-1]
+    return b, math.atan2(b[1] - a[1], b[0] - a[0])
+
+
+def _arrow(frame: _Frame, tip: Point, heading: float, size: float, colour: str) -> str:
+    """A filled triangle pointing along ``heading`` (world radians) with its tip at ``tip``."""
+    back = heading + math.pi
+    corners = [
+        tip,
+        (tip[0] + size * math.cos(back + 0.45), tip[1] + size * math.sin(back + 0.45)),
+        (tip[0] + size * math.cos(back - 0.45), tip[1] + size * math.sin(back - 0.45)),
+    ]
+    points = " ".join(f"{x:.2f},{y:.2f}" for x, y in map(frame.point, corners))
+    return f'<polygon points="{points}" fill="{colour}"/>'
+
+
+def _segment_svg(frame: _Frame, segment: Segment, colour: str, width: float, arrow: float) -> list[str]:
+    points = " ".join(f"{x:.2f},{y:.2f}" for x, y in map(frame.point, segment.waypoints))
+    parts = [
+        f'<polyline class="segment" data-segment="{segment.id}" points="{points}" fill="none" '
+        f'stroke="{colour}" stroke-width="{width:.2f}" stroke-linecap="round" stroke-linejoin="round"/>'
+    ]
+    # One arrow per allowed traverse, placed a little either side of the middle so both show.
+    for traverse, fraction in ((Traverse.FORWARD, 0.62), (Traverse.BACKWARD, 0.38)):
+        if not segment.allows(traverse):
+            continue
+        tip, heading = _point_at(segment, fraction)
+        if traverse is Traverse.BACKWARD:
+            heading += math.pi
+        parts.append(_arrow(frame, tip, heading, arrow, "#111111" if colour == _HIGHLIGHT else colour))
+    return parts
+
+
+def _label_svg(frame: _Frame, segment: Segment, font: float) -> str:
+    mid, heading = _point_at(segment, 0.5)
+    # Put the id beside the line, on its left-hand side, so it never sits on top of the stroke.
+    offset = 0.9 * font / frame.scale
+    anchor = (mid[0] - offset * math.sin(heading), mid[1] + offset * math.cos(heading))
+    x, y = frame.point(anchor)
+    return (
+        f'<text x="{x:.2f}" y="{y:.2f}" font-size="{font:.1f}" text-anchor="middle" '
+        f'dominant-baseline="middle">{segment.id}</text>'
+    )
+
+
+def _colours(layout: Layout, highlight: int | None) -> dict[int, str]:
+    colours = {sid: _PLAIN for sid in layout.segments}
+    if highlight is None:
+        return colours
+    for sid in sorted(layout.conflicts(highlight)):
+        colours[sid] = _CONFLICT
+    for traverse in Traverse:
+        if layout.segments[highlight].allows(traverse):
+            for next_sid, _, _ in layout.successors(highlight, traverse):
+                colours[next_sid] = _SUCCESSOR
+    colours[highlight] = _HIGHLIGHT
+    return colours
+
+
+def _legend(frame: _Frame, font: float, highlight: int) -> list[str]:
+    entries = ((_HIGHLIGHT, f"segment {highlight}"), (_SUCCESSOR, "leads to"), (_CONFLICT, "conflicts with"))
+    parts = []
+    for row, (colour, text) in enumerate(entries):
+        y = font * (1.5 + 1.4 * row)
+        parts.append(f'<rect x="{font:.1f}" y="{y - font * 0.5:.1f}" width="{font:.1f}" height="{font:.1f}" fill="{colour}"/>')
+        parts.append(f'<text x="{font * 2.5:.1f}" y="{y:.1f}" font-size="{font:.1f}" dominant-baseline="middle">{escape(text)}</text>')
+    return parts
+
+
+def render_layout_svg(layout: Layout, *, highlight: int | None = None, pixels_per_metre: float = 40.0) -> str:
+    """Draw ``layout`` as an SVG document: ids, direction arrows, and ``highlight``'s neighbourhood."""
+    if highlight is not None and highlight not in layout.segments:
+        source = layout.source if layout.source is not None else "layout"
+        msg = f"{source}: highlight={highlight!r} is not a segment id of this map"
+        raise LayoutError(msg)
+    frame = _frame(layout, margin=1.5, pixels_per_metre=pixels_per_metre)
+    width = 0.12 * pixels_per_metre
+    arrow = 0.35
+    font = 0.4 * pixels_per_metre
+    colours = _colours(layout, highlight)
+    # Draw plain segments first, then the highlighted neighbourhood on top of them.
+    order = sorted(layout.segments, key=lambda sid: (colours[sid] != _PLAIN, colours[sid] == _HIGHLIGHT, sid))
+    body: list[str] = []
+    for sid in order:
+        segment = layout.segments[sid]
+        body.extend(_segment_svg(frame, segment, colours[sid], width * (1.6 if sid == highlight else 1.0), arrow))
+    body.append('<g font-family="sans-serif" fill="#111">')
+    body.extend(_label_svg(frame, layout.segments[sid], font * 0.6) for sid in sorted(layout.segments))
+    body.append("</g>")
+    if highlight is not None:
+        body.append('<g font-family="sans-serif" fill="#111">')
+        body.extend(_legend(frame, font * 0.6, highlight))
+        body.append("</g>")
+    source = escape(str(layout.source)) if layout.source is not None else "layout"
+    return "\n".join(
+        [
+            '<?xml version="1.0" encoding="UTF-8"?>',
+            f'<svg xmlns="http://www.w3.org/2000/svg" width="{frame.width:.0f}" height="{frame.height:.0f}" '
+            f'viewBox="0 0 {frame.width:.2f} {frame.height:.2f}">',
+            f"<title>{source}</title>",
+            '<rect width="100%" height="100%" fill="white"/>',
+            *body,
+            "</svg>",
+            "",
+        ]
+    )

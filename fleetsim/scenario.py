@@ -1,0 +1,129 @@
+"""What a loaded scenario is made of: vehicle types, vehicles, tasks, settings, expectations (SPEC §5, §13)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Literal
+
+from fleetsim.enums import ConflictModel, Progress, Traverse, TurnCapability
+from fleetsim.layout.layout import Layout
+
+__all__ = [
+    "DEFAULT_VEHICLE_TYPE",
+    "Expectations",
+    "Scenario",
+    "ScenarioSettings",
+    "Task",
+    "Vehicle",
+    "VehicleType",
+]
+
+RGBA = tuple[float, float, float, float]
+
+
+@dataclass(frozen=True, slots=True)
+class VehicleType:
+    """A kind of vehicle: dimensions in metres, speed limits and how it turns."""
+
+    name: str
+    length: float
+    width: float
+    height: float
+    max_speed: float
+    acceleration: float
+    turn_capability: TurnCapability
+    turn_rate: float = 90.0  # deg/s, in-place turning speed
+    color: RGBA | None = None
+
+    @property
+    def swept_radius(self) -> float:
+        """Radius of the circle that covers the vehicle whatever its heading (SPEC §4)."""
+        return 0.5 * math.hypot(self.length, self.width)
+
+    @property
+    def bbox_radius(self) -> float:
+        """The thesis's vehicle circle: diameter = the larger of length and width."""
+        return 0.5 * max(self.length, self.width)
+
+
+DEFAULT_VEHICLE_TYPE = VehicleType(
+    name="default",
+    length=1.0,
+    width=0.6,
+    height=0.4,
+    max_speed=1.0,
+    acceleration=0.5,
+    turn_capability=TurnCapability.IN_PLACE,
+)
+
+
+@dataclass(frozen=True, slots=True)
+class Vehicle:
+    """A vehicle as it starts: at the entry point of its start segment."""
+
+    id: int
+    start_segment: int
+    traverse: Traverse
+    progress: Progress
+    type: VehicleType
+
+
+@dataclass(frozen=True, slots=True)
+class Task:
+    """Drive ``vehicle_id`` to ``goal_segment``; id = 1-based data-row number in tasks.csv."""
+
+    id: int
+    vehicle_id: int
+    goal_segment: int
+    goal_progress: Progress | None = None
+
+
+StopOn = Literal["rejection", "collision"]
+
+
+@dataclass(frozen=True, slots=True)
+class ScenarioSettings:
+    """Run and layout settings; suite ``defaults`` and each scenario entry override these."""
+
+    vehicle_type: str | None = None
+    time_step: float = 0.1
+    time_limit: float = 300.0
+    planning_period: float = 0.1
+    deadlock_after: float = 30.0
+    stop_on: tuple[StopOn, ...] = ("rejection", "collision")
+    connection_tolerance: float = 0.05
+    joint_angle_tolerance: float = 30.0
+    conflict_model: ConflictModel = ConflictModel.SWEPT
+    safety_margin: float = 0.0
+    allow_start_conflicts: bool = False
+
+
+@dataclass(frozen=True, slots=True)
+class Expectations:
+    """What a scenario's run must show to pass (SPEC §13 ``expect``)."""
+
+    tasks: Literal["all"] | int = "all"
+    collisions: Literal["none", "any"] | tuple[int, ...] = "none"
+    rejections: Literal["none", "any"] | tuple[str, ...] = "none"
+    deadlock: bool = False
+    max_makespan: float | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class Scenario:
+    """A completely loaded scenario: layout, fleet, tasks, settings and expectations."""
+
+    name: str
+    layout: Layout
+    vehicle_types: Mapping[str, VehicleType]
+    vehicles: tuple[Vehicle, ...]
+    tasks: tuple[Task, ...]
+    settings: ScenarioSettings = field(default_factory=ScenarioSettings)
+    expect: Expectations = field(default_factory=Expectations)
+    map_path: Path | None = None
+    vehicles_path: Path | None = None
+    tasks_path: Path | None = None
+    warnings: tuple[str, ...] = ()  # load-time notes that did not stop loading (e.g. unknown map shapes)

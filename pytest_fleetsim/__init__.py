@@ -1,0 +1,1 @@
+"""pytest plugin for fleetsim: hooks and reporting only; behaviour lives in :mod:`fleetsim`."""
