@@ -134,6 +134,7 @@ def _assemble(
         map_path=map_path,
         vehicles_path=vehicles_path,
         tasks_path=tasks_path,
+        warnings=tiled.warnings,
     )
 
 

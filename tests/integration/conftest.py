@@ -55,7 +55,11 @@ def tiled(tmp_path_factory: pytest.TempPathFactory) -> TiledCli:
     """The Tiled CLI; tests using it are skipped when Tiled is not installed."""
     executable = shutil.which("tiled")
     if executable is None:
-        pytest.skip("the Tiled editor's CLI 'tiled' is not on PATH (Debian/Ubuntu: apt install tiled)")
+        reason = "the Tiled editor's CLI 'tiled' is not on PATH (Debian/Ubuntu: apt install tiled)"
+        # CI must not pass by skipping: there a missing tool is a failure.
+        if os.environ.get("FLEETSIM_REQUIRE_TOOLS") == "1":
+            pytest.fail(reason + "; FLEETSIM_REQUIRE_TOOLS=1 requires it")
+        pytest.skip(reason)
     config_home = tmp_path_factory.mktemp("tiled-config")
     config_home.chmod(0o700)  # Qt refuses an XDG_RUNTIME_DIR others can read
     return TiledCli(executable, config_home)

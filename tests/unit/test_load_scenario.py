@@ -193,3 +193,15 @@ def test_rows_without_type_fail_when_several_types_and_no_default(tmp_path: Path
 def test_every_load_failure_is_a_load_error(tmp_path: Path) -> None:
     with pytest.raises(LoadError):
         load_first(tmp_path, SUITE, "1,1,forward,,\n", "vehicle_id,goal_segment_id\n5,1\n")
+
+
+def test_map_warnings_reach_the_scenario(tmp_path: Path) -> None:
+    folder = make_dir(tmp_path, "1,1,forward,,\n")
+    doc = (folder / "map.json").read_text(encoding="utf-8")
+    # Turn segment 3 into a polyline of a class fleetsim does not know: it is skipped with a warning.
+    marked = doc.replace('{"id":3,"name":"","type":"straight"', '{"id":3,"name":"","type":"ramp"')
+    assert marked != doc
+    (folder / "map.json").write_text(marked, encoding="utf-8")
+    scenario = load_scenario_dir(folder)
+    assert sorted(scenario.layout.segments) == [1, 2]
+    assert len(scenario.warnings) == 1 and "ramp" in scenario.warnings[0]
