@@ -1,6 +1,6 @@
 """Draft benchmark: conflict sets on a ~10,000-segment warehouse grid, broad phase vs all pairs.
 
-Usage: python benchmarks/conflicts_layout_draft.py [--segments 10000] [--radius 0.583] [--all-pairs full|sample|skip]
+Usage: python benchmarks/conflicts_layout_draft.py [--segments N] [--radius R] [--all-pairs full|sample|skip]
 
 The map is a lattice of junctions 6 m apart. Each junction has a horizontal and a vertical straight
 crossing it and four 90° curves (10 waypoints, radius 1 m) joining its arms; long straights join
@@ -13,6 +13,8 @@ from __future__ import annotations
 import argparse
 import math
 import time
+from collections.abc import Callable
+from typing import TypeVar
 
 import numpy as np
 
@@ -20,6 +22,8 @@ from fleetsim.enums import Direction, Shape
 from fleetsim.layout import Segment, build_layout
 from fleetsim.layout.conflicts import SubSegments, all_pairs_conflicts, polyline_distances, swept_conflicts
 from fleetsim.layout.geometry import ragged_arange
+
+T = TypeVar("T")
 
 SPACING = 6.0
 CURVE_RADIUS = 1.0
@@ -52,7 +56,7 @@ def warehouse(junctions_per_side: int) -> list[Segment]:
     return segments
 
 
-def _time(label: str, fn):  # type: ignore[no-untyped-def]
+def _time(label: str, fn: Callable[[], T]) -> tuple[T, float]:
     start = time.perf_counter()
     result = fn()
     elapsed = time.perf_counter() - start
@@ -84,13 +88,14 @@ def main() -> None:
     segments = warehouse(side)
     pieces = sum(len(s.waypoints) - 1 for s in segments)
     print(f"{len(segments)} segments, {pieces} straight pieces, vehicle radius {args.radius:.3f} m")
-    threshold = 2.0 * args.radius
-    fast, t_fast = _time("swept_conflicts (grid broad phase)", lambda: swept_conflicts(segments, threshold, 0.05))
-    _time("build_layout (connections+graph+conflicts)", lambda: build_layout(segments, vehicle_radius=args.radius))
+    threshold, touch = 2.0 * args.radius, 0.05
+    fast, t_fast = _time("swept_conflicts (grid broad phase)", lambda: swept_conflicts(segments, threshold, touch))
+    layout, _ = _time("build_layout (all of it)", lambda: build_layout(segments, vehicle_radius=args.radius))
+    _time("Layout.lint", layout.lint)
     sizes = [len(v) for v in fast.values()]
     print(f"conflict set size: mean {np.mean(sizes):.1f}, max {max(sizes)}")
     if args.all_pairs == "full":
-        ref, t_ref = _time("all_pairs_conflicts", lambda: all_pairs_conflicts(segments, threshold, touch=0.05))
+        ref, t_ref = _time("all_pairs_conflicts", lambda: all_pairs_conflicts(segments, threshold, touch=touch))
         assert ref == fast, "broad phase disagrees with the all-pairs reference"
     elif args.all_pairs == "sample":
         t_ref = _sampled_all_pairs(segments, threshold, rows=40)

@@ -38,9 +38,18 @@ def test_swept_model_does_not_flag_a_straight_inside_a_curves_box_far_from_the_a
 
 @pytest.mark.parametrize(
     ("gap", "margin", "conflict"),
-    [(1.19, 0.2, True), (1.21, 0.2, False), (0.99, 0.0, True), (1.01, 0.0, False), (1.1, 0.0, False), (1.1, 0.2, True)],
+    [
+        (1.19, 0.2, True),
+        (1.21, 0.2, False),
+        (0.99, 0.0, True),
+        (1.01, 0.0, False),
+        (1.1, 0.0, False),
+        (1.1, 0.2, True),
+    ],
 )
-def test_parallel_lanes_conflict_when_closer_than_two_radii_plus_margin(gap: float, margin: float, conflict: bool) -> None:
+def test_parallel_lanes_conflict_when_closer_than_two_radii_plus_margin(
+    gap: float, margin: float, conflict: bool
+) -> None:
     lanes = [_straight(1, (0, 0), (10, 0)), _straight(2, (0, gap), (10, gap))]
     layout = build_layout(lanes, vehicle_radius=0.5, safety_margin=margin)
     assert (2 in layout.conflicts(1)) is conflict

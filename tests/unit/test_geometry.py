@@ -16,7 +16,10 @@ from fleetsim.layout.geometry import (
 )
 
 
-def _distance(a0: tuple[float, float], a1: tuple[float, float], b0: tuple[float, float], b1: tuple[float, float]) -> float:
+P = tuple[float, float]
+
+
+def _distance(a0: P, a1: P, b0: P, b1: P) -> float:
     arrays = [np.array([p], dtype=np.float64) for p in (a0, a1, b0, b1)]
     return float(segment_distances(*arrays)[0])
 
@@ -37,7 +40,7 @@ def _distance(a0: tuple[float, float], a1: tuple[float, float], b0: tuple[float,
     ],
 )
 def test_segment_distance_matches_known_geometry(
-    a0: tuple[float, float], a1: tuple[float, float], b0: tuple[float, float], b1: tuple[float, float], expected: float
+    a0: P, a1: P, b0: P, b1: P, expected: float
 ) -> None:
     assert _distance(a0, a1, b0, b1) == pytest.approx(expected, abs=1e-12)
     assert _distance(b1, b0, a1, a0) == pytest.approx(expected, abs=1e-12)

@@ -21,7 +21,8 @@ SEGMENTS = [_straight(1, (0, 0), (4, 0)), _straight(2, (4, 0), (8, 0))]
 
 def test_duplicate_segment_ids_are_rejected_naming_the_id() -> None:
     with pytest.raises(LayoutError, match=r"duplicate segment id 7 in map\.json"):
-        build_layout([_straight(7, (0, 0), (1, 0)), _straight(7, (2, 0), (3, 0))], vehicle_radius=0.3, source=Path("map.json"))
+        twins = [_straight(7, (0, 0), (1, 0)), _straight(7, (2, 0), (3, 0))]
+        build_layout(twins, vehicle_radius=0.3, source=Path("map.json"))
 
 
 def test_non_finite_waypoints_are_rejected() -> None:
@@ -59,7 +60,8 @@ def test_settings_are_kept_on_the_layout() -> None:
         source=Path("maps/a.json"),
     )
     assert (layout.vehicle_radius, layout.connection_tolerance, layout.joint_angle_tolerance) == (0.4, 0.1, 20.0)
-    assert (layout.safety_margin, layout.conflict_model, layout.source) == (0.2, ConflictModel.BBOX, Path("maps/a.json"))
+    assert layout.safety_margin == 0.2
+    assert (layout.conflict_model, layout.source) == (ConflictModel.BBOX, Path("maps/a.json"))
 
 
 @pytest.mark.parametrize("query", ["successors", "predecessors"])

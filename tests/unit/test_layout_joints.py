@@ -13,11 +13,8 @@ Points = tuple[tuple[float, float], ...]
 
 
 def _arc(cx: float, cy: float, radius: float, start_deg: float, end_deg: float, n: int = 10) -> Points:
-    step = (end_deg - start_deg) / (n - 1)
-    return tuple(
-        (cx + radius * math.cos(math.radians(start_deg + k * step)), cy + radius * math.sin(math.radians(start_deg + k * step)))
-        for k in range(n)
-    )
+    angles = [math.radians(start_deg + k * (end_deg - start_deg) / (n - 1)) for k in range(n)]
+    return tuple((cx + radius * math.cos(a), cy + radius * math.sin(a)) for a in angles)
 
 
 def _s_curve(x0: float, y0: float, dx: float, dy: float, rise: float, n: int = 9) -> Points:

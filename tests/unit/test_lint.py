@@ -32,7 +32,9 @@ def test_a_clean_loop_has_no_findings() -> None:
 def test_dangling_end_names_the_segment_the_end_and_the_point() -> None:
     findings = _codes([_straight(1, (0, 0), (4, 0))], "dangling-end")
     assert [(f.segments, f.severity) for f in findings] == [((1,), "warning"), ((1,), "warning")]
-    assert findings[0].message == "the first end of segment 1 at (0.000, 0.000) meets no other segment end (a dead end)"
+    assert findings[0].message == (
+        "the first end of segment 1 at (0.000, 0.000) meets no other segment end (a dead end)"
+    )
     assert "the last end of segment 1 at (4.000, 0.000)" in findings[1].message
 
 
@@ -105,7 +107,8 @@ def test_touching_one_ways_that_cannot_connect_are_reported(first: Direction, se
     segments = [_straight(1, (0, 0), (4, 0), direction=first), _straight(2, (4, 0), (8, 0), direction=second)]
     findings = _codes(segments, "no-connection")
     assert [f.segments for f in findings] == [(1, 2)]
-    assert f"touch at (4.000, 0.000) but do not connect: both one-way directions lead {flow} the joint" in findings[0].message
+    expected = f"touch at (4.000, 0.000) but do not connect: both one-way directions lead {flow} the joint"
+    assert expected in findings[0].message
 
 
 def test_touching_one_ways_in_the_same_direction_are_not_reported() -> None:
@@ -118,7 +121,9 @@ def test_touching_one_ways_in_the_same_direction_are_not_reported() -> None:
 
 def test_segment_shorter_than_the_connection_tolerance_is_zero_length() -> None:
     findings = _codes([_straight(1, (0, 0), (0.049, 0))], "zero-length")
-    assert [f.message for f in findings] == ["segment 1 is 0.049 m long, shorter than the connection tolerance 0.05 m"]
+    assert [f.message for f in findings] == [
+        "segment 1 is 0.049 m long, shorter than the connection tolerance 0.05 m"
+    ]
 
 
 def test_segment_just_longer_than_the_connection_tolerance_is_not_zero_length() -> None:
