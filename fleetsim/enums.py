@@ -18,6 +18,8 @@ __all__ = [
 class Traverse(str, Enum):
     """The way a vehicle drives along a segment's waypoints."""
 
+    __hash__ = str.__hash__  # hash like the equal string, so "forward" finds Traverse.FORWARD in a dict
+
     FORWARD = "forward"
     BACKWARD = "backward"
 
@@ -31,6 +33,8 @@ class Traverse(str, Enum):
 
 class Progress(str, Enum):
     """How a vehicle moves relative to its own nose: nose first, or backing."""
+
+    __hash__ = str.__hash__
 
     FORWARD = "forward"
     REVERSE = "reverse"
@@ -46,6 +50,8 @@ class Progress(str, Enum):
 class Direction(str, Enum):
     """The driving direction a segment allows."""
 
+    __hash__ = str.__hash__
+
     BOTH = "both"
     FORWARD = "forward"
     BACKWARD = "backward"
@@ -60,6 +66,8 @@ class Direction(str, Enum):
 class Shape(str, Enum):
     """The drawing template a segment came from."""
 
+    __hash__ = str.__hash__
+
     STRAIGHT = "straight"
     CURVE = "curve"
     S_CURVE = "s_curve"
@@ -70,6 +78,8 @@ class Shape(str, Enum):
 
 class JointKind(str, Enum):
     """How two connected segments meet (the thesis's "NextProgressDirection")."""
+
+    __hash__ = str.__hash__
 
     SAME = "same"  # smooth continuation: progress direction unchanged
     OPPOSITE = "opposite"  # a cusp: the vehicle must reverse its progress direction
@@ -82,6 +92,8 @@ class JointKind(str, Enum):
 class TurnCapability(str, Enum):
     """Whether a vehicle type can only follow curves or can also turn on the spot."""
 
+    __hash__ = str.__hash__
+
     CURVE = "curve"
     IN_PLACE = "in_place"
 
@@ -91,6 +103,8 @@ class TurnCapability(str, Enum):
 
 class ConflictModel(str, Enum):
     """How conflicting segments are found: swept circles (default) or the thesis's bounding boxes."""
+
+    __hash__ = str.__hash__
 
     SWEPT = "swept"
     BBOX = "bbox"

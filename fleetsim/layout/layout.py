@@ -38,7 +38,6 @@ class Layout:
 
     segments: Mapping[int, Segment]
     connections: tuple[Connection, ...]
-    graph: nx.DiGraph
     connection_tolerance: float
     joint_angle_tolerance: float
     vehicle_radius: float
@@ -48,6 +47,18 @@ class Layout:
     _successors: StepIndex
     _predecessors: StepIndex
     _conflicts: Mapping[int, frozenset[int]]
+    _graph_cache: list[nx.DiGraph]  # empty until `graph` is first asked for
+
+    @property
+    def graph(self) -> nx.DiGraph:
+        """The frozen networkx graph over ``(segment, traverse)`` states; edges carry ``joint``.
+
+        Built on first use: on large maps it costs more than everything else in :func:`build_layout`,
+        and :meth:`successors` / :meth:`predecessors` answer most questions without it.
+        """
+        if not self._graph_cache:
+            self._graph_cache.append(_state_graph(self.segments, self.connections))
+        return self._graph_cache[0]
 
     def __repr__(self) -> str:
         where = f", source={str(self.source)!r}" if self.source is not None else ""
@@ -172,7 +183,6 @@ def build_layout(
     return Layout(
         segments=MappingProxyType(by_id),
         connections=connections,
-        graph=_state_graph(by_id, connections),
         connection_tolerance=tolerance,
         joint_angle_tolerance=angle,
         vehicle_radius=radius,
@@ -182,4 +192,5 @@ def build_layout(
         _successors=successors,
         _predecessors=predecessors,
         _conflicts=MappingProxyType(conflict_sets(ordered, model, radius, margin, tolerance)),
+        _graph_cache=[],
     )
