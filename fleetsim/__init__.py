@@ -1,4 +1,7 @@
-"""fleetsim: test fleet route planners against declarative scenarios, headless."""
+"""fleetsim: test fleet route planners against declarative scenarios, headless.
+
+The public API is exactly what this module exports (``__all__``); everything else may change.
+"""
 
 from fleetsim.enums import ConflictModel, Direction, JointKind, Progress, Shape, Traverse, TurnCapability
 from fleetsim.errors import (
@@ -10,25 +13,65 @@ from fleetsim.errors import (
     ScenarioFileError,
     SuiteError,
 )
-from fleetsim.layout.segment import Segment
+from fleetsim.layout import Connection, Layout, LintFinding, Segment, build_layout
+from fleetsim.load import (
+    ScenarioSpec,
+    Suite,
+    TiledMap,
+    discover_suites,
+    load_map,
+    load_scenario,
+    load_scenario_dir,
+    load_suite,
+    write_map,
+)
+from fleetsim.scenario import (
+    DEFAULT_VEHICLE_TYPE,
+    Expectations,
+    Scenario,
+    ScenarioSettings,
+    Task,
+    Vehicle,
+    VehicleType,
+)
 
 __version__ = "0.1.0"
 
 __all__ = [
+    "DEFAULT_VEHICLE_TYPE",
     "ConflictModel",
+    "Connection",
     "Direction",
+    "Expectations",
     "FleetsimError",
     "JointKind",
+    "Layout",
     "LayoutError",
+    "LintFinding",
     "LoadError",
     "Location",
     "MapError",
     "Progress",
+    "Scenario",
     "ScenarioFileError",
+    "ScenarioSettings",
+    "ScenarioSpec",
     "Segment",
     "Shape",
+    "Suite",
     "SuiteError",
+    "Task",
+    "TiledMap",
     "Traverse",
     "TurnCapability",
+    "Vehicle",
+    "VehicleType",
     "__version__",
+    "build_layout",
+    "discover_suites",
+    "load_map",
+    "load_scenario",
+    "load_scenario_dir",
+    "load_suite",
+    "write_map",
 ]

@@ -1,11 +1,14 @@
-"""The pytest11 entry point of fleetsim. It stays thin: hooks call into :mod:`fleetsim`."""
+"""The pytest11 entry point of fleetsim. It stays thin and imports little: hooks call into :mod:`fleetsim`."""
 
 from __future__ import annotations
 
-import pytest
+from importlib.metadata import PackageNotFoundError, version
 
-import fleetsim
+import pytest
 
 
 def pytest_report_header(config: pytest.Config) -> str:
-    return f"fleetsim: {fleetsim.__version__}"
+    try:
+        return f"fleetsim: {version('fleetsim')}"
+    except PackageNotFoundError:  # running from a source tree that was never installed
+        return "fleetsim: (not installed)"
