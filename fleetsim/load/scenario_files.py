@@ -118,6 +118,10 @@ def _records(path: Path) -> list[tuple[int, list[str]]]:
 
 
 def _header(path: Path, line: int, cells: list[str], columns: _Columns) -> tuple[str, ...]:
+    if cells[0].isdigit():
+        # A data row where the header belongs: say that, not "unknown column '1'".
+        msg = f"missing header: the first row must be {columns.header}, found data {','.join(cells)!r}"
+        raise ScenarioFileError(msg, Location(path, line=line))
     names = tuple(cell.lower() for cell in cells)
     for index, name in enumerate(names):
         where = Location(path, line=line, field=name or None)

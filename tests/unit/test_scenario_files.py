@@ -110,7 +110,7 @@ BAD_VEHICLES = [
                  "row has 6 values but the header has 5 columns", id="long-row"),
     pytest.param("", 1, None, "no header", id="empty-file"),
     pytest.param("\n# only a comment\n", 1, None, "no header", id="no-header"),
-    pytest.param("1,1,forward\n", 1, "1", "unknown column '1'", id="data-row-instead-of-header"),
+    pytest.param("1,1,forward\n", 1, None, "missing header: the first row must be vehicle_id,", id="data-row-instead-of-header"),
     pytest.param("vehicle_id,start_segment_id\n", 1, "segment_orientation",
                  "missing required column 'segment_orientation'", id="missing-required-column"),
     pytest.param("vehicle_id,start_segment,segment_orientation\n", 1, "start_segment",
