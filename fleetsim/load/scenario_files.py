@@ -26,7 +26,7 @@ from typing import TypeVar
 from fleetsim.enums import Progress, Traverse
 from fleetsim.errors import Location, ScenarioFileError
 from fleetsim.layout.segment import Segment
-from fleetsim.load.yaml_source import read_text_file
+from fleetsim.load.text import read_text_file
 from fleetsim.scenario import Task, Vehicle, VehicleType
 
 __all__ = [

@@ -18,6 +18,7 @@ from pathlib import Path
 from fleetsim.enums import Direction, Shape
 from fleetsim.errors import Location, MapError
 from fleetsim.layout.segment import Point, Segment
+from fleetsim.load.text import read_text_file
 from fleetsim.load.tiled_templates import (
     ObjectFields,
     PropertyValue,
@@ -29,7 +30,6 @@ from fleetsim.load.tiled_templates import (
     parse_json,
     parse_xml,
     read_json_object,
-    read_text,
     read_xml_object,
     xml_properties,
 )
@@ -109,7 +109,7 @@ def load_map(path: str | os.PathLike[str]) -> TiledMap:
     if suffix not in MAP_SUFFIXES:
         msg = f"suffix={map_path.suffix!r} must be one of {', '.join(MAP_SUFFIXES)}"
         raise MapError(msg, Location(map_path))
-    text = read_text(map_path, Location(map_path))
+    text = read_text_file(map_path, MapError)
     if suffix == ".tmx":
         header, placed = _read_tmx(text, map_path)
     else:

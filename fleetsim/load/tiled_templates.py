@@ -19,6 +19,7 @@ from types import MappingProxyType
 from typing import TypeVar
 
 from fleetsim.errors import Location, MapError
+from fleetsim.load.text import read_text_file
 
 __all__ = [
     "ObjectFields",
@@ -31,7 +32,6 @@ __all__ = [
     "parse_json",
     "parse_xml",
     "read_json_object",
-    "read_text",
     "read_xml_object",
     "xml_properties",
 ]
@@ -155,15 +155,6 @@ def _typed(kind: object, raw: object, name: str, where: Location) -> PropertyVal
 
 
 # --- files ---------------------------------------------------------------------------------------
-
-
-def read_text(path: Path, where: Location) -> str:
-    """The file's UTF-8 text; any failure to read it is a MapError located at ``where``."""
-    try:
-        return path.read_text(encoding="utf-8")
-    except (OSError, ValueError) as exc:  # ValueError: undecodable text or a NUL in the path
-        msg = f"cannot read {str(path)!r}: {exc}"
-        raise MapError(msg, where) from None
 
 
 def parse_json(text: str, path: Path, object_id: int | None = None) -> object:
@@ -367,7 +358,7 @@ class TemplateCache:
         if not template_path.is_file():
             msg = f"template {instance.template!r} not found (looked for {str(template_path)!r})"
             raise MapError(msg, Location(self._map_path, object_id=instance.id))
-        text = read_text(template_path, Location(self._map_path, object_id=instance.id))
+        text = read_text_file(template_path, MapError, Location(self._map_path, object_id=instance.id))
         # Sniffed by content, not suffix: either template format works from either map format.
         if text.lstrip().startswith("{"):
             return _json_template(text, template_path, instance.id)

@@ -14,8 +14,9 @@ from typing import Any, Protocol
 import yaml
 
 from fleetsim.errors import LoadError, Location, SuiteError
+from fleetsim.load.text import read_text_file
 
-__all__ = ["Locate", "YamlPath", "load_yaml_with_marks", "read_text_file"]
+__all__ = ["Locate", "YamlPath", "load_yaml_with_marks"]
 
 YamlPath = tuple[Hashable, ...]
 _Pairs = dict[int, dict[Hashable, tuple[yaml.Node, yaml.Node]]]  # id(mapping node) → key → (key, value)
@@ -66,24 +67,6 @@ def _location(path: Path, mark: yaml.Mark | None) -> Location:
     if mark is None:
         return Location(path)
     return Location(path, line=mark.line + 1, column=mark.column + 1)
-
-
-def read_text_file(path: Path, error_type: type[LoadError]) -> str:
-    """A user's UTF-8 text file (a BOM is dropped); unreadable or undecodable → located ``error_type``."""
-    try:
-        raw = path.read_bytes()
-    except FileNotFoundError:
-        raise error_type("file not found", Location(path)) from None
-    except IsADirectoryError:
-        raise error_type("is a directory, not a file", Location(path)) from None
-    except OSError as exc:
-        raise error_type(f"cannot read: {exc.strerror}", Location(path)) from None
-    try:
-        return raw.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        line = raw.count(b"\n", 0, exc.start) + 1
-        msg = f"not UTF-8 text: byte {raw[exc.start:exc.start + 1]!r} cannot be decoded"
-        raise error_type(msg, Location(path, line=line)) from None
 
 
 def _syntax_error(exc: yaml.YAMLError, text: str, path: Path, error_type: type[LoadError]) -> LoadError:

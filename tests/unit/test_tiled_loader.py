@@ -351,13 +351,13 @@ def test_template_used_many_times_is_read_once_per_load(tmp_path: Path, suffix: 
                                                         monkeypatch: pytest.MonkeyPatch) -> None:
     save_template(tmp_path, "bend.tx", TEMPLATE_OBJECT)
     reads: list[Path] = []
-    original = tiled_templates.read_text
+    original = tiled_templates.read_text_file
 
-    def counting_read_text(path: Path, where: Any) -> str:
+    def counting_read_text(path: Path, error_type: Any, where: Any = None) -> str:
         reads.append(path)
-        return original(path, where)
+        return original(path, error_type, where)
 
-    monkeypatch.setattr(tiled_templates, "read_text", counting_read_text)
+    monkeypatch.setattr(tiled_templates, "read_text_file", counting_read_text)
     objects = [{"id": i, "template": "bend.tx", "x": i * 40, "y": 100} for i in range(1, 51)]
     assert len(load(tmp_path, suffix, tiled_map(layer(*objects))).segments) == 50
     assert reads.count(tmp_path / "bend.tx") == 1

@@ -1,0 +1,33 @@
+"""Reading a user's text file (map, template, suite, CSV) with located errors."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from fleetsim.errors import LoadError, Location
+
+__all__ = ["read_text_file"]
+
+
+def read_text_file(path: Path, error_type: type[LoadError], where: Location | None = None) -> str:
+    """The file's UTF-8 text (a BOM is dropped); any failure is an ``error_type`` located at ``where``.
+
+    ``where`` defaults to the file itself; a template names the map object that refers to it instead.
+    """
+    place = where if where is not None else Location(path)
+    # The location already names the file unless it points at whoever referred to it.
+    name = "" if where is None else f" {str(path)!r}"
+    try:
+        raw = path.read_bytes()
+    except FileNotFoundError:
+        raise error_type(f"file{name} not found", place) from None
+    except IsADirectoryError:
+        raise error_type(f"{name.strip() or 'this'} is a directory, not a file", place) from None
+    except (OSError, ValueError) as exc:  # ValueError: a NUL in the path
+        raise error_type(f"cannot read{name}: {exc}", place) from None
+    try:
+        return raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = raw.count(b"\n", 0, exc.start) + 1
+        msg = f"not UTF-8 text: byte {raw[exc.start:exc.start + 1]!r} cannot be decoded"
+        raise error_type(msg, Location(path, line=line) if where is None else place) from None
