@@ -57,7 +57,9 @@ def _squared_to_segment(
 
 def _inverse_squared_length(dx: FloatArray, dy: FloatArray) -> FloatArray:
     length2 = dx * dx + dy * dy
-    return np.divide(1.0, length2, out=np.zeros_like(length2), where=length2 > 0.0)
+    # Below the smallest normal float, 1/length² overflows to inf and 0·inf gives NaN: treat such a
+    # piece as the point it practically is.
+    return np.divide(1.0, length2, out=np.zeros_like(length2), where=length2 > np.finfo(np.float64).tiny)
 
 
 def point_segment_distances(p: FloatArray, s0: FloatArray, s1: FloatArray) -> FloatArray:

@@ -105,3 +105,11 @@ def test_away_direction_skips_waypoints_at_the_end_point() -> None:
 
 def test_away_direction_of_a_segment_collapsed_to_a_point_is_undefined() -> None:
     assert away_direction(((1.0, 1.0), (1.0, 1.0)), at_last=False, skip=0.05) is None
+
+
+def test_a_piece_too_short_to_invert_its_squared_length_is_measured_as_a_point() -> None:
+    # |d|² underflows to a subnormal; 1/|d|² would be inf and poison the distance with NaN.
+    tiny = np.array([[0.0, 0.0]]), np.array([[0.0, 8.9e-157]])
+    other = np.array([[0.0, 1.0]]), np.array([[0.0, 0.0]])
+    assert segment_distances(*tiny, *other).tolist() == [0.0]
+    assert point_segment_distances(np.array([[3.0, 4.0]]), *tiny).tolist() == [5.0]

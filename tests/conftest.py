@@ -1,0 +1,11 @@
+"""Test-wide settings. Hypothesis runs derandomised in CI, so a CI failure reproduces exactly."""
+
+from __future__ import annotations
+
+import os
+
+from hypothesis import settings
+
+settings.register_profile("ci", derandomize=True, print_blob=True)
+settings.register_profile("dev")
+settings.load_profile("ci" if os.environ.get("CI") else os.environ.get("HYPOTHESIS_PROFILE", "dev"))
