@@ -2,9 +2,12 @@
 
 Every segment contributes two endpoints. Endpoints of *different ends* that lie within the connection
 tolerance "touch"; each touching pair yields up to two connections (one per driving direction through the
-joint), kept only where both segments allow the traverse. An endpoint never pairs with itself, so a
-vehicle cannot U-turn back onto the segment it just drove; a segment whose two ends meet is a loop and
-does connect to itself.
+joint), kept only where both segments allow the traverse. A segment whose two ends meet is a loop and
+connects to itself.
+
+An end also "touches" itself (SPEC §4 reads "an endpoint of segment B" for any B, A included): a vehicle
+at the end of a two-way segment may turn back onto it. That U-turn is a cusp (``opposite``): a vehicle
+that only follows curves backs out with its progress flipped, which is how it leaves a dead-end dock.
 """
 
 from __future__ import annotations
@@ -166,8 +169,9 @@ def find_connections(
     the joint kind is computed for those the directions allow. Vectorised: maps have 10,000+ segments.
     """
     pairs, _ = close_point_pairs(endpoint_array(segments), tolerance)
-    leave = np.concatenate([pairs[:, 0], pairs[:, 1]])
-    enter = np.concatenate([pairs[:, 1], pairs[:, 0]])
+    rows = np.arange(2 * len(segments), dtype=np.int64)  # each end with itself: the U-turns
+    leave = np.concatenate([pairs[:, 0], pairs[:, 1], rows])
+    enter = np.concatenate([pairs[:, 1], pairs[:, 0], rows])
     may_leave, may_enter = _allowed(segments)
     ok = may_leave[leave] & may_enter[enter]
     leave, enter = leave[ok], enter[ok]

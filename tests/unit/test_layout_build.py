@@ -85,4 +85,5 @@ def test_an_empty_layout_is_valid_and_empty() -> None:
 
 
 def test_repr_is_short() -> None:
-    assert repr(build_layout(SEGMENTS, vehicle_radius=0.3)) == "Layout(2 segments, 2 connections)"
+    # 1 -> 2 and 2 -> 1 where they meet, plus a U-turn at each end of both two-way segments.
+    assert repr(build_layout(SEGMENTS, vehicle_radius=0.3)) == "Layout(2 segments, 6 connections)"

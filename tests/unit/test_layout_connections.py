@@ -14,6 +14,11 @@ from fleetsim.layout import Connection, Segment, build_layout
 F, B = Traverse.FORWARD, Traverse.BACKWARD
 
 
+def between_segments(connections: tuple[Connection, ...]) -> tuple[Connection, ...]:
+    """The connections from one segment onto another, leaving out each segment's U-turns."""
+    return tuple(c for c in connections if c.from_segment != c.to_segment)
+
+
 def _straight(sid: int, *points: tuple[float, float], direction: Direction = Direction.BOTH) -> Segment:
     return Segment(sid, Shape.STRAIGHT, direction, tuple(points))
 
@@ -30,26 +35,31 @@ def _junction() -> list[Segment]:
 
 def test_ends_within_connection_tolerance_connect() -> None:
     layout = build_layout([_straight(1, (0, 0), (4, 0)), _straight(2, (4.049, 0), (8, 0))], vehicle_radius=0.3)
-    assert layout.successors(1, F) == ((2, F, JointKind.SAME),)
+    assert layout.successors(1, F) == ((1, B, JointKind.OPPOSITE), (2, F, JointKind.SAME))
 
 
 def test_ends_just_beyond_connection_tolerance_do_not_connect() -> None:
     layout = build_layout([_straight(1, (0, 0), (4, 0)), _straight(2, (4.051, 0), (8, 0))], vehicle_radius=0.3)
-    assert layout.successors(1, F) == ()
-    assert layout.connections == ()
+    assert layout.successors(1, F) == ((1, B, JointKind.OPPOSITE),)  # only its own U-turn
+    assert between_segments(layout.connections) == ()
 
 
 def test_connection_enters_backward_through_the_last_waypoint() -> None:
     layout = build_layout([_straight(1, (0, 0), (4, 0)), _straight(2, (8, 0), (4, 0))], vehicle_radius=0.3)
     assert layout.connections == (
+        Connection(1, F, 1, B, JointKind.OPPOSITE),
         Connection(1, F, 2, B, JointKind.SAME),
+        Connection(1, B, 1, F, JointKind.OPPOSITE),
         Connection(2, F, 1, B, JointKind.SAME),
+        Connection(2, F, 2, B, JointKind.OPPOSITE),
+        Connection(2, B, 2, F, JointKind.OPPOSITE),
     )
 
 
 def test_successors_are_sorted_by_segment_then_forward_first() -> None:
     layout = build_layout(_junction(), vehicle_radius=0.3)
     assert layout.successors(1, F) == (
+        (1, B, JointKind.OPPOSITE),
         (3, B, JointKind.TURN_IN_PLACE),
         (5, F, JointKind.SAME),
         (9, F, JointKind.TURN_IN_PLACE),
@@ -61,6 +71,7 @@ def test_predecessors_list_the_states_that_lead_into_a_state() -> None:
     assert layout.predecessors(5, F) == (
         (1, F, JointKind.SAME),
         (3, F, JointKind.TURN_IN_PLACE),
+        (5, B, JointKind.OPPOSITE),
         (9, B, JointKind.TURN_IN_PLACE),
     )
 
@@ -79,7 +90,8 @@ def test_connections_are_sorted_by_from_state_then_to_state() -> None:
     rank = {F: 0, B: 1}
     keys = [(c.from_segment, rank[c.from_traverse], c.to_segment, rank[c.to_traverse]) for c in connections]
     assert keys == sorted(keys)
-    assert len(connections) == 12  # four ends meet: each ordered pair of distinct ends, once
+    assert len(between_segments(connections)) == 12  # four ends meet: each ordered pair of distinct ends, once
+    assert len(connections) == 12 + 4 * 2  # and each two-way segment U-turns at both of its ends
 
 
 def test_forward_only_segment_has_only_its_forward_state() -> None:
@@ -95,8 +107,12 @@ def test_backward_only_segment_has_only_its_backward_state() -> None:
 def test_one_way_segment_is_never_entered_the_wrong_way() -> None:
     one_way = _straight(1, (0, 0), (4, 0), direction=Direction.FORWARD)
     layout = build_layout([one_way, _straight(2, (4, 0), (8, 0))], vehicle_radius=0.3)
-    assert layout.connections == (Connection(1, F, 2, F, JointKind.SAME),)
-    assert layout.successors(2, B) == ()
+    assert layout.connections == (
+        Connection(1, F, 2, F, JointKind.SAME),
+        Connection(2, F, 2, B, JointKind.OPPOSITE),
+        Connection(2, B, 2, F, JointKind.OPPOSITE),
+    )
+    assert layout.successors(2, B) == ((2, F, JointKind.OPPOSITE),)  # its U-turn, but not onto 1
     assert layout.successors(1, B) == ()  # a traverse the segment forbids has no successors
 
 
@@ -113,15 +129,30 @@ def test_touching_one_ways_with_incompatible_directions_do_not_connect(first: Di
     assert layout.conflicts(1) == {1, 2}  # they still conflict
 
 
-def test_driving_back_onto_the_segment_just_left_is_not_a_connection() -> None:
+def test_two_way_segment_u_turns_onto_itself_at_both_ends_as_a_cusp() -> None:
     layout = build_layout([_straight(1, (0, 0), (4, 0))], vehicle_radius=0.3)
+    assert layout.connections == (
+        Connection(1, F, 1, B, JointKind.OPPOSITE),  # at its last waypoint
+        Connection(1, B, 1, F, JointKind.OPPOSITE),  # at its first waypoint
+    )
+
+
+@pytest.mark.parametrize("direction", [Direction.FORWARD, Direction.BACKWARD])
+def test_one_way_segment_has_no_u_turn(direction: Direction) -> None:
+    layout = build_layout([_straight(1, (0, 0), (4, 0), direction=direction)], vehicle_radius=0.3)
     assert layout.connections == ()
+    assert layout.graph.number_of_edges() == 0
 
 
-def test_segment_whose_ends_meet_is_a_loop_onto_itself() -> None:
+def test_segment_whose_ends_meet_is_a_loop_onto_itself_and_u_turns_too() -> None:
     circle = tuple((math.cos(math.radians(a)), math.sin(math.radians(a))) for a in range(0, 361, 10))
     layout = build_layout([Segment(1, Shape.CURVE, Direction.BOTH, circle)], vehicle_radius=0.3)
-    assert layout.connections == (Connection(1, F, 1, F, JointKind.SAME), Connection(1, B, 1, B, JointKind.SAME))
+    assert layout.connections == (
+        Connection(1, F, 1, F, JointKind.SAME),  # round the loop again
+        Connection(1, F, 1, B, JointKind.OPPOSITE),  # U-turn
+        Connection(1, B, 1, F, JointKind.OPPOSITE),  # U-turn
+        Connection(1, B, 1, B, JointKind.SAME),  # round the loop again, backing
+    )
 
 
 def test_graph_has_a_node_per_allowed_state_and_edges_carry_the_joint() -> None:

@@ -7,9 +7,14 @@ import math
 import pytest
 
 from fleetsim.enums import Direction, JointKind, Shape, Traverse
-from fleetsim.layout import Segment, build_layout
+from fleetsim.layout import Layout, Segment, Step, build_layout
 
 Points = tuple[tuple[float, float], ...]
+
+
+def onward(layout: Layout, segment: int, traverse: Traverse) -> tuple[Step, ...]:
+    """``layout.successors`` onto other segments only: the joints between two segments, not the U-turns."""
+    return tuple(step for step in layout.successors(segment, traverse) if step[0] != segment)
 
 
 def _arc(cx: float, cy: float, radius: float, start_deg: float, end_deg: float, n: int = 10) -> Points:
@@ -72,8 +77,23 @@ def test_joint_kind_for_every_pair_of_shapes(case: str) -> None:
     a = Segment(1, shape_a, Direction.BOTH, points_a)
     b = Segment(2, shape_b, Direction.BOTH, points_b)
     layout = build_layout([a, b], vehicle_radius=0.3)
-    assert layout.successors(1, Traverse.FORWARD) == ((2, Traverse.FORWARD, expected),)
-    assert layout.successors(2, Traverse.BACKWARD) == ((1, Traverse.BACKWARD, expected),)
+    assert onward(layout, 1, Traverse.FORWARD) == ((2, Traverse.FORWARD, expected),)
+    assert onward(layout, 2, Traverse.BACKWARD) == ((1, Traverse.BACKWARD, expected),)
+
+
+@pytest.mark.parametrize(
+    ("shape", "points"),
+    [
+        (Shape.STRAIGHT, ((-4.0, 0.0), (0.0, 0.0))),
+        (Shape.CURVE, _arc(0.0, 1.0, 1.0, 180.0, 270.0)),
+        (Shape.S_CURVE, _s_curve(0.0, 0.0, 1.0, 0.0, 1.0)),
+    ],
+    ids=["straight", "curve", "s_curve"],
+)
+def test_u_turn_at_a_segment_end_is_a_cusp_whatever_the_shape(shape: Shape, points: Points) -> None:
+    layout = build_layout([Segment(1, shape, Direction.BOTH, points)], vehicle_radius=0.3)
+    assert layout.successors(1, Traverse.FORWARD) == ((1, Traverse.BACKWARD, JointKind.OPPOSITE),)
+    assert layout.successors(1, Traverse.BACKWARD) == ((1, Traverse.FORWARD, JointKind.OPPOSITE),)
 
 
 def _bend(deviation_deg: float, tolerance: float = 30.0) -> JointKind:
@@ -82,7 +102,7 @@ def _bend(deviation_deg: float, tolerance: float = 30.0) -> JointKind:
     a = Segment(1, Shape.STRAIGHT, Direction.BOTH, ((-4.0, 0.0), (0.0, 0.0)))
     b = Segment(2, Shape.STRAIGHT, Direction.BOTH, ((0.0, 0.0), (4.0 * math.cos(angle), 4.0 * math.sin(angle))))
     layout = build_layout([a, b], vehicle_radius=0.3, joint_angle_tolerance=tolerance)
-    (step,) = layout.successors(1, Traverse.FORWARD)
+    (step,) = onward(layout, 1, Traverse.FORWARD)
     return step[2]
 
 
@@ -111,7 +131,7 @@ def test_waypoints_repeated_at_the_joint_do_not_hide_the_direction() -> None:
     a = Segment(1, Shape.STRAIGHT, Direction.BOTH, ((-4.0, 0.0), (0.0, 0.0), (0.0, 0.0)))
     b = Segment(2, Shape.STRAIGHT, Direction.BOTH, ((0.0, 0.0), (0.01, 0.0), (4.0, 0.0)))
     layout = build_layout([a, b], vehicle_radius=0.3)
-    assert layout.successors(1, Traverse.FORWARD) == ((2, Traverse.FORWARD, JointKind.SAME),)
+    assert onward(layout, 1, Traverse.FORWARD) == ((2, Traverse.FORWARD, JointKind.SAME),)
 
 
 def test_joint_with_a_segment_collapsed_to_a_point_is_a_turn_in_place() -> None:
@@ -125,4 +145,4 @@ def test_joint_of_ends_within_tolerance_uses_each_segments_own_end() -> None:
     a = Segment(1, Shape.STRAIGHT, Direction.BOTH, ((-4.0, 0.0), (0.0, 0.0)))
     b = Segment(2, Shape.STRAIGHT, Direction.BOTH, ((0.0, 0.04), (4.0, 0.04)))
     layout = build_layout([a, b], vehicle_radius=0.3)
-    assert layout.successors(1, Traverse.FORWARD) == ((2, Traverse.FORWARD, JointKind.SAME),)
+    assert onward(layout, 1, Traverse.FORWARD) == ((2, Traverse.FORWARD, JointKind.SAME),)
