@@ -10,6 +10,7 @@ from fleetsim.errors import (
     LoadError,
     Location,
     MapError,
+    PlannerError,
     ScenarioFileError,
     SuiteError,
 )
@@ -25,6 +26,17 @@ from fleetsim.load import (
     load_suite,
     write_map,
 )
+from fleetsim.planning import (
+    CollisionAlert,
+    FleetLeg,
+    FleetPlan,
+    FleetSnapshot,
+    Planner,
+    Rejection,
+    RejectionCode,
+    RouteError,
+    VehicleState,
+)
 from fleetsim.scenario import (
     DEFAULT_VEHICLE_TYPE,
     Expectations,
@@ -38,11 +50,15 @@ from fleetsim.scenario import (
 __version__ = "0.1.0"
 
 __all__ = [
-    "DEFAULT_VEHICLE_TYPE",
+    "CollisionAlert",
     "ConflictModel",
     "Connection",
+    "DEFAULT_VEHICLE_TYPE",
     "Direction",
     "Expectations",
+    "FleetLeg",
+    "FleetPlan",
+    "FleetSnapshot",
     "FleetsimError",
     "JointKind",
     "Layout",
@@ -51,7 +67,12 @@ __all__ = [
     "LoadError",
     "Location",
     "MapError",
+    "Planner",
+    "PlannerError",
     "Progress",
+    "Rejection",
+    "RejectionCode",
+    "RouteError",
     "Scenario",
     "ScenarioFileError",
     "ScenarioSettings",
@@ -65,8 +86,8 @@ __all__ = [
     "Traverse",
     "TurnCapability",
     "Vehicle",
+    "VehicleState",
     "VehicleType",
-    "__version__",
     "build_layout",
     "discover_suites",
     "load_map",
@@ -74,4 +95,5 @@ __all__ = [
     "load_scenario_dir",
     "load_suite",
     "write_map",
+    "__version__",
 ]

@@ -15,6 +15,7 @@ __all__ = [
     "LoadError",
     "Location",
     "MapError",
+    "PlannerError",
     "ScenarioFileError",
     "SuiteError",
 ]
@@ -70,3 +71,7 @@ class SuiteError(LoadError):
 
 class LayoutError(FleetsimError, ValueError):
     """Segments cannot form a layout (for example two segments share an id)."""
+
+
+class PlannerError(FleetsimError, TypeError):
+    """A planner broke the protocol: it raised, returned something that is not a response, or hung."""

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from bisect import bisect_right
 from dataclasses import dataclass, field
 
 from fleetsim.enums import Direction, Shape, Traverse
@@ -26,12 +27,39 @@ class Segment:
     direction: Direction
     waypoints: tuple[Point, ...]
     length: float = field(init=False, compare=False)
+    # Distance along the polyline at each waypoint, for locating a point by its distance.
+    _along: tuple[float, ...] = field(init=False, compare=False, repr=False)
 
     def __post_init__(self) -> None:
         if len(self.waypoints) < 2:
             msg = f"segment {self.id} needs at least 2 waypoints, got {len(self.waypoints)}"
             raise ValueError(msg)
+        along = [0.0]
+        for a, b in zip(self.waypoints, self.waypoints[1:]):
+            along.append(along[-1] + math.dist(a, b))
+        object.__setattr__(self, "_along", tuple(along))
         object.__setattr__(self, "length", polyline_length(self.waypoints))
+
+    def pose_at(self, distance: float, traverse: Traverse) -> tuple[float, float, float]:
+        """``(x, y, travel heading)`` after driving ``distance`` metres along the segment with ``traverse``.
+
+        The heading (radians, counter-clockwise from +x) is the direction of travel on the piece the point
+        lies on; a vehicle backing faces the other way. ``distance`` is clamped to ``[0, length]``.
+        """
+        along = min(max(distance, 0.0), self.length)
+        if traverse is Traverse.BACKWARD:
+            along = self.length - along
+        # The piece holding the point; zero-length pieces are skipped by bisect on the running distance.
+        index = min(max(bisect_right(self._along, along) - 1, 0), len(self.waypoints) - 2)
+        while index > 0 and self._along[index + 1] == self._along[index]:
+            index -= 1
+        (ax, ay), (bx, by) = self.waypoints[index], self.waypoints[index + 1]
+        piece = self._along[index + 1] - self._along[index]
+        t = (along - self._along[index]) / piece if piece > 0 else 0.0
+        heading = math.atan2(by - ay, bx - ax)
+        if traverse is Traverse.BACKWARD:
+            heading = math.atan2(ay - by, ax - bx)
+        return ax + t * (bx - ax), ay + t * (by - ay), heading
 
     @property
     def first(self) -> Point:

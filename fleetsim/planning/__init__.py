@@ -1,0 +1,31 @@
+"""Planning (SPEC §6–7): the planner protocol, plan checks, reservations and task bookkeeping."""
+
+from fleetsim.planning.checks import CheckContext, Rejection, RejectionCode, check_plan, check_plans
+from fleetsim.planning.controller import CallOutcome, FleetController, validate_response
+from fleetsim.planning.protocol import FleetLeg, FleetPlan, Planner, Response, ResponseItem, RouteError
+from fleetsim.planning.reservations import CollisionAlert, ConflictTable, find_alerts
+from fleetsim.planning.snapshot import FleetSnapshot, VehicleState
+from fleetsim.planning.tasks import TaskBook
+
+__all__ = [
+    "CallOutcome",
+    "CheckContext",
+    "CollisionAlert",
+    "ConflictTable",
+    "FleetController",
+    "FleetLeg",
+    "FleetPlan",
+    "FleetSnapshot",
+    "Planner",
+    "Rejection",
+    "RejectionCode",
+    "Response",
+    "ResponseItem",
+    "RouteError",
+    "TaskBook",
+    "VehicleState",
+    "check_plan",
+    "check_plans",
+    "find_alerts",
+    "validate_response",
+]

@@ -1,0 +1,291 @@
+"""Checks on every plan a planner returns (SPEC §7), each its own small function with a stable code.
+
+A plan goes through the response checks (``unknown-vehicle``, ``duplicate-plan``), then the task checks
+(goal markers), then the sanity checks; the first failing check rejects it and the vehicle keeps its old
+plan. Every rejection names the vehicle, the leg index and segment where there is one, and says what to
+change.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from enum import Enum
+
+from fleetsim.enums import JointKind, TurnCapability
+from fleetsim.layout.layout import Layout
+from fleetsim.planning.protocol import FleetLeg, FleetPlan
+from fleetsim.scenario import Task, VehicleType
+
+__all__ = [
+    "CheckContext",
+    "Rejection",
+    "RejectionCode",
+    "check_plan",
+    "check_plans",
+]
+
+
+class RejectionCode(str, Enum):
+    """The stable codes of SPEC §7; suites name them in ``expect.rejections``."""
+
+    __hash__ = str.__hash__
+
+    UNKNOWN_VEHICLE = "unknown-vehicle"
+    DUPLICATE_PLAN = "duplicate-plan"
+    EMPTY_PLAN = "empty-plan"
+    UNKNOWN_SEGMENT = "unknown-segment"
+    FIXED_LEGS_CHANGED = "fixed-legs-changed"
+    FIXED_NOT_CONTIGUOUS = "fixed-not-contiguous"
+    NOT_CONNECTED = "not-connected"
+    WRONG_WAY = "wrong-way"
+    ILLEGAL_PROGRESS_CHANGE = "illegal-progress-change"
+    GOAL_NOT_ASSIGNED = "goal-not-assigned"
+    GOAL_ORDER = "goal-order"
+    GOAL_SEGMENT_MISMATCH = "goal-segment-mismatch"
+    GOAL_DIRECTION = "goal-direction"
+
+    def __str__(self) -> str:
+        return self.value
+
+
+@dataclass(frozen=True, slots=True)
+class Rejection:
+    """A plan the checks refused: which check, for which vehicle, where in the plan, and why."""
+
+    code: RejectionCode
+    vehicle_id: int
+    leg_index: int | None
+    segment: int | None
+    message: str
+
+    def __str__(self) -> str:
+        where = f"vehicle {self.vehicle_id}"
+        if self.leg_index is not None:
+            where += f", leg {self.leg_index}"
+        if self.segment is not None:
+            where += f" (segment {self.segment})"
+        return f"{self.code.value}: {where}: {self.message}"
+
+
+@dataclass(frozen=True, slots=True)
+class CheckContext:
+    """What the checks compare a plan with: the layout and each vehicle's type, plan and task queue."""
+
+    layout: Layout
+    vehicle_types: Mapping[int, VehicleType]  # by vehicle id
+    plans: Mapping[int, FleetPlan]  # the plans in force now
+    queues: Mapping[int, tuple[Task, ...]]  # head first
+    routed: frozenset[int] = frozenset()  # queued tasks an accepted plan already marks
+
+
+Check = Callable[[FleetPlan, CheckContext], "Rejection | None"]
+
+
+def _reject(code: RejectionCode, plan: FleetPlan, index: int | None, message: str) -> Rejection:
+    segment = plan.legs[index].segment if index is not None else None
+    return Rejection(code, plan.vehicle_id, index, segment, message)
+
+
+def _goal_legs(plan: FleetPlan) -> list[tuple[int, FleetLeg]]:
+    return [(index, leg) for index, leg in enumerate(plan.legs) if leg.goal_for_task is not None]
+
+
+# -- task checks ------------------------------------------------------------------------------------
+
+
+def goal_not_assigned(plan: FleetPlan, ctx: CheckContext) -> Rejection | None:
+    queued = {task.id for task in ctx.queues.get(plan.vehicle_id, ())}
+    for index, leg in _goal_legs(plan):
+        if leg.goal_for_task not in queued:
+            listing = ", ".join(str(task_id) for task_id in sorted(queued)) or "none"
+            msg = f"marks the goal of task {leg.goal_for_task}, which is not in this vehicle's queue (queued: {listing})"
+            return _reject(RejectionCode.GOAL_NOT_ASSIGNED, plan, index, msg)
+    return None
+
+
+def goal_order(plan: FleetPlan, ctx: CheckContext) -> Rejection | None:
+    """Goal markers must follow the queue from its head, without gaps or repeats, and keep routed tasks.
+
+    The marked tasks are always the first tasks of the queue, in queue order: a vehicle completes its
+    tasks one after the other, so a plan cannot reach task 3's goal before task 2's. A task that an
+    accepted plan routed stays marked until it is completed.
+    """
+    queue = ctx.queues.get(plan.vehicle_id, ())
+    goals = _goal_legs(plan)
+    routed = [task for task in queue if task.id in ctx.routed]
+    if len(goals) < len(routed):
+        dropped = routed[len(goals)]
+        msg = f"drops the goal marker of task {dropped.id}, which is routed; it must stay marked until completed"
+        return _reject(RejectionCode.GOAL_ORDER, plan, None, msg)
+    for position, (index, leg) in enumerate(goals):
+        expected = queue[position].id if position < len(queue) else None
+        if leg.goal_for_task != expected:
+            wanted = f"task {expected}" if expected is not None else "no further goal"
+            msg = (
+                f"marks task {leg.goal_for_task} as goal number {position + 1}, but the queue's order "
+                f"requires {wanted} there (queue: {', '.join(str(t.id) for t in queue)})"
+            )
+            return _reject(RejectionCode.GOAL_ORDER, plan, index, msg)
+    return None
+
+
+def goal_segment_mismatch(plan: FleetPlan, ctx: CheckContext) -> Rejection | None:
+    tasks = {task.id: task for task in ctx.queues.get(plan.vehicle_id, ())}
+    for index, leg in _goal_legs(plan):
+        task = tasks[leg.goal_for_task]  # type: ignore[index]  # goal_not_assigned ran first
+        if leg.segment != task.goal_segment:
+            msg = f"marks the goal of task {task.id} on segment {leg.segment}, but its goal is segment {task.goal_segment}"
+            return _reject(RejectionCode.GOAL_SEGMENT_MISMATCH, plan, index, msg)
+    return None
+
+
+def goal_direction(plan: FleetPlan, ctx: CheckContext) -> Rejection | None:
+    tasks = {task.id: task for task in ctx.queues.get(plan.vehicle_id, ())}
+    for index, leg in _goal_legs(plan):
+        task = tasks[leg.goal_for_task]  # type: ignore[index]
+        if task.goal_progress is not None and leg.progress is not task.goal_progress:
+            msg = (
+                f"reaches the goal of task {task.id} with progress {leg.progress.value}, "
+                f"but the task requires arriving {task.goal_progress.value}"
+            )
+            return _reject(RejectionCode.GOAL_DIRECTION, plan, index, msg)
+    return None
+
+
+# -- sanity checks ----------------------------------------------------------------------------------
+
+
+def empty_plan(plan: FleetPlan, ctx: CheckContext) -> Rejection | None:
+    if not plan.legs:
+        return _reject(RejectionCode.EMPTY_PLAN, plan, None, "the plan has no legs; it must at least hold the leg the vehicle is on")
+    return None
+
+
+def unknown_segment(plan: FleetPlan, ctx: CheckContext) -> Rejection | None:
+    for index, leg in enumerate(plan.legs):
+        if leg.segment not in ctx.layout.segments:
+            return _reject(RejectionCode.UNKNOWN_SEGMENT, plan, index, f"segment {leg.segment} is not in the map")
+    return None
+
+
+def fixed_legs_changed(plan: FleetPlan, ctx: CheckContext) -> Rejection | None:
+    """The plan must start with every current fixed leg, same drive, still fixed, goal marker kept.
+
+    A goal marker may be added to a fixed leg that had none: that is how a planner completes a task on
+    the segment the vehicle is already committed to.
+    """
+    current = ctx.plans[plan.vehicle_id].fixed_legs
+    for index, old in enumerate(current):
+        if index >= len(plan.legs):
+            msg = f"the plan has {len(plan.legs)} legs but the vehicle has {len(current)} fixed legs, which cannot be dropped"
+            return _reject(RejectionCode.FIXED_LEGS_CHANGED, plan, None, msg)
+        new = plan.legs[index]
+        marker_kept = old.goal_for_task is None or new.goal_for_task == old.goal_for_task
+        if not (new.same_drive(old) and new.fixed and marker_kept):
+            msg = f"fixed leg {index} was ({old}) and may not change; the plan has ({new})"
+            return _reject(RejectionCode.FIXED_LEGS_CHANGED, plan, index, msg)
+    return None
+
+
+def fixed_not_contiguous(plan: FleetPlan, ctx: CheckContext) -> Rejection | None:
+    seen_planned = False
+    for index, leg in enumerate(plan.legs):
+        if leg.fixed and seen_planned:
+            msg = "a fixed leg follows a planned one; fixed legs must form the plan's first legs"
+            return _reject(RejectionCode.FIXED_NOT_CONTIGUOUS, plan, index, msg)
+        seen_planned = seen_planned or not leg.fixed
+    return None
+
+
+def wrong_way(plan: FleetPlan, ctx: CheckContext) -> Rejection | None:
+    for index, leg in enumerate(plan.legs):
+        segment = ctx.layout.segments[leg.segment]
+        if not segment.allows(leg.traverse):
+            msg = f"segment {segment.id} is one-way {segment.direction.value}; the leg drives it {leg.traverse.value}"
+            return _reject(RejectionCode.WRONG_WAY, plan, index, msg)
+    return None
+
+
+def _joint(layout: Layout, before: FleetLeg, after: FleetLeg) -> JointKind | None:
+    for segment, traverse, joint in layout.successors(before.segment, before.traverse):
+        if segment == after.segment and traverse is after.traverse:
+            return joint
+    return None
+
+
+def not_connected(plan: FleetPlan, ctx: CheckContext) -> Rejection | None:
+    for index, (before, after) in enumerate(zip(plan.legs, plan.legs[1:]), start=1):
+        if _joint(ctx.layout, before, after) is None:
+            msg = (
+                f"segment {before.segment} driven {before.traverse.value} does not lead to segment "
+                f"{after.segment} driven {after.traverse.value}"
+            )
+            return _reject(RejectionCode.NOT_CONNECTED, plan, index, msg)
+    return None
+
+
+def illegal_progress_change(plan: FleetPlan, ctx: CheckContext) -> Rejection | None:
+    """Curve-only vehicles keep progress at smooth joints, flip it at cusps and cannot take corners."""
+    vehicle_type = ctx.vehicle_types[plan.vehicle_id]
+    if vehicle_type.turn_capability is TurnCapability.IN_PLACE:
+        return None  # it stops and turns on the spot wherever its heading changes
+    for index, (before, after) in enumerate(zip(plan.legs, plan.legs[1:]), start=1):
+        joint = _joint(ctx.layout, before, after)
+        flipped = after.progress is not before.progress
+        if joint is JointKind.TURN_IN_PLACE:
+            msg = f"the joint from segment {before.segment} is a corner, and a {vehicle_type.name!r} vehicle cannot turn in place"
+        elif joint is JointKind.SAME and flipped:
+            msg = f"progress changes from {before.progress.value} to {after.progress.value} at a smooth joint"
+        elif joint is JointKind.OPPOSITE and not flipped:
+            msg = f"the joint from segment {before.segment} is a cusp: progress must flip from {before.progress.value}"
+        else:
+            continue
+        return _reject(RejectionCode.ILLEGAL_PROGRESS_CHANGE, plan, index, msg)
+    return None
+
+
+# Task checks first, then sanity checks (SPEC §7). Within the sanity checks, wrong-way runs before
+# not-connected: a one-way segment driven backwards also has no connection, and "wrong way" says why.
+TASK_CHECKS: tuple[Check, ...] = (goal_not_assigned, goal_order, goal_segment_mismatch, goal_direction)
+SANITY_CHECKS: tuple[Check, ...] = (
+    empty_plan,
+    unknown_segment,
+    fixed_legs_changed,
+    fixed_not_contiguous,
+    wrong_way,
+    not_connected,
+    illegal_progress_change,
+)
+
+
+def check_plan(plan: FleetPlan, ctx: CheckContext) -> Rejection | None:
+    """The first failed check of a plan for a known vehicle, or ``None`` when it passes them all."""
+    for check in (*TASK_CHECKS, *SANITY_CHECKS):
+        rejection = check(plan, ctx)
+        if rejection is not None:
+            return rejection
+    return None
+
+
+def check_plans(plans: Sequence[FleetPlan], ctx: CheckContext) -> list[FleetPlan | Rejection]:
+    """Each plan of one response, or the rejection it earned, in response order.
+
+    Plans for vehicles not in the scenario are rejected, and so are all plans of a vehicle that appears
+    twice (which of them the planner meant cannot be known; the vehicle keeps its current plan).
+    """
+    counts: dict[int, int] = {}
+    for plan in plans:
+        counts[plan.vehicle_id] = counts.get(plan.vehicle_id, 0) + 1
+    results: list[FleetPlan | Rejection] = []
+    for plan in plans:
+        if plan.vehicle_id not in ctx.plans:
+            known = ", ".join(str(v) for v in sorted(ctx.plans))
+            msg = f"vehicle {plan.vehicle_id} is not in the scenario (vehicles: {known})"
+            results.append(Rejection(RejectionCode.UNKNOWN_VEHICLE, plan.vehicle_id, None, None, msg))
+        elif counts[plan.vehicle_id] > 1:
+            msg = f"the response holds {counts[plan.vehicle_id]} plans for this vehicle; all are rejected"
+            results.append(Rejection(RejectionCode.DUPLICATE_PLAN, plan.vehicle_id, None, None, msg))
+        else:
+            results.append(check_plan(plan, ctx) or plan)
+    return results

@@ -1,0 +1,157 @@
+"""The fleet controller: consults the planner, checks and applies its plans, keeps tasks and alerts.
+
+This is steps 1–3 of the loop (SPEC §9): bookkeeping, planning for each vehicle in ascending id (head
+task unrouted → ``plan_routes``, else ``fix_legs``; each response checked and applied at once so later
+calls see it), and the reservation check. Motion comes on top of it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, replace
+from typing import Literal
+
+from fleetsim.errors import PlannerError
+from fleetsim.layout.layout import Layout
+from fleetsim.planning.checks import CheckContext, Rejection, check_plans
+from fleetsim.planning.protocol import FleetPlan, Planner, RouteError
+from fleetsim.planning.reservations import CollisionAlert, ConflictTable, find_alerts
+from fleetsim.planning.snapshot import FleetSnapshot, VehicleState, initial_plan, initial_state, read_only
+from fleetsim.planning.tasks import TaskBook
+from fleetsim.scenario import Scenario, Task
+
+__all__ = ["CallOutcome", "FleetController", "validate_response"]
+
+Method = Literal["plan_routes", "fix_legs"]
+
+
+@dataclass(frozen=True, slots=True)
+class CallOutcome:
+    """What one planner call did: plans accepted, plans rejected, route errors, tasks completed."""
+
+    vehicle_id: int
+    method: Method
+    task: Task
+    accepted: tuple[FleetPlan, ...]
+    rejections: tuple[Rejection, ...]
+    route_errors: tuple[RouteError, ...]
+    completed: tuple[int, ...]  # task ids whose goal leg an accepted plan put under the vehicle
+
+
+def validate_response(response: object, method: Method, vehicle_id: int) -> tuple[FleetPlan | RouteError, ...]:
+    """The response's items, or a :class:`PlannerError` saying exactly what is wrong with it."""
+    where = f"{method}() for vehicle {vehicle_id}"
+    if isinstance(response, (str, bytes, Mapping)) or not isinstance(response, Sequence):
+        msg = f"{where} returned {response!r}; it must return a list of FleetPlan or RouteError items"
+        raise PlannerError(msg)
+    for index, item in enumerate(response):
+        if not isinstance(item, (FleetPlan, RouteError)):
+            msg = f"{where} returned item {index} = {item!r}; each item must be a FleetPlan or a RouteError"
+            raise PlannerError(msg)
+    return tuple(response)
+
+
+class FleetController:
+    """The mutable planning state of one run: plans, vehicle states, task queues."""
+
+    def __init__(self, scenario: Scenario) -> None:
+        self.layout: Layout = scenario.layout
+        self.tasks = TaskBook(scenario.tasks, (v.id for v in scenario.vehicles))
+        self._types = {v.id: v.type for v in scenario.vehicles}
+        self._plans: dict[int, FleetPlan] = {v.id: initial_plan(v) for v in scenario.vehicles}
+        self._states: dict[int, VehicleState] = {v.id: initial_state(v, self.layout) for v in scenario.vehicles}
+        self._table = ConflictTable(self.layout)
+
+    # -- views ---------------------------------------------------------------------------------------
+
+    @property
+    def plans(self) -> Mapping[int, FleetPlan]:
+        return read_only(self._plans)
+
+    @property
+    def states(self) -> Mapping[int, VehicleState]:
+        return read_only(self._states)
+
+    def snapshot(self, time: float) -> FleetSnapshot:
+        """A fresh immutable view for one planner call."""
+        return FleetSnapshot(
+            time=time,
+            vehicles=read_only(self._states),
+            plans=read_only(self._plans),
+            tasks=self.tasks.queues(),
+            routed=self.tasks.routed,
+        )
+
+    def alerts(self) -> tuple[CollisionAlert, ...]:
+        """The reservation check over the plans in force (step 3)."""
+        return find_alerts(self._plans, self._table)
+
+    # -- changes -------------------------------------------------------------------------------------
+
+    def set_plan(self, plan: FleetPlan) -> None:
+        """Replace a vehicle's plan without checks (the simulation drops legs it has driven past)."""
+        self._plans[plan.vehicle_id] = plan
+
+    def set_state(self, state: VehicleState) -> None:
+        self._states[state.id] = state
+
+    def consult(self, planner: Planner, vehicle_id: int, time: float) -> CallOutcome | None:
+        """Step 2 for one vehicle: ask the planner, check the response, apply what passes.
+
+        ``None`` when the vehicle has no more tasks. A :class:`RouteError` raised by the planner fails
+        the whole request; any other exception propagates to the caller (which reports a planner error).
+        """
+        task = self.tasks.head(vehicle_id)
+        if task is None:
+            return None
+        method: Method = "fix_legs" if self.tasks.is_routed(task.id) else "plan_routes"
+        call = planner.fix_legs if method == "fix_legs" else planner.plan_routes
+        try:
+            items = validate_response(call(task, self.snapshot(time), self.layout), method, vehicle_id)
+        except RouteError as error:
+            return CallOutcome(vehicle_id, method, task, (), (), (error,), ())
+        return self._apply(vehicle_id, method, task, items, time)
+
+    def _context(self) -> CheckContext:
+        return CheckContext(self.layout, self._types, self._plans, self.tasks.queues(), self.tasks.routed)
+
+    def _apply(
+        self, vehicle_id: int, method: Method, task: Task, items: tuple[FleetPlan | RouteError, ...], time: float
+    ) -> CallOutcome:
+        plans = [item for item in items if isinstance(item, FleetPlan)]
+        errors = tuple(item for item in items if isinstance(item, RouteError))
+        accepted: list[FleetPlan] = []
+        rejections: list[Rejection] = []
+        completed: list[int] = []
+        for result in check_plans(plans, self._context()):
+            if isinstance(result, Rejection):
+                rejections.append(result)
+                continue
+            self._plans[result.vehicle_id] = result
+            self.tasks.mark_routed(result)
+            goal = result.legs[0].goal_for_task
+            if goal is not None and not self.tasks.is_completed(goal):
+                self.tasks.complete(goal, time)  # already on the goal leg
+                completed.append(goal)
+            accepted.append(result)
+        return CallOutcome(vehicle_id, method, task, tuple(accepted), tuple(rejections), errors, tuple(completed))
+
+    def bookkeeping(self) -> tuple[Task, ...]:
+        """Step 1: completed tasks leave their queues and their goal markers leave the plans."""
+        dropped = self.tasks.drop_completed()
+        for task in dropped:
+            plan = self._plans[task.vehicle_id]
+            if any(leg.goal_for_task == task.id for leg in plan.legs):
+                legs = tuple(replace(leg, goal_for_task=None) if leg.goal_for_task == task.id else leg for leg in plan.legs)
+                self._plans[task.vehicle_id] = FleetPlan(task.vehicle_id, legs)
+        return dropped
+
+    def planning_round(self, planner: Planner, time: float) -> tuple[CallOutcome, ...]:
+        """Steps 1–2: bookkeeping, then consult the planner for each busy vehicle by id."""
+        self.bookkeeping()
+        outcomes = []
+        for vehicle_id in self.tasks.busy_vehicles():
+            outcome = self.consult(planner, vehicle_id, time)
+            if outcome is not None:
+                outcomes.append(outcome)
+        return tuple(outcomes)

@@ -1,0 +1,147 @@
+"""The planner protocol (SPEC §6): what a planner receives and what it may return.
+
+A planner is any object with ``plan_routes(task, fleet, layout)`` and ``fix_legs(task, fleet, layout)``.
+Both return a sequence whose items are each a :class:`FleetPlan` or a :class:`RouteError` for one
+vehicle; raising a :class:`RouteError` fails the whole request. Plans and legs are immutable.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Protocol, Union, runtime_checkable
+
+from fleetsim.enums import Progress, Traverse
+from fleetsim.errors import FleetsimError
+
+if TYPE_CHECKING:
+    from fleetsim.layout.layout import Layout
+    from fleetsim.planning.snapshot import FleetSnapshot
+    from fleetsim.scenario import Task
+
+__all__ = ["FleetLeg", "FleetPlan", "Planner", "Response", "ResponseItem", "RouteError"]
+
+
+def _enum_value(enum: type[Traverse] | type[Progress], value: object, name: str) -> Traverse | Progress:
+    try:
+        return enum(value)
+    except ValueError:
+        choices = " or ".join(repr(member.value) for member in enum)
+        msg = f"{name}={value!r} must be {choices}"
+        raise ValueError(msg) from None
+
+
+def _whole_number(value: object, name: str) -> int:
+    # bool is an int subclass, but True is never a meaningful segment or vehicle id.
+    if isinstance(value, bool) or not isinstance(value, int):
+        msg = f"{name}={value!r} must be an int"
+        raise TypeError(msg)
+    return value
+
+
+@dataclass(frozen=True, slots=True)
+class FleetLeg:
+    """An instruction to drive one segment: which way, nose first or backing, committed or not.
+
+    ``fixed`` legs are committed (VDA 5050 "base"): the vehicle may drive them and they can never change.
+    Planned legs (VDA 5050 "horizon") may still change. ``goal_for_task`` marks the leg that completes a
+    task. The strings ``"forward"``, ``"backward"`` and ``"reverse"`` are accepted for the enums.
+    """
+
+    segment: int
+    traverse: Traverse
+    progress: Progress
+    fixed: bool
+    goal_for_task: int | None = None
+
+    def __post_init__(self) -> None:
+        _whole_number(self.segment, "segment")
+        object.__setattr__(self, "traverse", _enum_value(Traverse, self.traverse, "traverse"))
+        object.__setattr__(self, "progress", _enum_value(Progress, self.progress, "progress"))
+        if not isinstance(self.fixed, bool):
+            msg = f"fixed={self.fixed!r} must be True or False"
+            raise TypeError(msg)
+        if self.goal_for_task is not None:
+            _whole_number(self.goal_for_task, "goal_for_task")
+
+    def same_drive(self, other: FleetLeg) -> bool:
+        """Whether both legs drive the same segment the same way (fixed flag and goal marker aside)."""
+        return (self.segment, self.traverse, self.progress) == (other.segment, other.traverse, other.progress)
+
+    def __str__(self) -> str:
+        text = f"{self.segment} {self.traverse.value} {self.progress.value} {'fixed' if self.fixed else 'planned'}"
+        return text + (f" goal of task {self.goal_for_task}" if self.goal_for_task is not None else "")
+
+
+@dataclass(frozen=True, slots=True)
+class FleetPlan:
+    """A vehicle's route plan: its legs in driving order, the first being the one it is on now.
+
+    A list of legs is accepted and frozen into a tuple.
+    """
+
+    vehicle_id: int
+    legs: tuple[FleetLeg, ...]
+
+    def __post_init__(self) -> None:
+        _whole_number(self.vehicle_id, "vehicle_id")
+        if isinstance(self.legs, (str, bytes)) or not isinstance(self.legs, Sequence):
+            msg = f"legs={self.legs!r} must be a sequence of FleetLeg"
+            raise TypeError(msg)
+        legs = tuple(self.legs)
+        for index, leg in enumerate(legs):
+            if not isinstance(leg, FleetLeg):
+                msg = f"legs[{index}]={leg!r} must be a FleetLeg"
+                raise TypeError(msg)
+        object.__setattr__(self, "legs", legs)
+
+    @property
+    def fixed_legs(self) -> tuple[FleetLeg, ...]:
+        """The committed prefix (for a well-formed plan; see the ``fixed-not-contiguous`` check)."""
+        count = 0
+        for leg in self.legs:
+            if not leg.fixed:
+                break
+            count += 1
+        return self.legs[:count]
+
+    def __str__(self) -> str:
+        return f"vehicle {self.vehicle_id}: " + ", ".join(map(str, self.legs))
+
+
+class RouteError(FleetsimError):
+    """A planner cannot route: returned as a response item for one vehicle, or raised for the request."""
+
+    def __init__(self, vehicle_id: int | None, message: str) -> None:
+        self.vehicle_id = vehicle_id
+        self.message = message
+        who = f"vehicle {vehicle_id}" if vehicle_id is not None else "request"
+        super().__init__(f"route error ({who}): {message}")
+
+    def __repr__(self) -> str:
+        return f"RouteError(vehicle_id={self.vehicle_id!r}, message={self.message!r})"
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, RouteError):
+            return NotImplemented
+        return (self.vehicle_id, self.message) == (other.vehicle_id, other.message)
+
+    def __hash__(self) -> int:
+        return hash((self.vehicle_id, self.message))
+
+
+ResponseItem = Union[FleetPlan, RouteError]
+Response = Sequence[ResponseItem]
+
+
+@runtime_checkable
+class Planner(Protocol):
+    """A fleet route planner (the thesis's ``RoutePlannerInterface``). A fresh instance serves one run."""
+
+    def plan_routes(self, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
+        """The vehicle's head task has not been routed yet: return a plan marking its goal leg."""
+        ...
+
+    def fix_legs(self, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
+        """The task is routed: return the vehicle's plan with more legs fixed (or unchanged)."""
+        ...

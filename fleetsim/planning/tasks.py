@@ -1,0 +1,94 @@
+"""Task bookkeeping (the thesis's fleet controller): per-vehicle FIFO queues, routed status, completion.
+
+Each vehicle works through its tasks in file order. The head task is *unrouted* until an accepted plan
+marks a leg as its goal, then *routed*; it is *completed* when the vehicle enters that leg (or is on it
+when the plan is accepted). Completed tasks leave the queue at the next bookkeeping. A vehicle with an
+empty queue has no more tasks and is not consulted again.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from collections.abc import Iterable, Mapping
+from types import MappingProxyType
+
+from fleetsim.planning.protocol import FleetPlan
+from fleetsim.scenario import Task
+
+__all__ = ["TaskBook"]
+
+
+class TaskBook:
+    """The mutable task state of one run; the simulation owns it."""
+
+    def __init__(self, tasks: Iterable[Task], vehicle_ids: Iterable[int]) -> None:
+        self._queues: dict[int, deque[Task]] = {vid: deque() for vid in sorted(vehicle_ids)}
+        self._tasks: dict[int, Task] = {}
+        for task in tasks:  # file order: the queue order
+            self._queues[task.vehicle_id].append(task)
+            self._tasks[task.id] = task
+        self._routed: set[int] = set()
+        self._completed: dict[int, float] = {}  # task id -> sim time of completion
+
+    # -- queries -------------------------------------------------------------------------------------
+
+    def queue(self, vehicle_id: int) -> tuple[Task, ...]:
+        return tuple(self._queues[vehicle_id])
+
+    def queues(self) -> Mapping[int, tuple[Task, ...]]:
+        """Every vehicle's queue, head first (a read-only copy)."""
+        return MappingProxyType({vid: tuple(queue) for vid, queue in self._queues.items()})
+
+    def head(self, vehicle_id: int) -> Task | None:
+        queue = self._queues[vehicle_id]
+        return queue[0] if queue else None
+
+    def is_routed(self, task_id: int) -> bool:
+        return task_id in self._routed
+
+    @property
+    def routed(self) -> frozenset[int]:
+        return frozenset(self._routed)
+
+    def is_completed(self, task_id: int) -> bool:
+        return task_id in self._completed
+
+    def completed(self) -> Mapping[int, float]:
+        """Completed task ids with their completion times, in completion order."""
+        return MappingProxyType(dict(self._completed))
+
+    def busy_vehicles(self) -> tuple[int, ...]:
+        """Vehicles with tasks still queued, ascending."""
+        return tuple(vid for vid, queue in self._queues.items() if queue)
+
+    def pending(self) -> tuple[Task, ...]:
+        """Tasks not yet completed, by task id."""
+        return tuple(task for task_id, task in sorted(self._tasks.items()) if task_id not in self._completed)
+
+    @property
+    def total(self) -> int:
+        return len(self._tasks)
+
+    def all_done(self) -> bool:
+        return len(self._completed) == len(self._tasks)
+
+    # -- changes -------------------------------------------------------------------------------------
+
+    def mark_routed(self, plan: FleetPlan) -> None:
+        """An accepted plan routes every task it marks as a goal."""
+        for leg in plan.legs:
+            if leg.goal_for_task is not None:
+                self._routed.add(leg.goal_for_task)
+
+    def complete(self, task_id: int, time: float) -> None:
+        """The vehicle entered (or stands on) the task's goal leg."""
+        if task_id in self._tasks and task_id not in self._completed:
+            self._completed[task_id] = time
+
+    def drop_completed(self) -> tuple[Task, ...]:
+        """Bookkeeping at the start of a step: completed tasks leave their queues (returned)."""
+        dropped = []
+        for queue in self._queues.values():
+            while queue and queue[0].id in self._completed:
+                dropped.append(queue.popleft())
+        return tuple(dropped)
