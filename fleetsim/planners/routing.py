@@ -1,0 +1,133 @@
+"""Route search over (segment, traverse, progress) states, shared by the reference planners.
+
+A vehicle's next states follow the layout's connections and the progress rules of SPEC §4: a vehicle
+that can only follow curves keeps its progress at smooth joints, flips it at cusps and cannot take
+corners; a vehicle that turns in place keeps its progress everywhere (it turns on the spot instead).
+"""
+
+from __future__ import annotations
+
+import heapq
+from collections import deque
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import replace
+
+from fleetsim.enums import JointKind, Progress, Traverse, TurnCapability
+from fleetsim.layout.layout import Layout
+from fleetsim.planning.protocol import FleetLeg
+from fleetsim.scenario import Task
+
+__all__ = [
+    "State",
+    "breadth_first_route",
+    "legs_along",
+    "mark_goal_on_fixed",
+    "next_states",
+    "next_steps",
+    "shortest_route",
+]
+
+State = tuple[int, Traverse, Progress]
+Cost = Callable[[int, Traverse, JointKind], float]  # (segment entered, its traverse, joint crossed)
+
+
+def next_steps(layout: Layout, capability: TurnCapability, state: State) -> Iterator[tuple[State, JointKind]]:
+    """The states a vehicle may drive on to from ``state``, each with the joint it crosses."""
+    segment, traverse, progress = state
+    for next_segment, next_traverse, joint in layout.successors(segment, traverse):
+        if capability is TurnCapability.IN_PLACE or joint is JointKind.SAME:
+            yield (next_segment, next_traverse, progress), joint
+        elif joint is JointKind.OPPOSITE:
+            yield (next_segment, next_traverse, progress.flipped), joint
+        # a corner (turn_in_place) is no way on for a vehicle that only follows curves
+
+
+def next_states(layout: Layout, capability: TurnCapability, state: State) -> Iterator[State]:
+    return (following for following, _ in next_steps(layout, capability, state))
+
+
+def _rebuild(came_from: dict[State, State], end: State) -> list[State]:
+    path = [end]
+    while path[-1] in came_from:
+        path.append(came_from[path[-1]])
+    path.reverse()
+    return path[1:]  # without the start state
+
+
+def breadth_first_route(layout: Layout, capability: TurnCapability, start: State, goal: int) -> list[State] | None:
+    """Fewest legs from ``start`` to any state on segment ``goal`` (``start`` itself excluded)."""
+    came_from: dict[State, State] = {}
+    frontier = deque([start])
+    seen = {start}
+    while frontier:
+        state = frontier.popleft()
+        for following in next_states(layout, capability, state):
+            if following in seen:
+                continue
+            seen.add(following)
+            came_from[following] = state
+            if following[0] == goal:
+                return _rebuild(came_from, following)
+            frontier.append(following)
+    return None
+
+
+def _order(state: State) -> tuple[int, int, int]:
+    """A total order on states, so equal-cost ties never depend on hashing or insertion order."""
+    segment, traverse, progress = state
+    return segment, traverse is Traverse.BACKWARD, progress is Progress.REVERSE
+
+
+def shortest_route(
+    layout: Layout,
+    capability: TurnCapability,
+    start: State,
+    goal: int,
+    arrive: Progress | None,
+    cost: Cost,
+) -> list[State] | None:
+    """Least total ``cost`` from ``start`` to segment ``goal`` (Dijkstra; ``start`` itself excluded).
+
+    ``cost(segment, traverse, joint)`` is what driving on to a segment costs (at least its length). ``arrive`` is the
+    required progress on the goal segment; a vehicle that turns in place can always meet it on the last
+    leg, so for it only a curve-only vehicle's progress is constrained.
+    """
+    must_match = arrive is not None and capability is TurnCapability.CURVE
+    best: dict[State, float] = {start: 0.0}
+    came_from: dict[State, State] = {}
+    heap: list[tuple[float, tuple[int, int, int], State]] = [(0.0, _order(start), start)]
+    while heap:
+        spent, _, state = heapq.heappop(heap)
+        if spent > best.get(state, float("inf")):
+            continue
+        if state != start and state[0] == goal and (not must_match or state[2] is arrive):
+            return _rebuild(came_from, state)
+        for following, joint in next_steps(layout, capability, state):
+            total = spent + cost(following[0], following[1], joint)
+            if total < best.get(following, float("inf")):
+                best[following] = total
+                came_from[following] = state
+                heapq.heappush(heap, (total, _order(following), following))
+    return None
+
+
+def legs_along(path: Sequence[State], task: Task, arrive: Progress | None) -> tuple[FleetLeg, ...]:
+    """Planned legs for a route, the last one marked as the task's goal (with ``arrive`` if required)."""
+    legs = [FleetLeg(segment, traverse, progress, fixed=False) for segment, traverse, progress in path]
+    last = legs[-1]
+    legs[-1] = replace(last, goal_for_task=task.id, progress=arrive if arrive is not None else last.progress)
+    return tuple(legs)
+
+
+def mark_goal_on_fixed(fixed: Sequence[FleetLeg], task: Task, *, check_progress: bool) -> tuple[FleetLeg, ...] | None:
+    """The fixed legs with the task's goal marked on the first that reaches it, or ``None`` if none does.
+
+    A vehicle completes a task on a leg it is committed to when the plan marks that leg as the goal.
+    """
+    for index, leg in enumerate(fixed):
+        matches_progress = not check_progress or task.goal_progress in (None, leg.progress)
+        if leg.segment == task.goal_segment and leg.goal_for_task is None and matches_progress:
+            marked = list(fixed)
+            marked[index] = replace(leg, goal_for_task=task.id)
+            return tuple(marked)
+    return None
