@@ -7,7 +7,7 @@ calls see it), and the reservation check. Motion comes on top of it.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import Literal
 
@@ -15,7 +15,7 @@ from fleetsim.errors import PlannerError
 from fleetsim.layout.layout import Layout
 from fleetsim.planning.checks import CheckContext, Rejection, check_plans
 from fleetsim.planning.protocol import FleetPlan, Planner, RouteError
-from fleetsim.planning.reservations import CollisionAlert, ConflictTable, find_alerts
+from fleetsim.planning.reservations import CollisionAlert, ConflictTable, ReservationIndex
 from fleetsim.planning.snapshot import FleetSnapshot, VehicleState, initial_plan, initial_state, read_only
 from fleetsim.planning.tasks import TaskBook
 from fleetsim.scenario import Scenario, Task
@@ -23,6 +23,12 @@ from fleetsim.scenario import Scenario, Task
 __all__ = ["CallOutcome", "FleetController", "validate_response"]
 
 Method = Literal["plan_routes", "fix_legs"]
+# How a planner method is called: (method name, bound method, vehicle id, task, snapshot, layout).
+Invoke = Callable[..., object]
+
+
+def _direct(method: str, call: Callable[..., object], vehicle_id: int, *args: object) -> object:
+    return call(*args)
 
 
 @dataclass(frozen=True, slots=True)
@@ -54,13 +60,14 @@ def validate_response(response: object, method: Method, vehicle_id: int) -> tupl
 class FleetController:
     """The mutable planning state of one run: plans, vehicle states, task queues."""
 
-    def __init__(self, scenario: Scenario) -> None:
+    def __init__(self, scenario: Scenario, invoke: Invoke = _direct) -> None:
         self.layout: Layout = scenario.layout
+        self._invoke = invoke
         self.tasks = TaskBook(scenario.tasks, (v.id for v in scenario.vehicles))
         self._types = {v.id: v.type for v in scenario.vehicles}
         self._plans: dict[int, FleetPlan] = {v.id: initial_plan(v) for v in scenario.vehicles}
         self._states: dict[int, VehicleState] = {v.id: initial_state(v, self.layout) for v in scenario.vehicles}
-        self._table = ConflictTable(self.layout)
+        self._reservations = ReservationIndex(ConflictTable(self.layout))
 
     # -- views ---------------------------------------------------------------------------------------
 
@@ -84,7 +91,7 @@ class FleetController:
 
     def alerts(self) -> tuple[CollisionAlert, ...]:
         """The reservation check over the plans in force (step 3)."""
-        return find_alerts(self._plans, self._table)
+        return self._reservations.alerts(self._plans)
 
     # -- changes -------------------------------------------------------------------------------------
 
@@ -107,7 +114,8 @@ class FleetController:
         method: Method = "fix_legs" if self.tasks.is_routed(task.id) else "plan_routes"
         call = planner.fix_legs if method == "fix_legs" else planner.plan_routes
         try:
-            items = validate_response(call(task, self.snapshot(time), self.layout), method, vehicle_id)
+            response = self._invoke(method, call, vehicle_id, task, self.snapshot(time), self.layout)
+            items = validate_response(response, method, vehicle_id)
         except RouteError as error:
             return CallOutcome(vehicle_id, method, task, (), (), (error,), ())
         return self._apply(vehicle_id, method, task, items, time)
