@@ -1,0 +1,241 @@
+"""Moving one vehicle along its fixed legs over a time step (SPEC §8; thesis section 6.5).
+
+The distance a vehicle may drive is the rest of its current leg plus the following fixed legs, up to the
+first *stop point*: a junction where its progress direction flips or its heading changes by more than
+the joint angle tolerance (it must turn in place). A speed profile (:class:`SpeedProfile`) runs to the
+end of that distance: ``till_end`` when it ends with the fixed legs, ``till_stop`` when it ends at a stop
+point before them. New fixed legs under a ``till_end`` profile re-plan it from the current speed; a
+``till_stop`` profile runs to its stop first. At a stop point the vehicle takes the next leg's progress
+and, if its heading must change, turns in place at its type's ``turn_rate``; then it drives on.
+
+Within a step, time is spent phase by phase (driving, turning, driving on), so the distance per step is
+the exact area under the profile and nothing waits for the next step without reason.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from fleetsim.enums import Progress, Traverse
+from fleetsim.layout.layout import Layout
+from fleetsim.motion.profile import SpeedProfile
+from fleetsim.planning.protocol import FleetLeg, FleetPlan
+from fleetsim.planning.snapshot import VehicleState
+from fleetsim.scenario import Vehicle
+
+__all__ = ["Driver", "HeadingTable", "StepMotion"]
+
+_EPS = 1e-9  # metres or seconds below which a remainder is rounding noise
+
+
+def _wrap(angle: float) -> float:
+    """An angle in (-π, π]."""
+    return math.remainder(angle, math.tau)
+
+
+def _nose(travel_heading: float, progress: Progress) -> float:
+    return _wrap(travel_heading + (math.pi if progress is Progress.REVERSE else 0.0))
+
+
+class HeadingTable:
+    """Travel headings where each (segment, traverse) starts and ends; one per layout, shared."""
+
+    def __init__(self, layout: Layout) -> None:
+        self._layout = layout
+        self._ends: dict[tuple[int, Traverse], tuple[float, float]] = {}
+
+    def ends(self, segment: int, traverse: Traverse) -> tuple[float, float]:
+        key = (segment, traverse)
+        found = self._ends.get(key)
+        if found is None:
+            seg = self._layout.segments[segment]
+            found = (seg.pose_at(0.0, traverse)[2], seg.pose_at(seg.length, traverse)[2])
+            self._ends[key] = found
+        return found
+
+    def turn_between(self, before: FleetLeg, after: FleetLeg) -> float:
+        """How far the nose turns (radians, signed) from the end of ``before`` to the start of ``after``."""
+        end = _nose(self.ends(before.segment, before.traverse)[1], before.progress)
+        start = _nose(self.ends(after.segment, after.traverse)[0], after.progress)
+        return _wrap(start - end)
+
+
+@dataclass(frozen=True, slots=True)
+class StepMotion:
+    """What a step did to one vehicle: its plan with passed legs dropped, the legs it entered, how far."""
+
+    plan: FleetPlan
+    entered: tuple[FleetLeg, ...]
+    distance: float
+    turned: bool
+
+    @property
+    def moved(self) -> bool:
+        return self.distance > 0.0 or self.turned
+
+
+class Driver:
+    """The motion state of one vehicle; the simulation owns it and steps it once per time step."""
+
+    def __init__(self, vehicle: Vehicle, layout: Layout, headings: HeadingTable, heading: float) -> None:
+        self.id = vehicle.id
+        self.type = vehicle.type
+        self._layout = layout
+        self._headings = headings
+        self._tolerance = math.radians(layout.joint_angle_tolerance)
+        self._turn_rate = math.radians(vehicle.type.turn_rate)
+        self.progress = vehicle.progress
+        self.distance = 0.0  # along the current leg
+        self.speed = 0.0
+        self.heading = heading  # where the nose points
+        self.odometer = 0.0
+        self._profile: SpeedProfile | None = None
+        self._elapsed = 0.0
+        self._till_stop = False
+        self._turn_left = 0.0  # seconds of turning in place still to do
+        self._turn_target = heading
+        self._turn_sign = 1.0  # +1 counter-clockwise, -1 clockwise
+
+    # -- the distance available ---------------------------------------------------------------------
+
+    def _length(self, leg: FleetLeg) -> float:
+        return self._layout.segments[leg.segment].length
+
+    def stops_between(self, before: FleetLeg, after: FleetLeg) -> bool:
+        """A stop point: the progress flips or the nose must turn more than the tolerance."""
+        if before.progress is not after.progress:
+            return True
+        return abs(self._headings.turn_between(before, after)) > self._tolerance
+
+    def reach(self, legs: list[FleetLeg] | tuple[FleetLeg, ...]) -> tuple[float, bool]:
+        """Metres drivable from here without stopping, and whether a stop point (not the end) ends them."""
+        total = self._length(legs[0]) - self.distance
+        for before, after in zip(legs, legs[1:]):
+            if not after.fixed:
+                return max(total, 0.0), False
+            if self.stops_between(before, after):
+                return max(total, 0.0), True
+            total += self._length(after)
+        return max(total, 0.0), False
+
+    # -- one step ------------------------------------------------------------------------------------
+
+    def step(self, plan: FleetPlan, dt: float) -> StepMotion:
+        legs = list(plan.legs)
+        entered: list[FleetLeg] = []
+        driven = 0.0
+        turned = False
+        if self._profile is not None and not self._till_stop:
+            reach, till_stop = self.reach(legs)
+            if reach > self._remaining() + _EPS:  # new fixed legs: re-plan from the current speed
+                self._start(reach, till_stop)
+        budget = dt
+        while budget > _EPS:
+            if self._turn_left > 0.0:
+                budget -= self._turn(budget)
+                turned = True
+            elif self._profile is not None:
+                spent, distance = self._drive(budget, legs, entered)
+                budget -= spent
+                driven += distance
+            elif self._at_leg_end(legs) and len(legs) > 1 and legs[1].fixed:
+                self._cross(legs, entered)
+            else:
+                reach, till_stop = self.reach(legs)
+                if reach <= _EPS:
+                    break  # nothing fixed ahead: wait
+                self._start(reach, till_stop)
+        self.odometer += driven
+        new_plan = plan if len(legs) == len(plan.legs) else FleetPlan(plan.vehicle_id, tuple(legs))
+        return StepMotion(new_plan, tuple(entered), driven, turned)
+
+    def _remaining(self) -> float:
+        assert self._profile is not None
+        return self._profile.distance - self._profile.distance_at(self._elapsed)
+
+    def _start(self, reach: float, till_stop: bool) -> None:
+        self._profile = SpeedProfile.plan(
+            min(self.speed, self.type.max_speed), self.type.acceleration, self.type.max_speed, reach
+        )
+        self._elapsed = 0.0
+        self._till_stop = till_stop
+
+    def _at_leg_end(self, legs: list[FleetLeg]) -> bool:
+        return self.distance >= self._length(legs[0]) - _EPS
+
+    def _drive(self, budget: float, legs: list[FleetLeg], entered: list[FleetLeg]) -> tuple[float, float]:
+        """Follow the profile for up to ``budget`` seconds; the time spent and the distance driven."""
+        profile = self._profile
+        assert profile is not None
+        t0 = self._elapsed
+        t1 = min(t0 + budget, profile.stop_time)
+        distance = profile.advance(t0, t1)
+        self._elapsed = t1
+        self._move(distance, legs, entered)
+        if t1 >= profile.stop_time:
+            self._profile = None
+            self.speed = 0.0
+        else:
+            self.speed = profile.speed_at(t1)
+        return t1 - t0, distance
+
+    def _move(self, distance: float, legs: list[FleetLeg], entered: list[FleetLeg]) -> None:
+        """Advance along the legs; smooth joints are crossed on the move, passed legs dropped."""
+        self.distance += distance
+        while self._at_leg_end(legs):
+            length = self._length(legs[0])
+            if len(legs) > 1 and legs[1].fixed and not self.stops_between(legs[0], legs[1]):
+                self.distance = max(self.distance - length, 0.0)
+                legs.pop(0)
+                entered.append(legs[0])
+                continue
+            self.distance = length  # the end of what may be driven now
+            break
+        leg = legs[0]
+        travel = self._layout.segments[leg.segment].pose_at(self.distance, leg.traverse)[2]
+        self.heading = _nose(travel, leg.progress)
+
+    def _cross(self, legs: list[FleetLeg], entered: list[FleetLeg]) -> None:
+        """At rest at a leg's end with the next leg fixed: enter it, take its progress, turn if needed."""
+        turn = self._headings.turn_between(legs[0], legs[1])
+        legs.pop(0)
+        entered.append(legs[0])
+        self.distance = 0.0
+        self.progress = legs[0].progress
+        target = _wrap(self.heading + turn)
+        if abs(turn) > self._tolerance:
+            self._turn_left = abs(turn) / self._turn_rate
+            self._turn_target = target
+            self._turn_sign = math.copysign(1.0, turn)
+        else:
+            self.heading = target
+
+    def _turn(self, budget: float) -> float:
+        """Turn in place for up to ``budget`` seconds towards the target heading; the time spent."""
+        spent = min(budget, self._turn_left)
+        self._turn_left -= spent
+        if self._turn_left <= _EPS:
+            self._turn_left = 0.0
+            self.heading = self._turn_target
+        else:
+            self.heading = _wrap(self._turn_target - self._turn_sign * self._turn_left * self._turn_rate)
+        return spent
+
+    # -- what a planner sees -------------------------------------------------------------------------
+
+    def state(self, plan: FleetPlan) -> VehicleState:
+        leg = plan.legs[0]
+        x, y, _ = self._layout.segments[leg.segment].pose_at(self.distance, leg.traverse)
+        return VehicleState(
+            id=self.id,
+            segment=leg.segment,
+            traverse=leg.traverse,
+            progress=self.progress,
+            distance=self.distance,
+            speed=self.speed,
+            x=x,
+            y=y,
+            heading=self.heading,
+            type=self.type,
+        )

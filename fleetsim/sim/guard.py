@@ -1,0 +1,97 @@
+"""Calling a planner safely: a per-call wall-clock timeout, its time measured, its faults contained.
+
+A planner that raises anything but a :class:`RouteError`, or overruns the timeout, becomes a
+:class:`PlannerFault` carrying its traceback; the run then fails with a ``planner-error`` and the
+harness carries on with the next scenario. The timeout uses ``SIGALRM`` (an interval timer), which
+interrupts pure-Python loops and sleeps; it is only available in the main thread of a POSIX process,
+elsewhere calls run without a timeout.
+"""
+
+from __future__ import annotations
+
+import signal
+import threading
+import time
+import traceback
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from types import FrameType
+
+from fleetsim.errors import FleetsimError
+from fleetsim.planning.protocol import RouteError
+
+__all__ = ["PlannerFault", "PlannerGuard"]
+
+
+class PlannerFault(FleetsimError):
+    """The planner raised, overran its time, or returned something that is not a response."""
+
+    def __init__(self, message: str, *, vehicle_id: int | None = None, details: str = "") -> None:
+        self.message = message
+        self.vehicle_id = vehicle_id
+        self.details = details  # the planner's traceback, where there is one
+        super().__init__(message)
+
+
+class _Overrun(BaseException):
+    """Raised inside the planner by the timer; a BaseException so a planner's ``except Exception`` cannot
+    swallow it."""
+
+
+def _alarm(signum: int, frame: FrameType | None) -> None:
+    raise _Overrun
+
+
+@contextmanager
+def _deadline(seconds: float | None) -> Iterator[None]:
+    usable = (
+        seconds is not None
+        and hasattr(signal, "setitimer")
+        and threading.current_thread() is threading.main_thread()
+    )
+    if not usable:
+        yield
+        return
+    assert seconds is not None
+    previous = signal.signal(signal.SIGALRM, _alarm)
+    signal.setitimer(signal.ITIMER_REAL, seconds)
+    try:
+        yield
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0.0)
+        signal.signal(signal.SIGALRM, previous)
+
+
+def _planner_traceback(exc: BaseException) -> str:
+    """The traceback from the planner's frames on (the harness's own frames say nothing to a user)."""
+    frames = traceback.extract_tb(exc.__traceback__)
+    inside = [frame for frame in frames if "fleetsim/sim/guard.py" not in frame.filename.replace("\\", "/")]
+    lines = ["Traceback (most recent call last):\n", *traceback.format_list(inside)]
+    lines += traceback.format_exception_only(type(exc), exc)
+    return "".join(lines)
+
+
+class PlannerGuard:
+    """Invokes planner methods with a timeout; counts calls and sums their wall time."""
+
+    def __init__(self, timeout: float | None = 10.0) -> None:
+        self.timeout = timeout
+        self.calls = 0
+        self.wall_time = 0.0
+
+    def __call__(self, method: str, call: Callable[..., object], vehicle_id: int, *args: object) -> object:
+        start = time.perf_counter()
+        try:
+            with _deadline(self.timeout):
+                return call(*args)
+        except RouteError:
+            raise
+        except _Overrun:
+            msg = f"{method}() for vehicle {vehicle_id} did not return within the per-call timeout of {self.timeout:g} s"
+            raise PlannerFault(msg, vehicle_id=vehicle_id) from None
+        except Exception as exc:
+            msg = f"{method}() for vehicle {vehicle_id} raised {type(exc).__name__}: {exc}"
+            raise PlannerFault(msg, vehicle_id=vehicle_id, details=_planner_traceback(exc)) from None
+        finally:
+            self.calls += 1
+            self.wall_time += time.perf_counter() - start

@@ -1,0 +1,241 @@
+"""The simulation loop, in the fixed order of SPEC §9 (determinism depends on it).
+
+Each step, at time t: (1) bookkeeping — completed tasks leave their queues; (2) planning — every
+``planning_period``, each vehicle with tasks, in ascending id, is asked ``plan_routes`` (head task
+unrouted) or ``fix_legs``, and each response is checked and applied at once; (3) the reservation check;
+(4) motion over [t, t + dt] with task completions; (5) t ← t + dt and the step goes into the trace;
+(6) the end: all tasks done, the time limit, a stop-on event, a planner error, or deadlock (tasks
+pending, nothing moved and no plan changed for ``deadlock_after`` seconds).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from types import MappingProxyType
+from typing import Any
+
+from fleetsim.errors import PlannerError
+from fleetsim.motion.driver import Driver, HeadingTable
+from fleetsim.planning.controller import CallOutcome, FleetController
+from fleetsim.planning.protocol import FleetPlan, Planner
+from fleetsim.planning.reservations import CollisionAlert
+from fleetsim.scenario import Scenario
+from fleetsim.sim.deadlock import wait_for_cycle, wait_for_graph
+from fleetsim.sim.guard import PlannerFault, PlannerGuard
+from fleetsim.sim.result import AlertEvent, DeadlockReport, Ending, Failure, Metrics, RejectionEvent, RunResult, judge
+from fleetsim.sim.trace import Trace, plan_record, vehicle_record
+
+__all__ = ["RunProgress", "run_scenario"]
+
+
+@dataclass(frozen=True, slots=True)
+class RunProgress:
+    """Where a run is, for a live progress line."""
+
+    time: float
+    steps: int
+    completed: int
+    total: int
+
+
+class _Run:
+    """The mutable state of one run; everything a result is built from."""
+
+    def __init__(self, scenario: Scenario, planner: Planner, guard: PlannerGuard, keep_trace: bool) -> None:
+        self.scenario = scenario
+        self.planner = planner
+        self.guard = guard
+        self.settings = scenario.settings
+        self.controller = FleetController(scenario, invoke=guard)
+        headings = HeadingTable(scenario.layout)
+        states = self.controller.states
+        self.drivers = {
+            v.id: Driver(v, scenario.layout, headings, states[v.id].heading) for v in sorted(scenario.vehicles, key=lambda v: v.id)
+        }
+        self.trace = Trace(keep_lines=keep_trace)
+        self.rejections: list[RejectionEvent] = []
+        self.collisions: list[AlertEvent] = []
+        self.route_errors: list[dict[str, Any]] = []
+        self.active_alerts: set[CollisionAlert] = set()
+        self.waiting_time = {vid: 0.0 for vid in self.drivers}
+        self.last_activity = 0.0
+        self.planner_error: Failure | None = None
+
+    # -- the steps -----------------------------------------------------------------------------------
+
+    def plan(self, now: float, events: list[list[Any]], plans: list[list[Any]]) -> bool:
+        """Step 2; False when the planner failed and the run must end."""
+        for vehicle_id in self.controller.tasks.busy_vehicles():
+            before = self.controller.plans[vehicle_id]
+            try:
+                outcome = self.controller.consult(self.planner, vehicle_id, now)
+            except (PlannerFault, PlannerError) as fault:
+                self._planner_failed(fault, vehicle_id, now, events)
+                return False
+            if outcome is not None:
+                self._note(outcome, before, now, events, plans)
+        return True
+
+    def _planner_failed(self, fault: PlannerFault | PlannerError, vehicle_id: int, now: float, events: list[list[Any]]) -> None:
+        details: dict[str, Any] = {"vehicle": vehicle_id}
+        if isinstance(fault, PlannerFault) and fault.details:
+            details["traceback"] = fault.details
+        self.planner_error = Failure("planner-error", now, str(fault), details)
+        events.append(["planner-error", vehicle_id])
+
+    def _note(self, outcome: CallOutcome, before: FleetPlan, now: float, events: list[list[Any]], plans: list[list[Any]]) -> None:
+        for plan in outcome.accepted:
+            plans.append(plan_record(plan))
+            if plan.vehicle_id != outcome.vehicle_id or plan != before:
+                self.last_activity = now
+        for rejection in outcome.rejections:
+            self.rejections.append(RejectionEvent(now, rejection))
+            events.append(["reject", rejection.code.value, rejection.vehicle_id, rejection.leg_index])
+        for error in outcome.route_errors:
+            vehicle = error.vehicle_id if error.vehicle_id is not None else outcome.vehicle_id
+            self.route_errors.append({"time": round(now, 6), "vehicle": vehicle, "message": error.message})
+            events.append(["route-error", vehicle, error.message])
+        for task_id in outcome.completed:
+            events.append(["complete", task_id])
+            self.last_activity = now
+
+    def check_reservations(self, now: float, events: list[list[Any]]) -> int:
+        """Step 3; alerts are reported when they appear, not again while they persist."""
+        alerts = set(self.controller.alerts())
+        fresh = sorted(alerts - self.active_alerts, key=lambda a: (a.segment, a.primary, a.secondary))
+        self.active_alerts = alerts
+        for alert in fresh:
+            self.collisions.append(AlertEvent(now, alert))
+            events.append(["alert", alert.segment, list(alert.primary), list(alert.secondary)])
+        return len(fresh)
+
+    def move(self, now: float, dt: float, events: list[list[Any]]) -> None:
+        """Step 4: every vehicle over [now, now + dt]; entering a goal leg completes its task."""
+        controller = self.controller
+        busy = set(controller.tasks.busy_vehicles())
+        for vehicle_id, driver in self.drivers.items():
+            plan = controller.plans[vehicle_id]
+            motion = driver.step(plan, dt)
+            if motion.plan is not plan:
+                controller.set_plan(motion.plan)
+            for leg in motion.entered:
+                if leg.goal_for_task is not None and not controller.tasks.is_completed(leg.goal_for_task):
+                    controller.tasks.complete(leg.goal_for_task, now + dt)
+                    events.append(["complete", leg.goal_for_task])
+            if motion.moved or motion.entered:
+                self.last_activity = now + dt
+            elif vehicle_id in busy:
+                self.waiting_time[vehicle_id] += dt
+            controller.set_state(driver.state(motion.plan))
+
+    def deadlock(self, now: float) -> DeadlockReport:
+        waiting = tuple(v for v in self.controller.tasks.busy_vehicles() if self.drivers[v].speed == 0.0)
+        graph = wait_for_graph(self.scenario.layout, self.controller.plans, waiting)
+        return DeadlockReport(now, waiting, wait_for_cycle(graph))
+
+
+def run_scenario(
+    scenario: Scenario,
+    planner: Planner,
+    *,
+    planner_name: str = "",
+    planner_timeout: float | None = 10.0,
+    keep_trace: bool = True,
+    on_progress: Callable[[RunProgress], None] | None = None,
+) -> RunResult:
+    """Simulate ``scenario`` with ``planner`` (a fresh instance) and judge the run against its ``expect``."""
+    started = time.perf_counter()
+    guard = PlannerGuard(planner_timeout)
+    run = _Run(scenario, planner, guard, keep_trace)
+    settings = scenario.settings
+    dt = settings.time_step
+    period = max(1, round(settings.planning_period / dt))
+    max_steps = max(1, math.ceil(settings.time_limit / dt - 1e-9))
+    run.trace.begin(
+        {
+            "time_step_us": round(dt * 1e6),
+            "planning_period_steps": period,
+            "vehicles": [v.id for v in sorted(scenario.vehicles, key=lambda v: v.id)],
+            "tasks": len(scenario.tasks),
+        }
+    )
+    ended: Ending = "time-limit"
+    deadlock: DeadlockReport | None = None
+    step = 0
+    for step in range(max_steps):
+        now = step * dt
+        events: list[list[Any]] = []
+        plans: list[list[Any]] = []
+        run.controller.bookkeeping()
+        planned_ok = run.plan(now, events, plans) if step % period == 0 else True
+        rejected = any(e[0] == "reject" for e in events)
+        alerted = run.check_reservations(now, events) > 0 if planned_ok else False
+        if planned_ok:
+            run.move(now, dt, events)
+        run.trace.record(step, [vehicle_record(s) for _, s in sorted(run.controller.states.items())], plans, events)
+        end = now + dt
+        if not planned_ok:
+            ended = "planner-error"
+        elif run.controller.tasks.all_done():
+            ended = "completed"
+        elif rejected and "rejection" in settings.stop_on:
+            ended = "rejection"
+        elif alerted and "collision" in settings.stop_on:
+            ended = "collision"
+        elif end - run.last_activity >= settings.deadlock_after - 1e-9:
+            ended = "deadlock"
+            deadlock = run.deadlock(end)
+        else:
+            if on_progress is not None and step % 50 == 0:
+                on_progress(RunProgress(end, step + 1, len(run.controller.tasks.completed()), run.controller.tasks.total))
+            continue
+        break
+    steps = step + 1
+    sim_time = steps * dt
+    completed = run.controller.tasks.completed()
+    makespan = max(completed.values()) if completed and run.controller.tasks.all_done() else None
+    failures = judge(
+        scenario.expect,
+        ended=ended,
+        end_time=sim_time,
+        tasks_total=run.controller.tasks.total,
+        tasks_completed=len(completed),
+        pending=run.controller.tasks.pending(),
+        makespan=makespan,
+        rejections=tuple(run.rejections),
+        collisions=tuple(run.collisions),
+        deadlock=deadlock,
+        planner_error=run.planner_error,
+    )
+    metrics = Metrics(
+        makespan=makespan,
+        distance=MappingProxyType({vid: d.odometer for vid, d in run.drivers.items()}),
+        waiting_time=MappingProxyType(dict(run.waiting_time)),
+        planner_calls=guard.calls,
+        planner_wall_time=guard.wall_time,
+        wall_time=time.perf_counter() - started,
+        sim_time=sim_time,
+    )
+    return RunResult(
+        scenario=scenario.name,
+        planner=planner_name or type(planner).__name__,
+        status="failed" if failures else "passed",
+        failures=failures,
+        trace_hash=run.trace.digest,
+        sim_time=sim_time,
+        steps=steps,
+        tasks_total=run.controller.tasks.total,
+        tasks_completed=len(completed),
+        pending=run.controller.tasks.pending(),
+        rejections=tuple(run.rejections),
+        collisions=tuple(run.collisions),
+        route_errors=tuple(run.route_errors),
+        ended=ended,
+        deadlock=deadlock,
+        metrics=metrics,
+        checkpoints=tuple(run.trace.checkpoints),
+        trace=run.trace if keep_trace else None,
+    )

@@ -1,0 +1,232 @@
+"""What a run yields (SPEC §10): status, failures, trace hash, events, metrics; and its JSON form.
+
+A run's events (rejections, collision alerts, route errors, the way it ended) are judged against the
+scenario's ``expect`` block; every way in which they fall short is a :class:`Failure` with a kind:
+``rejection``, ``collision``, ``timeout``, ``deadlock``, ``planner-error``, ``hash-mismatch``, or
+``expectation`` (something the scenario required did not happen).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Any, Literal
+
+from fleetsim.planning.checks import Rejection
+from fleetsim.planning.reservations import CollisionAlert
+from fleetsim.scenario import Expectations, Task
+from fleetsim.sim.trace import Trace
+
+__all__ = ["AlertEvent", "DeadlockReport", "Failure", "Metrics", "RejectionEvent", "RunResult", "judge"]
+
+Ending = Literal["completed", "time-limit", "deadlock", "rejection", "collision", "planner-error"]
+
+
+@dataclass(frozen=True, slots=True)
+class Failure:
+    """One reason a run failed its scenario."""
+
+    kind: str
+    time: float
+    message: str
+    details: Mapping[str, Any] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"kind": self.kind, "time": round(self.time, 6), "message": self.message, **self.details}
+
+
+@dataclass(frozen=True, slots=True)
+class RejectionEvent:
+    time: float
+    rejection: Rejection
+
+    def to_dict(self) -> dict[str, Any]:
+        r = self.rejection
+        return {
+            "time": round(self.time, 6),
+            "code": r.code.value,
+            "vehicle": r.vehicle_id,
+            "leg_index": r.leg_index,
+            "segment": r.segment,
+            "message": r.message,
+        }
+
+
+@dataclass(frozen=True, slots=True)
+class AlertEvent:
+    time: float
+    alert: CollisionAlert
+
+    def to_dict(self) -> dict[str, Any]:
+        a = self.alert
+        return {
+            "time": round(self.time, 6),
+            "segment": a.segment,
+            "primary": list(a.primary),
+            "secondary": list(a.secondary),
+            "text": a.text(),
+        }
+
+
+@dataclass(frozen=True, slots=True)
+class DeadlockReport:
+    time: float
+    waiting: tuple[int, ...]
+    cycle: tuple[int, ...]  # vehicles that wait for each other in turn; empty if none was found
+
+    @property
+    def message(self) -> str:
+        text = f"waiting: vehicles {', '.join(map(str, self.waiting))}"
+        if self.cycle:
+            text += "; wait-for cycle: " + " -> ".join(map(str, (*self.cycle, self.cycle[0])))
+        return text
+
+
+@dataclass(frozen=True, slots=True)
+class Metrics:
+    makespan: float | None  # sim time when the last task was completed
+    distance: Mapping[int, float]  # metres driven per vehicle
+    waiting_time: Mapping[int, float]  # seconds standing still with tasks pending, per vehicle
+    planner_calls: int
+    planner_wall_time: float  # seconds inside the planner (wall clock; never in the hash)
+    wall_time: float  # seconds for the whole run (wall clock)
+    sim_time: float  # seconds simulated
+
+    @property
+    def realtime_factor(self) -> float | None:
+        return None if self.wall_time <= 0 else self.sim_time / self.wall_time
+
+    def to_dict(self) -> dict[str, Any]:
+        harness = max(self.wall_time - self.planner_wall_time, 0.0)
+        return {
+            "makespan": None if self.makespan is None else round(self.makespan, 6),
+            "distance": {str(vid): round(d, 6) for vid, d in sorted(self.distance.items())},
+            "waiting_time": {str(vid): round(w, 6) for vid, w in sorted(self.waiting_time.items())},
+            "planner_calls": self.planner_calls,
+            "planner_wall_time": round(self.planner_wall_time, 6),
+            "wall_time": round(self.wall_time, 6),
+            "realtime_factor": None if self.realtime_factor is None else round(self.realtime_factor, 3),
+            "harness_share": None if self.wall_time <= 0 else round(harness / self.wall_time, 4),
+        }
+
+
+@dataclass(frozen=True, slots=True)
+class RunResult:
+    """Everything a run produced; ``to_dict`` is the JSON object of ``fleetsim run --json``."""
+
+    scenario: str
+    planner: str
+    status: Literal["passed", "failed"]
+    failures: tuple[Failure, ...]
+    trace_hash: str
+    sim_time: float
+    steps: int
+    tasks_total: int
+    tasks_completed: int
+    pending: tuple[Task, ...]
+    rejections: tuple[RejectionEvent, ...]
+    collisions: tuple[AlertEvent, ...]
+    route_errors: tuple[dict[str, Any], ...]
+    ended: Ending
+    deadlock: DeadlockReport | None
+    metrics: Metrics
+    checkpoints: tuple[tuple[int, str], ...] = ()
+    artifacts: Mapping[str, str] = field(default_factory=lambda: MappingProxyType({}))
+    trace: Trace | None = field(default=None, compare=False, repr=False)
+
+    @property
+    def passed(self) -> bool:
+        return self.status == "passed"
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "scenario": self.scenario,
+            "planner": self.planner,
+            "status": self.status,
+            "failures": [f.to_dict() for f in self.failures],
+            "trace_hash": self.trace_hash,
+            "sim_time": round(self.sim_time, 6),
+            "steps": self.steps,
+            "tasks": {"total": self.tasks_total, "completed": self.tasks_completed},
+            "rejections": [r.to_dict() for r in self.rejections],
+            "collisions": [c.to_dict() for c in self.collisions],
+            "route_errors": list(self.route_errors),
+            "ended": self.ended,
+            "deadlock": None
+            if self.deadlock is None
+            else {"time": self.deadlock.time, "waiting": list(self.deadlock.waiting), "cycle": list(self.deadlock.cycle)},
+            "metrics": self.metrics.to_dict(),
+            "artifacts": dict(self.artifacts),
+        }
+
+
+def _first(events: tuple[RejectionEvent, ...] | tuple[AlertEvent, ...]) -> float:
+    return events[0].time if events else 0.0
+
+
+def judge(  # noqa: PLR0913 - the facts of a run, named
+    expect: Expectations,
+    *,
+    ended: Ending,
+    end_time: float,
+    tasks_total: int,
+    tasks_completed: int,
+    pending: tuple[Task, ...],
+    makespan: float | None,
+    rejections: tuple[RejectionEvent, ...],
+    collisions: tuple[AlertEvent, ...],
+    deadlock: DeadlockReport | None,
+    planner_error: Failure | None,
+) -> tuple[Failure, ...]:
+    """Every way the run falls short of ``expect`` (SPEC §13), in a fixed order."""
+    failures: list[Failure] = []
+    if planner_error is not None:
+        failures.append(planner_error)
+    failures += _judge_rejections(expect, rejections)
+    failures += _judge_collisions(expect, collisions)
+    if deadlock is not None and not expect.deadlock:
+        failures.append(Failure("deadlock", deadlock.time, f"deadlock: {deadlock.message}", {"waiting": list(deadlock.waiting), "cycle": list(deadlock.cycle)}))
+    if expect.deadlock and deadlock is None:
+        failures.append(Failure("expectation", end_time, "the scenario expects a deadlock, but the run ended without one"))
+    wanted = tasks_total if expect.tasks == "all" else expect.tasks
+    if tasks_completed < wanted and planner_error is None and (deadlock is None or not expect.deadlock):
+        listing = ", ".join(f"task {t.id} (vehicle {t.vehicle_id} to segment {t.goal_segment})" for t in pending[:5])
+        more = f" and {len(pending) - 5} more" if len(pending) > 5 else ""
+        kind = "timeout" if ended == "time-limit" else "expectation"
+        reason = "the time limit was reached" if ended == "time-limit" else f"the run ended ({ended})"
+        msg = f"{tasks_completed} of {tasks_total} tasks completed, {wanted} expected; {reason} with {listing}{more} pending"
+        failures.append(Failure(kind, end_time, msg, {"pending": [t.id for t in pending]}))
+    if expect.max_makespan is not None and makespan is not None and makespan > expect.max_makespan:
+        msg = f"makespan {makespan:.2f} s exceeds max_makespan {expect.max_makespan:g} s"
+        failures.append(Failure("expectation", makespan, msg))
+    return tuple(failures)
+
+
+def _judge_rejections(expect: Expectations, rejections: tuple[RejectionEvent, ...]) -> list[Failure]:
+    if expect.rejections == "none":
+        return [
+            Failure("rejection", e.time, f"plan rejected: {e.rejection}", {"code": e.rejection.code.value, "vehicle": e.rejection.vehicle_id})
+            for e in rejections
+        ]
+    if expect.rejections == "any":
+        return [] if rejections else [Failure("expectation", 0.0, "the scenario expects plan rejections, but there were none")]
+    seen = {e.rejection.code.value for e in rejections}
+    missing = [code for code in expect.rejections if code not in seen]
+    return [Failure("expectation", _first(rejections), f"the scenario expects a {code} rejection, but there was none") for code in missing]
+
+
+def _judge_collisions(expect: Expectations, collisions: tuple[AlertEvent, ...]) -> list[Failure]:
+    if expect.collisions == "none":
+        return [
+            Failure("collision", e.time, str(e.alert), {"segment": e.alert.segment, "vehicles": list(e.alert.vehicles)})
+            for e in collisions
+        ]
+    if expect.collisions == "any":
+        return [] if collisions else [Failure("expectation", 0.0, "the scenario expects collision alerts, but there were none")]
+    seen = {e.alert.segment for e in collisions}
+    missing = [segment for segment in expect.collisions if segment not in seen]
+    return [
+        Failure("expectation", _first(collisions), f"the scenario expects a collision alert on segment {segment}, but there was none")
+        for segment in missing
+    ]

@@ -1,0 +1,157 @@
+"""The canonical, versioned trace of a run and its hash (SPEC §10).
+
+Per step the trace holds what changed: each vehicle's leg, traverse, progress, position, heading and
+speed (quantised to integers: millimetres, hundredths of a degree, mm/s), the plans accepted, and the
+events (task completions, rejections, route errors, alerts, the end). Lines are compact JSON with a
+fixed layout; the hash is SHA-256 over the header and every line. Nothing from the wall clock, the host,
+hash seeds or dict iteration order enters it, so the same behaviour gives the same hash everywhere.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from fleetsim.enums import Progress, Traverse
+from fleetsim.planning.protocol import FleetPlan
+from fleetsim.planning.snapshot import VehicleState
+
+__all__ = ["TRACE_FORMAT", "Divergence", "Trace", "first_divergence", "plan_record", "vehicle_record"]
+
+TRACE_FORMAT = "fleetsim-trace/1"
+CHECKPOINT_EVERY = 100  # steps between the running digests kept for locating a divergence later
+
+VehicleRecord = tuple[int, int, str, str, int, int, int, int]
+
+
+def _q(value: float, scale: float) -> int:
+    return int(round(value * scale))  # round-half-even, and -0.0 becomes 0
+
+
+def vehicle_record(state: VehicleState) -> VehicleRecord:
+    """(id, segment, traverse, progress, x mm, y mm, heading centidegrees, speed mm/s)."""
+    return (
+        state.id,
+        state.segment,
+        "f" if state.traverse is Traverse.FORWARD else "b",
+        "f" if state.progress is Progress.FORWARD else "r",
+        _q(state.x, 1000.0),
+        _q(state.y, 1000.0),
+        _q(_degrees(state.heading), 100.0),
+        _q(state.speed, 1000.0),
+    )
+
+
+def _degrees(radians: float) -> float:
+    degrees = radians * (180.0 / 3.141592653589793)
+    return 0.0 if abs(degrees) < 1e-9 else degrees
+
+
+def plan_record(plan: FleetPlan) -> list[Any]:
+    return [
+        plan.vehicle_id,
+        [
+            [leg.segment, leg.traverse.value[0], leg.progress.value[0], int(leg.fixed), leg.goal_for_task]
+            for leg in plan.legs
+        ],
+    ]
+
+
+@dataclass(slots=True)
+class Trace:
+    """The trace being written: its running hash, checkpoints and (optionally) its lines."""
+
+    keep_lines: bool = True
+    lines: list[str] = field(default_factory=list)
+    checkpoints: list[tuple[int, str]] = field(default_factory=list)  # (step, digest so far)
+    steps: int = 0
+    _hash: Any = field(default_factory=hashlib.sha256)
+    _last: dict[int, VehicleRecord] = field(default_factory=dict)
+
+    def begin(self, header: dict[str, Any]) -> None:
+        self._write(json.dumps({"format": TRACE_FORMAT, **header}, separators=(",", ":"), sort_keys=True))
+
+    def record(
+        self,
+        step: int,
+        vehicles: Sequence[VehicleRecord],
+        plans: Sequence[list[Any]],
+        events: Sequence[list[Any]],
+    ) -> None:
+        changed = []
+        for record in vehicles:
+            if self._last.get(record[0]) != record:
+                self._last[record[0]] = record
+                changed.append(record)
+        self._write(json.dumps([step, changed, list(plans), list(events)], separators=(",", ":")))
+        self.steps = step + 1
+        if self.steps % CHECKPOINT_EVERY == 0:
+            self.checkpoints.append((step, self._hash.copy().hexdigest()))
+
+    def _write(self, line: str) -> None:
+        self._hash.update(line.encode("utf-8"))
+        self._hash.update(b"\n")
+        if self.keep_lines:
+            self.lines.append(line)
+
+    @property
+    def digest(self) -> str:
+        return self._hash.hexdigest()
+
+
+@dataclass(frozen=True, slots=True)
+class Divergence:
+    """Where two traces first differ, and how."""
+
+    step: int
+    time: float
+    differences: tuple[str, ...]
+
+    def __str__(self) -> str:
+        return f"first divergence at step {self.step} (t = {self.time:.2f} s): " + "; ".join(self.differences)
+
+
+_FIELDS = ("segment", "traverse", "progress", "x mm", "y mm", "heading (0.01°)", "speed mm/s")
+
+
+def _describe_vehicles(a: dict[int, list[Any]], b: dict[int, list[Any]]) -> list[str]:
+    notes = []
+    for vid in sorted(set(a) | set(b)):
+        left, right = a.get(vid), b.get(vid)
+        if left == right:
+            continue
+        if left is None or right is None:
+            notes.append(f"vehicle {vid} present in only one trace")
+            continue
+        for name, x, y in zip(_FIELDS, left[1:], right[1:]):
+            if x != y:
+                notes.append(f"vehicle {vid} {name} {x} vs {y}")
+    return notes
+
+
+def first_divergence(a: Sequence[str], b: Sequence[str], time_step: float) -> Divergence | None:
+    """The first step at which two traces' lines differ (``None`` if identical), described field by field."""
+    if a and b and a[0] != b[0]:
+        return Divergence(-1, 0.0, ("the trace headers differ (different scenario, settings or format)",))
+    state_a: dict[int, list[Any]] = {}
+    state_b: dict[int, list[Any]] = {}
+    for line_a, line_b in zip(a[1:], b[1:]):
+        step_a, vehicles_a, plans_a, events_a = json.loads(line_a)
+        _, vehicles_b, plans_b, events_b = json.loads(line_b)
+        state_a.update({record[0]: record for record in vehicles_a})
+        state_b.update({record[0]: record for record in vehicles_b})
+        if line_a == line_b:
+            continue
+        notes = _describe_vehicles(state_a, state_b)
+        if plans_a != plans_b:
+            notes.append(f"accepted plans {plans_a} vs {plans_b}")
+        if events_a != events_b:
+            notes.append(f"events {events_a} vs {events_b}")
+        return Divergence(step_a, (step_a + 1) * time_step, tuple(notes) or ("the step records differ",))
+    if len(a) != len(b):
+        step = min(len(a), len(b)) - 1
+        return Divergence(step, step * time_step, (f"one run ended after {len(a) - 1} steps, the other after {len(b) - 1}",))
+    return None
