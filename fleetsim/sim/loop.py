@@ -112,8 +112,8 @@ class _Run:
             events.append(["alert", alert.segment, list(alert.primary), list(alert.secondary)])
         return len(fresh)
 
-    def move(self, now: float, dt: float, events: list[list[Any]]) -> None:
-        """Step 4: every vehicle over [now, now + dt]; entering a goal leg completes its task."""
+    def move(self, dt: float, end: float, events: list[list[Any]]) -> None:
+        """Step 4: every vehicle over the step ending at ``end``; entering a goal leg completes its task."""
         controller = self.controller
         busy = set(controller.tasks.busy_vehicles())
         for vehicle_id, driver in self.drivers.items():
@@ -123,10 +123,10 @@ class _Run:
                 controller.set_plan(motion.plan)
             for leg in motion.entered:
                 if leg.goal_for_task is not None and not controller.tasks.is_completed(leg.goal_for_task):
-                    controller.tasks.complete(leg.goal_for_task, now + dt)
+                    controller.tasks.complete(leg.goal_for_task, end)
                     events.append(["complete", leg.goal_for_task])
             if motion.moved or motion.entered:
-                self.last_activity = now + dt
+                self.last_activity = end
             elif vehicle_id in busy:
                 self.waiting_time[vehicle_id] += dt
             controller.set_state(driver.state(motion.plan))
@@ -173,10 +173,10 @@ def run_scenario(
         planned_ok = run.plan(now, events, plans) if step % period == 0 else True
         rejected = any(e[0] == "reject" for e in events)
         alerted = run.check_reservations(now, events) > 0 if planned_ok else False
+        end = (step + 1) * dt  # times are multiples of dt, never sums of them
         if planned_ok:
-            run.move(now, dt, events)
+            run.move(dt, end, events)
         run.trace.record(step, [vehicle_record(s) for _, s in sorted(run.controller.states.items())], plans, events)
-        end = now + dt
         if not planned_ok:
             ended = "planner-error"
         elif run.controller.tasks.all_done():
