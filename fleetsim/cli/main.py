@@ -1,7 +1,7 @@
 """Argument parsing and the error boundary of the ``fleetsim`` command.
 
-Commands live in :mod:`fleetsim.cli.commands`; here a user's mistake becomes a one-line located error and
-exit status 1, never a traceback.
+Commands live in :mod:`fleetsim.cli.commands` and :mod:`fleetsim.cli.run`; here a user's mistake becomes a
+one-line located error and exit status 1 (2 for a mistake on the command line itself), never a traceback.
 """
 
 from __future__ import annotations
@@ -12,9 +12,11 @@ from collections.abc import Sequence
 
 from fleetsim import __version__
 from fleetsim.cli import commands
+from fleetsim.cli.run import UsageError, run
 from fleetsim.enums import ConflictModel
 from fleetsim.errors import FleetsimError
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, ScenarioSettings
+from fleetsim.sim.planner_spec import PlannerSpecError
 
 __all__ = ["build_parser", "main"]
 
@@ -86,6 +88,21 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _add_layout_options(render)
     render.set_defaults(run=commands.render)
+
+    run_parser = sub.add_parser("run", help="simulate scenarios with a planner and judge the runs", description=run.__doc__)
+    run_parser.add_argument(
+        "suites", nargs="+", metavar="SUITE[::SCENARIO]", help="*.fleetsim.yaml files or folders; FILE::NAME runs one scenario"
+    )
+    run_parser.add_argument(
+        "--planner", required=True, metavar="SPEC", help="module:attribute naming a planner class or zero-argument factory, "
+        "e.g. fleetsim.planners:ReservingPlanner (the current directory is importable)"
+    )
+    run_parser.add_argument("--json", action="store_true", help="print one result object per scenario per line; the table goes to stderr")
+    run_parser.add_argument(
+        "--planner-timeout", type=_non_negative, default=10.0, metavar="SECONDS",
+        help="wall-clock limit per planner call; 0 switches it off (default: %(default)g)",
+    )
+    run_parser.set_defaults(run=run)
     return parser
 
 
@@ -93,6 +110,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
         return int(args.run(args))
+    except (PlannerSpecError, UsageError) as error:
+        print(f"fleetsim: error: {error}", file=sys.stderr)
+        return 2
     except FleetsimError as error:
         print(f"fleetsim: error: {error}", file=sys.stderr)
         return 1

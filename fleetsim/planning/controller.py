@@ -68,6 +68,8 @@ class FleetController:
         self._plans: dict[int, FleetPlan] = {v.id: initial_plan(v) for v in scenario.vehicles}
         self._states: dict[int, VehicleState] = {v.id: initial_state(v, self.layout) for v in scenario.vehicles}
         self._reservations = ReservationIndex(ConflictTable(self.layout))
+        # The last snapshot handed out; reused until something it shows changes (most calls change nothing).
+        self._snapshot: FleetSnapshot | None = None
 
     # -- views ---------------------------------------------------------------------------------------
 
@@ -80,14 +82,17 @@ class FleetController:
         return read_only(self._states)
 
     def snapshot(self, time: float) -> FleetSnapshot:
-        """A fresh immutable view for one planner call."""
-        return FleetSnapshot(
+        """An immutable view for a planner call: rebuilt when the fleet or the time has changed."""
+        if self._snapshot is not None and self._snapshot.time == time:
+            return self._snapshot
+        self._snapshot = FleetSnapshot(
             time=time,
             vehicles=read_only(self._states),
             plans=read_only(self._plans),
             tasks=self.tasks.queues(),
             routed=self.tasks.routed,
         )
+        return self._snapshot
 
     def alerts(self) -> tuple[CollisionAlert, ...]:
         """The reservation check over the plans in force (step 3)."""
@@ -98,9 +103,11 @@ class FleetController:
     def set_plan(self, plan: FleetPlan) -> None:
         """Replace a vehicle's plan without checks (the simulation drops legs it has driven past)."""
         self._plans[plan.vehicle_id] = plan
+        self._snapshot = None
 
     def set_state(self, state: VehicleState) -> None:
         self._states[state.id] = state
+        self._snapshot = None
 
     def consult(self, planner: Planner, vehicle_id: int, time: float) -> CallOutcome | None:
         """Step 2 for one vehicle: ask the planner, check the response, apply what passes.
@@ -136,6 +143,7 @@ class FleetController:
                 rejections.append(result)
                 continue
             self._plans[result.vehicle_id] = result
+            self._snapshot = None
             self.tasks.mark_routed(result)
             goal = result.legs[0].goal_for_task
             if goal is not None and not self.tasks.is_completed(goal):
@@ -147,6 +155,8 @@ class FleetController:
     def bookkeeping(self) -> tuple[Task, ...]:
         """Step 1: completed tasks leave their queues and their goal markers leave the plans."""
         dropped = self.tasks.drop_completed()
+        if dropped:
+            self._snapshot = None
         for task in dropped:
             plan = self._plans[task.vehicle_id]
             if any(leg.goal_for_task == task.id for leg in plan.legs):

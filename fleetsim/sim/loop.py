@@ -127,9 +127,9 @@ class _Run:
                     events.append(["complete", leg.goal_for_task])
             if motion.moved or motion.entered:
                 self.last_activity = end
+                controller.set_state(driver.state(motion.plan))
             elif vehicle_id in busy:
                 self.waiting_time[vehicle_id] += dt
-            controller.set_state(driver.state(motion.plan))
 
     def deadlock(self, now: float) -> DeadlockReport:
         waiting = tuple(v for v in self.controller.tasks.busy_vehicles() if self.drivers[v].speed == 0.0)

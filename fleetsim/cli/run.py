@@ -1,0 +1,296 @@
+"""``fleetsim run SUITE[::SCENARIO]... --planner SPEC``: simulate scenarios with a planner and judge them.
+
+Every suite named on the command line is loaded and every ``::scenario`` selector checked before the
+first run, so a typo costs no waiting. Then each scenario, in file order, is loaded (a load error fails
+that scenario only), given a fresh planner and run. Progress goes to stderr; the summary table goes to
+stdout, or to stderr with ``--json``, where stdout carries one result object (SPEC §10) per line.
+Exit status: 0 when every scenario passed, 1 when any failed, 2 for a usage error.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, TextIO, cast
+
+from fleetsim.errors import FleetsimError, LoadError
+from fleetsim.load.scenario import load_scenario
+from fleetsim.load.scenario_files import did_you_mean
+from fleetsim.load.suite import SUITE_SUFFIX, ScenarioSpec, Suite, discover_suites, load_suite
+from fleetsim.sim.loop import RunProgress, run_scenario
+from fleetsim.sim.planner_spec import PlannerFactory, load_planner_factory
+from fleetsim.sim.result import Ending, Failure, Metrics, RunResult
+
+__all__ = ["UsageError", "run"]
+
+FAILURES_SHOWN = 3  # per failed scenario, below the table; --json has them all
+
+
+class UsageError(FleetsimError, ValueError):
+    """A mistake on the command line itself (exit status 2): a missing path, an unknown scenario name."""
+
+
+@dataclass(frozen=True, slots=True)
+class _Target:
+    """One scenario to run, or a suite file that could not be loaded."""
+
+    label: str  # shown in the table and progress
+    suite_path: Path
+    suite: Suite | None = None
+    spec: ScenarioSpec | None = None
+    error: LoadError | None = None  # the suite failed to load
+
+
+@dataclass(frozen=True, slots=True)
+class _Outcome:
+    target: _Target
+    result: RunResult
+    loaded: bool
+
+    @property
+    def xfail(self) -> str | None:
+        return self.target.spec.xfail if self.target.spec is not None else None
+
+    @property
+    def word(self) -> str:
+        """passed, failed, or pytest's xfailed/xpassed for scenarios marked ``xfail`` that loaded."""
+        if self.xfail is not None and self.loaded:
+            return "xpassed" if self.result.passed else "xfailed"
+        return self.result.status
+
+    @property
+    def counts_as_failure(self) -> bool:
+        return self.word == "failed"
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run every scenario of the given suites with a fresh planner each and print a summary table.
+
+    SUITE is a *.fleetsim.yaml file or a folder holding them; SUITE::NAME selects one scenario of a
+    file. Exit status 0 when every scenario passed (an xfail scenario may fail), 1 when any failed.
+    """
+    factory = load_planner_factory(args.planner)
+    targets = _targets(args.suites)
+    timeout = args.planner_timeout or None  # 0 switches the timeout off
+    table = sys.stderr if args.json else sys.stdout
+    progress = _Progress(sys.stderr, len(targets))
+    outcomes = []
+    for index, target in enumerate(targets, 1):
+        with progress.scenario(index, target.label):
+            outcome = _run_target(target, factory, timeout, progress.update)
+        progress.done(outcome)
+        outcomes.append(outcome)
+        if args.json:
+            print(json.dumps(_document(outcome)), flush=True)
+    _print_summary(outcomes, table)
+    return 1 if any(o.counts_as_failure for o in outcomes) else 0
+
+
+# -- what to run ----------------------------------------------------------------------------------
+
+
+def _targets(arguments: Iterable[str]) -> list[_Target]:
+    targets: list[_Target] = []
+    seen: set[tuple[Path, str]] = set()
+    pending: list[tuple[Path, str | None]] = []
+    for argument in arguments:
+        path_text, selector, name = argument.rpartition("::") if "::" in argument else (argument, "", "")
+        path = Path(path_text)
+        if not path.exists():
+            raise UsageError(f"{path_text}: no such file or directory")
+        if selector and path.is_dir():
+            msg = f"{argument!r}: ::{name} selects a scenario of a suite file, but {path_text} is a folder"
+            raise UsageError(msg)
+        if selector and not name:
+            raise UsageError(f"{argument!r}: name a scenario after '::', or leave '::' out to run them all")
+        files = discover_suites([path])
+        if not files:
+            raise UsageError(f"{path_text}: no *{SUITE_SUFFIX} files in this folder")
+        pending += [(file, name or None) for file in files]
+    many = len({file.resolve() for file, _ in pending}) > 1
+    for file, name in pending:
+        for target in _suite_targets(file, name, many):
+            key = (file.resolve(), target.spec.name if target.spec is not None else "")
+            if key not in seen:
+                seen.add(key)
+                targets.append(target)
+    return targets
+
+
+def _suite_targets(file: Path, name: str | None, many: bool) -> list[_Target]:
+    try:
+        suite = load_suite(file)
+    except LoadError as error:
+        return [_Target(f"{file}::{name}" if name else str(file), file, error=error)]
+    specs = suite.scenarios
+    if name is not None:
+        specs = tuple(spec for spec in specs if spec.name == name)
+        if not specs:
+            names = [spec.name for spec in suite.scenarios]
+            msg = f"{file} has no scenario {name!r}{did_you_mean(name, names)}; its scenarios: {', '.join(names)}"
+            raise UsageError(msg)
+    return [_Target(f"{file.name}::{spec.name}" if many else spec.name, file, suite, spec) for spec in specs]
+
+
+# -- running --------------------------------------------------------------------------------------
+
+
+def _run_target(
+    target: _Target, factory: PlannerFactory, timeout: float | None, on_progress: Callable[[RunProgress], None]
+) -> _Outcome:
+    if target.error is not None:
+        return _Outcome(target, _load_failure(target.label, factory.spec, target.error), loaded=False)
+    assert target.suite is not None and target.spec is not None
+    try:
+        scenario = load_scenario(target.spec, target.suite)
+    except LoadError as error:
+        return _Outcome(target, _load_failure(target.spec.name, factory.spec, error), loaded=False)
+    result = run_scenario(
+        scenario, factory(), planner_name=factory.spec, planner_timeout=timeout, on_progress=on_progress
+    )
+    return _Outcome(target, result, loaded=True)
+
+
+def _load_failure(name: str, planner: str, error: LoadError) -> RunResult:
+    """A result for a scenario that never ran, shaped like any other (its JSON has the same keys)."""
+    details = {"location": str(error.location)} if error.location is not None else {}
+    metrics = Metrics(None, {}, {}, planner_calls=0, planner_wall_time=0.0, wall_time=0.0, sim_time=0.0)
+    return RunResult(
+        scenario=name,
+        planner=planner,
+        status="failed",
+        failures=(Failure("load-error", 0.0, str(error), details),),
+        trace_hash="",
+        sim_time=0.0,
+        steps=0,
+        tasks_total=0,
+        tasks_completed=0,
+        pending=(),
+        rejections=(),
+        collisions=(),
+        route_errors=(),
+        ended=cast(Ending, "load-error"),
+        deadlock=None,
+        metrics=metrics,
+    )
+
+
+def _document(outcome: _Outcome) -> dict[str, Any]:
+    document = outcome.result.to_dict()
+    if not outcome.loaded:
+        document["trace_hash"] = None  # nothing ran, so there is no hash to compare
+    document["suite"] = str(outcome.target.suite_path)
+    document["xfail"] = outcome.xfail
+    return document
+
+
+class _Progress:
+    """A live line on a terminal (overwritten, then cleared); one line per result anywhere else."""
+
+    def __init__(self, stream: TextIO, total: int) -> None:
+        self.stream = stream
+        self.total = total
+        self.live = _isatty(stream)
+        self._prefix = ""
+        self._width = 0
+
+    def scenario(self, index: int, label: str) -> _Progress:
+        self._prefix = f"[{index}/{self.total}] {label}"
+        return self
+
+    def __enter__(self) -> None:
+        self._show(self._prefix)
+
+    def __exit__(self, *exc: object) -> None:
+        if self.live and self._width:
+            self.stream.write("\r" + " " * self._width + "\r")
+            self.stream.flush()
+            self._width = 0
+
+    def update(self, progress: RunProgress) -> None:
+        self._show(f"{self._prefix}  t={progress.time:.1f} s  tasks {progress.completed}/{progress.total}")
+
+    def _show(self, text: str) -> None:
+        if self.live:
+            self.stream.write("\r" + text.ljust(self._width))
+            self.stream.flush()
+            self._width = max(self._width, len(text))
+
+    def done(self, outcome: _Outcome) -> None:
+        if self.live:
+            return
+        r = outcome.result
+        facts = f"tasks {r.tasks_completed}/{r.tasks_total}, t={r.sim_time:.1f} s" if outcome.loaded else "not loaded"
+        print(f"{self._prefix}: {outcome.word} ({facts})", file=self.stream, flush=True)
+
+
+def _isatty(stream: TextIO) -> bool:
+    try:
+        return stream.isatty()
+    except (AttributeError, ValueError):
+        return False
+
+
+# -- the summary ----------------------------------------------------------------------------------
+
+_COLUMNS = ("scenario", "outcome", "tasks", "makespan", "alerts", "rejections", "hash", "realtime")
+
+
+def _row(outcome: _Outcome) -> tuple[str, ...]:
+    r = outcome.result
+    if not outcome.loaded:
+        return (outcome.target.label, outcome.word, "-", "-", "-", "-", "-", "-")
+    makespan = r.metrics.makespan
+    factor = r.metrics.realtime_factor
+    return (
+        outcome.target.label,
+        outcome.word,
+        f"{r.tasks_completed}/{r.tasks_total}",
+        "-" if makespan is None else f"{makespan:.1f} s",
+        str(len(r.collisions)),
+        str(len(r.rejections)),
+        r.trace_hash[:12],
+        "-" if factor is None else f"{factor:.0f}x",
+    )
+
+
+def _print_summary(outcomes: list[_Outcome], stream: TextIO) -> None:
+    rows = [_COLUMNS, *map(_row, outcomes)]
+    widths = [max(len(row[i]) for row in rows) for i in range(len(_COLUMNS))]
+    for row in rows:
+        print("  ".join(cell.ljust(width) for cell, width in zip(row, widths)).rstrip(), file=stream)
+    words = [o.word for o in outcomes]
+    counts = ", ".join(f"{words.count(w)} {w}" for w in ("passed", "failed", "xfailed", "xpassed") if w in words)
+    planner = outcomes[0].result.planner if outcomes else ""
+    print(f"\n{len(outcomes)} scenario(s) with {planner}: {counts}", file=stream)
+    for outcome in outcomes:
+        if outcome.counts_as_failure:
+            _print_failures(outcome, stream)
+
+
+def _print_failures(outcome: _Outcome, stream: TextIO) -> None:
+    failures = outcome.result.failures
+    print(f"\nFAILED {outcome.target.label}", file=stream)
+    for failure in failures[:FAILURES_SHOWN]:
+        print(f"  {failure.kind} at t={failure.time:.2f} s:", file=stream)
+        print(_indent(_failure_text(outcome.result, failure), "    "), file=stream)
+    if len(failures) > FAILURES_SHOWN:
+        print(f"  ... and {len(failures) - FAILURES_SHOWN} more failure(s) (--json lists them all)", file=stream)
+
+
+def _failure_text(result: RunResult, failure: Failure) -> str:
+    if failure.kind == "collision":
+        for event in result.collisions:
+            if event.time == failure.time and event.alert.segment == failure.details.get("segment"):
+                return event.alert.text()  # the thesis's alert text
+    if failure.kind == "planner-error" and failure.details.get("traceback"):
+        return f"{failure.message}\n{str(failure.details['traceback']).rstrip()}"
+    return failure.message
+
+
+def _indent(text: str, prefix: str) -> str:
+    return "\n".join(prefix + line for line in text.splitlines())
