@@ -11,11 +11,12 @@ from __future__ import annotations
 
 import argparse
 import json
+import shutil
 import sys
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, TextIO, cast
+from typing import Any, TextIO
 
 from fleetsim.errors import FleetsimError, LoadError
 from fleetsim.load.scenario import load_scenario
@@ -23,7 +24,7 @@ from fleetsim.load.scenario_files import did_you_mean
 from fleetsim.load.suite import SUITE_SUFFIX, ScenarioSpec, Suite, discover_suites, load_suite
 from fleetsim.sim.loop import RunProgress, run_scenario
 from fleetsim.sim.planner_spec import PlannerFactory, load_planner_factory
-from fleetsim.sim.result import Ending, Failure, Metrics, RunResult
+from fleetsim.sim.result import Failure, Metrics, RunResult
 
 __all__ = ["UsageError", "run"]
 
@@ -112,8 +113,8 @@ def _targets(arguments: Iterable[str]) -> list[_Target]:
             raise UsageError(f"{path_text}: no *{SUITE_SUFFIX} files in this folder")
         pending += [(file, name or None) for file in files]
     many = len({file.resolve() for file, _ in pending}) > 1
-    for file, name in pending:
-        for target in _suite_targets(file, name, many):
+    for file, selected in pending:
+        for target in _suite_targets(file, selected, many):
             key = (file.resolve(), target.spec.name if target.spec is not None else "")
             if key not in seen:
                 seen.add(key)
@@ -131,7 +132,7 @@ def _suite_targets(file: Path, name: str | None, many: bool) -> list[_Target]:
         specs = tuple(spec for spec in specs if spec.name == name)
         if not specs:
             names = [spec.name for spec in suite.scenarios]
-            msg = f"{file} has no scenario {name!r}{did_you_mean(name, names)}; its scenarios: {', '.join(names)}"
+            msg = f"{file} has no scenario {name!r} (its scenarios: {', '.join(names)}){did_you_mean(name, names)}"
             raise UsageError(msg)
     return [_Target(f"{file.name}::{spec.name}" if many else spec.name, file, suite, spec) for spec in specs]
 
@@ -173,7 +174,7 @@ def _load_failure(name: str, planner: str, error: LoadError) -> RunResult:
         rejections=(),
         collisions=(),
         route_errors=(),
-        ended=cast(Ending, "load-error"),
+        ended="load-error",
         deadlock=None,
         metrics=metrics,
     )
@@ -216,6 +217,7 @@ class _Progress:
 
     def _show(self, text: str) -> None:
         if self.live:
+            text = text[: shutil.get_terminal_size().columns - 1]  # a wrapped line cannot be overwritten
             self.stream.write("\r" + text.ljust(self._width))
             self.stream.flush()
             self._width = max(self._width, len(text))

@@ -4,7 +4,9 @@ A planner that raises anything but a :class:`RouteError`, or overruns the timeou
 :class:`PlannerFault` carrying its traceback; the run then fails with a ``planner-error`` and the
 harness carries on with the next scenario. The timeout uses ``SIGALRM`` (an interval timer), which
 interrupts pure-Python loops and sleeps; it is only available in the main thread of a POSIX process,
-elsewhere calls run without a timeout.
+elsewhere calls run without a timeout. A call that returns after its time is a fault too, even if the
+planner caught the timer's exception; a planner that catches it and never returns cannot be stopped
+in-process (run such a planner as a subprocess).
 """
 
 from __future__ import annotations
@@ -83,7 +85,10 @@ class PlannerGuard:
         start = time.perf_counter()
         try:
             with _deadline(self.timeout):
-                return call(*args)
+                response = call(*args)
+            if self.timeout is not None and time.perf_counter() - start > self.timeout:
+                raise _Overrun  # the planner caught the timer's exception itself and returned late
+            return response
         except RouteError:
             raise
         except _Overrun:

@@ -20,7 +20,7 @@ from fleetsim.sim.trace import Trace
 
 __all__ = ["AlertEvent", "DeadlockReport", "Failure", "Metrics", "RejectionEvent", "RunResult", "judge"]
 
-Ending = Literal["completed", "time-limit", "deadlock", "rejection", "collision", "planner-error"]
+Ending = Literal["completed", "time-limit", "deadlock", "rejection", "collision", "planner-error", "load-error"]
 
 
 @dataclass(frozen=True, slots=True)

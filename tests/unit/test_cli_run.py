@@ -1,0 +1,271 @@
+"""``fleetsim run``, in-process through ``main``: the table, ``--json`` lines, selectors, exit statuses."""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import re
+import shutil
+import sys
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+import fleetsim
+from fleetsim.cli import main
+from fleetsim.planners import ReservingPlanner
+from fleetsim.sim import run_scenario
+
+SUITES = Path(__file__).resolve().parents[2] / "scenario_suites"
+EXAMPLES = SUITES / "examples.fleetsim.yaml"
+NAMES = ["crossing", "loop-one-way", "corridor-passing-bay", "mixed-shapes"]
+RESERVING = "fleetsim.planners:ReservingPlanner"
+RESULT_KEYS = {
+    "scenario", "planner", "status", "failures", "trace_hash", "sim_time",
+    "steps", "tasks", "rejections", "collisions", "metrics", "artifacts",
+}  # SPEC §10
+
+FAULTY_PLANNERS = """\
+import time
+
+from fleetsim.planners import ReservingPlanner
+
+
+class Raising(ReservingPlanner):
+    def plan_routes(self, task, fleet, layout):
+        raise ValueError("oops in user code")
+
+
+class Sleeping(ReservingPlanner):
+    def plan_routes(self, task, fleet, layout):
+        time.sleep(60)
+"""
+
+
+def run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
+    status = main(list(argv))
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def json_lines(out: str) -> list[dict[str, Any]]:
+    return [json.loads(line) for line in out.splitlines()]
+
+
+@pytest.fixture
+def user_project(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[Path]:
+    """The current directory holds ``faulty_planners.py``; sys.path and sys.modules are restored."""
+    (tmp_path / "faulty_planners.py").write_text(FAULTY_PLANNERS, encoding="utf-8")
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(sys, "path", [p for p in sys.path if p not in ("", os.getcwd())])
+    before = set(sys.modules)
+    yield tmp_path
+    for name in set(sys.modules) - before:
+        del sys.modules[name]
+
+
+def copy_examples(root: Path, *folders: str) -> None:
+    shutil.copytree(SUITES / "tiled", root / "tiled")  # the example maps use these templates
+    for folder in folders:
+        shutil.copytree(SUITES / "examples" / folder, root / "examples" / folder)
+
+
+# -- the table ------------------------------------------------------------------------------------
+
+
+def test_the_shipped_suites_pass_with_the_reserving_planner(capsys: pytest.CaptureFixture[str]) -> None:
+    status, out, err = run(capsys, "run", str(SUITES), "--planner", RESERVING)
+    assert status == 0, out + err
+    header, *rows = out.splitlines()[:5]
+    assert header.split() == ["scenario", "outcome", "tasks", "makespan", "alerts", "rejections", "hash", "realtime"]
+    assert [row.split()[:2] for row in rows] == [[name, "passed"] for name in NAMES]
+    assert f"4 scenario(s) with {RESERVING}: 4 passed" in out
+    assert "FAILED" not in out
+
+
+def test_the_bfs_planner_fails_and_the_thesis_collision_alert_is_shown(capsys: pytest.CaptureFixture[str]) -> None:
+    status, out, _ = run(capsys, "run", str(EXAMPLES), "--planner", "fleetsim.planners:BFSPlanner")
+    assert status == 1
+    assert "4 failed" in out
+    assert "FAILED crossing" in out
+    assert "COLLISION ALERT: Possible collision detected on segment '2'" in out
+    assert "Primary reservations" in out and " - vehicle_1" in out
+
+
+def test_without_a_terminal_each_result_is_one_line_on_stderr(capsys: pytest.CaptureFixture[str]) -> None:
+    _, _, err = run(capsys, "run", str(EXAMPLES), "--planner", RESERVING)
+    lines = err.splitlines()
+    assert len(lines) == 4
+    for index, (line, name, tasks) in enumerate(zip(lines, NAMES, (2, 4, 2, 3)), 1):
+        assert re.fullmatch(rf"\[{index}/4\] {name}: passed \(tasks {tasks}/{tasks}, t=\d+\.\d s\)", line), line
+
+
+class _Terminal(io.StringIO):
+    def isatty(self) -> bool:
+        return True
+
+
+def test_on_a_terminal_a_live_progress_line_is_drawn_and_cleared(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    terminal = _Terminal()
+    monkeypatch.setattr(sys, "stderr", terminal)
+    status, out, _ = run(capsys, "run", f"{EXAMPLES}::corridor-passing-bay", "--planner", RESERVING)
+    assert status == 0
+    shown = terminal.getvalue()
+    assert re.search(r"\r\[1/1\] corridor-passing-bay  t=\d+\.\d s  tasks [01]/2", shown)
+    assert re.search(r"\r +\r$", shown)  # cleared at the end
+    assert "\n" not in shown
+    assert "corridor-passing-bay  passed" in out
+
+
+# -- --json ---------------------------------------------------------------------------------------
+
+
+def test_json_prints_one_result_per_scenario_per_line_with_the_direct_runs_hash(capsys: pytest.CaptureFixture[str]) -> None:
+    status, out, err = run(capsys, "run", str(EXAMPLES), "--planner", RESERVING, "--json")
+    assert status == 0
+    results = json_lines(out)
+    assert [r["scenario"] for r in results] == NAMES
+    suite = fleetsim.load_suite(EXAMPLES)
+    for result, spec in zip(results, suite.scenarios):
+        assert RESULT_KEYS <= result.keys()
+        assert result["status"] == "passed" and result["planner"] == RESERVING
+        direct = run_scenario(fleetsim.load_scenario(spec, suite), ReservingPlanner())
+        assert result["trace_hash"] == direct.trace_hash
+    assert "scenario" in err and "4 passed" in err  # the table moved to stderr
+
+
+def test_a_selector_runs_one_scenario(capsys: pytest.CaptureFixture[str]) -> None:
+    status, out, _ = run(capsys, "run", f"{EXAMPLES}::crossing", "--planner", RESERVING, "--json")
+    assert status == 0
+    assert [r["scenario"] for r in json_lines(out)] == ["crossing"]
+
+
+def test_a_scenario_named_twice_runs_once_in_the_order_given(capsys: pytest.CaptureFixture[str]) -> None:
+    status, out, _ = run(capsys, "run", f"{EXAMPLES}::mixed-shapes", str(SUITES), "--planner", RESERVING, "--json")
+    assert status == 0
+    assert [r["scenario"] for r in json_lines(out)] == ["mixed-shapes", "crossing", "loop-one-way", "corridor-passing-bay"]
+
+
+# -- failures -------------------------------------------------------------------------------------
+
+
+def test_a_raising_planner_exits_1_and_its_traceback_is_shown(
+    user_project: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    status, out, err = run(capsys, "run", f"{EXAMPLES}::crossing", "--planner", "faulty_planners:Raising")
+    assert status == 1
+    assert "planner-error at t=0.00 s" in out
+    assert "plan_routes() for vehicle 1 raised ValueError: oops in user code" in out
+    assert "Traceback (most recent call last)" in out
+    assert 'raise ValueError("oops in user code")' in out
+    assert "faulty_planners.py" in out
+    assert "fleetsim/sim/" not in out  # the user's frames only
+    assert "Traceback" not in err
+
+
+def test_the_planner_timeout_option_limits_each_call(user_project: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    argv = ("run", f"{EXAMPLES}::crossing", "--planner", "faulty_planners:Sleeping", "--planner-timeout", "0.2", "--json")
+    status, out, _ = run(capsys, *argv)
+    assert status == 1
+    [result] = json_lines(out)
+    assert result["failures"][0]["kind"] == "planner-error"
+    assert "per-call timeout of 0.2 s" in result["failures"][0]["message"]
+
+
+def test_a_scenario_that_fails_to_load_fails_alone_and_the_others_run(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    copy_examples(tmp_path, "crossing", "corridor")
+    (tmp_path / "examples" / "crossing" / "tasks.csv").write_text("vehicle_id,goal_segment_id\n1,4\n2,99\n")
+    suite = tmp_path / "two.fleetsim.yaml"
+    suite.write_text(
+        "fleetsim: 1\nname: two\nscenarios:\n  - name: crossing\n    dir: examples/crossing/\n"
+        "  - name: corridor\n    dir: examples/corridor/\n"
+    )
+    status, out, err = run(capsys, "run", str(suite), "--planner", RESERVING, "--json")
+    assert status == 1
+    broken, fine = json_lines(out)
+    assert broken["status"] == "failed" and fine["status"] == "passed"
+    assert broken.keys() == fine.keys()
+    [failure] = broken["failures"]
+    assert failure["kind"] == "load-error"
+    assert "tasks.csv:3" in failure["message"] and "99" in failure["message"]
+    assert broken["trace_hash"] is None
+    assert "FAILED crossing" in err and "load-error" in err
+    assert "Traceback" not in out + err
+
+
+def test_a_suite_that_fails_to_load_is_one_failed_entry(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    suite = tmp_path / "broken.fleetsim.yaml"
+    suite.write_text("fleetsim: 1\nname: broken\nscenarios: [\n")
+    status, out, err = run(capsys, "run", str(suite), str(EXAMPLES), "--planner", RESERVING, "--json")
+    assert status == 1
+    results = json_lines(out)
+    assert [r["status"] for r in results] == ["failed", "passed", "passed", "passed", "passed"]
+    assert results[0]["scenario"] == str(suite)
+    assert results[0]["failures"][0]["kind"] == "load-error"
+    assert "examples.fleetsim.yaml::crossing" in err  # several suites: rows name their file
+
+
+def test_an_xfail_scenario_that_fails_does_not_fail_the_run(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    copy_examples(tmp_path, "crossing")
+    suite = tmp_path / "known.fleetsim.yaml"
+    suite.write_text(
+        "fleetsim: 1\nname: known\nscenarios:\n  - name: crossing\n    dir: examples/crossing/\n"
+        "    xfail: the BFS planner collides\n"
+    )
+    status, out, _ = run(capsys, "run", str(suite), "--planner", "fleetsim.planners:BFSPlanner")
+    assert status == 0
+    assert "crossing  xfailed" in out and "1 xfailed" in out
+
+
+# -- usage errors ---------------------------------------------------------------------------------
+
+
+def test_an_unknown_scenario_name_exits_2_listing_the_names(capsys: pytest.CaptureFixture[str]) -> None:
+    status, out, err = run(capsys, "run", f"{EXAMPLES}::crosing", "--planner", RESERVING)
+    assert status == 2
+    assert "has no scenario 'crosing'" in err
+    assert ", ".join(NAMES) in err and "did you mean 'crossing'?" in err
+    assert out == ""
+
+
+def test_a_bad_planner_spec_exits_2_without_a_traceback(capsys: pytest.CaptureFixture[str]) -> None:
+    status, out, err = run(capsys, "run", str(EXAMPLES), "--planner", "foo")
+    assert status == 2
+    assert err == (
+        "fleetsim: error: planner='foo' must look like module:attribute, e.g. fleetsim.planners:ReservingPlanner\n"
+    )
+    assert out == ""
+
+
+def test_a_planner_module_that_does_not_import_exits_2(capsys: pytest.CaptureFixture[str]) -> None:
+    status, _, err = run(capsys, "run", str(EXAMPLES), "--planner", "no_such_module_here:Planner")
+    assert status == 2
+    assert "no module named 'no_such_module_here'" in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize(
+    ("target", "message"),
+    [
+        ("nowhere/at/all.fleetsim.yaml", "no such file or directory"),
+        (f"{SUITES}::crossing", "is a folder"),
+        (f"{EXAMPLES}::", "name a scenario after '::'"),
+    ],
+    ids=["missing-path", "selector-on-folder", "empty-selector"],
+)
+def test_a_bad_suite_argument_exits_2(target: str, message: str, capsys: pytest.CaptureFixture[str]) -> None:
+    status, _, err = run(capsys, "run", target, "--planner", RESERVING)
+    assert status == 2
+    assert message in err
+
+
+def test_a_folder_without_suites_exits_2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    status, _, err = run(capsys, "run", str(tmp_path), "--planner", RESERVING)
+    assert status == 2
+    assert "no *.fleetsim.yaml files" in err
