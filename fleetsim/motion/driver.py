@@ -96,6 +96,11 @@ class Driver:
         self._turn_left = 0.0  # seconds of turning in place still to do
         self._turn_target = heading
         self._turn_sign = 1.0  # +1 counter-clockwise, -1 clockwise
+        # The plan this vehicle last found nothing to drive on, and the no-motion result for it: a still
+        # vehicle whose plan has not changed (plans are immutable) stays still without any work.
+        self._idle: StepMotion | None = None
+        # Where the drivable stretch of a plan ends, measured from the start of its first leg.
+        self._stretch: tuple[FleetPlan | None, float, bool] = (None, 0.0, False)
 
     # -- the distance available ---------------------------------------------------------------------
 
@@ -110,26 +115,42 @@ class Driver:
 
     def reach(self, legs: list[FleetLeg] | tuple[FleetLeg, ...]) -> tuple[float, bool]:
         """Metres drivable from here without stopping, and whether a stop point (not the end) ends them."""
-        total = self._length(legs[0]) - self.distance
+        total, till_stop = self._stretch_of(legs)
+        return max(total - self.distance, 0.0), till_stop
+
+    def _stretch_of(self, legs: list[FleetLeg] | tuple[FleetLeg, ...]) -> tuple[float, bool]:
+        total = self._length(legs[0])
         for before, after in zip(legs, legs[1:]):
             if not after.fixed:
-                return max(total, 0.0), False
+                return total, False
             if self.stops_between(before, after):
-                return max(total, 0.0), True
+                return total, True
             total += self._length(after)
-        return max(total, 0.0), False
+        return total, False
+
+    def _reach_in(self, plan: FleetPlan) -> tuple[float, bool]:
+        """:meth:`reach` for a plan, remembering the plan's stretch while the plan object stays the same."""
+        cached, total, till_stop = self._stretch
+        if cached is not plan:
+            total, till_stop = self._stretch_of(plan.legs)
+            self._stretch = (plan, total, till_stop)
+        return max(total - self.distance, 0.0), till_stop
 
     # -- one step ------------------------------------------------------------------------------------
 
     def step(self, plan: FleetPlan, dt: float) -> StepMotion:
+        idle = self._idle
+        if idle is not None and idle.plan is plan:
+            return idle
+        self._idle = None
+        if self._profile is not None and not self._till_stop:
+            reach, till_stop = self._reach_in(plan)
+            if reach > self._remaining() + _EPS:  # new fixed legs: re-plan from the current speed
+                self._start(reach, till_stop)
         legs = list(plan.legs)
         entered: list[FleetLeg] = []
         driven = 0.0
         turned = False
-        if self._profile is not None and not self._till_stop:
-            reach, till_stop = self.reach(legs)
-            if reach > self._remaining() + _EPS:  # new fixed legs: re-plan from the current speed
-                self._start(reach, till_stop)
         budget = dt
         while budget > _EPS:
             if self._turn_left > 0.0:
@@ -148,7 +169,10 @@ class Driver:
                 self._start(reach, till_stop)
         self.odometer += driven
         new_plan = plan if len(legs) == len(plan.legs) else FleetPlan(plan.vehicle_id, tuple(legs))
-        return StepMotion(new_plan, tuple(entered), driven, turned)
+        motion = StepMotion(new_plan, tuple(entered), driven, turned)
+        if not motion.moved and not entered and self._profile is None and self._turn_left == 0.0:
+            self._idle = motion
+        return motion
 
     def _remaining(self) -> float:
         assert self._profile is not None

@@ -46,6 +46,8 @@ class CallOutcome:
 
 def validate_response(response: object, method: Method, vehicle_id: int) -> tuple[FleetPlan | RouteError, ...]:
     """The response's items, or a :class:`PlannerError` saying exactly what is wrong with it."""
+    if type(response) is list and not response:
+        return ()  # the common "nothing to change"
     where = f"{method}() for vehicle {vehicle_id}"
     if isinstance(response, (str, bytes, Mapping)) or not isinstance(response, Sequence):
         msg = f"{where} returned {response!r}; it must return a list of FleetPlan or RouteError items"
@@ -80,6 +82,13 @@ class FleetController:
     @property
     def states(self) -> Mapping[int, VehicleState]:
         return read_only(self._states)
+
+    def plan_of(self, vehicle_id: int) -> FleetPlan:
+        """One vehicle's plan in force (no copy of the whole fleet's)."""
+        return self._plans[vehicle_id]
+
+    def state_of(self, vehicle_id: int) -> VehicleState:
+        return self._states[vehicle_id]
 
     def snapshot(self, time: float) -> FleetSnapshot:
         """An immutable view for a planner call: rebuilt when the fleet or the time has changed."""
@@ -133,6 +142,8 @@ class FleetController:
     def _apply(
         self, vehicle_id: int, method: Method, task: Task, items: tuple[FleetPlan | RouteError, ...], time: float
     ) -> CallOutcome:
+        if not items:
+            return CallOutcome(vehicle_id, method, task, (), (), (), ())
         plans = [item for item in items if isinstance(item, FleetPlan)]
         errors = tuple(item for item in items if isinstance(item, RouteError))
         accepted: list[FleetPlan] = []

@@ -29,6 +29,9 @@ class TaskBook:
             self._tasks[task.id] = task
         self._routed: set[int] = set()
         self._completed: dict[int, float] = {}  # task id -> sim time of completion
+        # Read-only views handed out on every planner call, rebuilt only after a change.
+        self._queues_view: Mapping[int, tuple[Task, ...]] | None = None
+        self._routed_view: frozenset[int] | None = None
 
     # -- queries -------------------------------------------------------------------------------------
 
@@ -36,8 +39,10 @@ class TaskBook:
         return tuple(self._queues[vehicle_id])
 
     def queues(self) -> Mapping[int, tuple[Task, ...]]:
-        """Every vehicle's queue, head first (a read-only copy)."""
-        return MappingProxyType({vid: tuple(queue) for vid, queue in self._queues.items()})
+        """Every vehicle's queue, head first (a read-only copy, shared until a queue changes)."""
+        if self._queues_view is None:
+            self._queues_view = MappingProxyType({vid: tuple(queue) for vid, queue in self._queues.items()})
+        return self._queues_view
 
     def head(self, vehicle_id: int) -> Task | None:
         queue = self._queues[vehicle_id]
@@ -48,7 +53,9 @@ class TaskBook:
 
     @property
     def routed(self) -> frozenset[int]:
-        return frozenset(self._routed)
+        if self._routed_view is None:
+            self._routed_view = frozenset(self._routed)
+        return self._routed_view
 
     def is_completed(self, task_id: int) -> bool:
         return task_id in self._completed
@@ -77,8 +84,9 @@ class TaskBook:
     def mark_routed(self, plan: FleetPlan) -> None:
         """An accepted plan routes every task it marks as a goal."""
         for leg in plan.legs:
-            if leg.goal_for_task is not None:
+            if leg.goal_for_task is not None and leg.goal_for_task not in self._routed:
                 self._routed.add(leg.goal_for_task)
+                self._routed_view = None
 
     def complete(self, task_id: int, time: float) -> None:
         """The vehicle entered (or stands on) the task's goal leg."""
@@ -91,4 +99,6 @@ class TaskBook:
         for queue in self._queues.values():
             while queue and queue[0].id in self._completed:
                 dropped.append(queue.popleft())
+        if dropped:
+            self._queues_view = None
         return tuple(dropped)

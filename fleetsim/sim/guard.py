@@ -15,8 +15,7 @@ import signal
 import threading
 import time
 import traceback
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from collections.abc import Callable
 from types import FrameType
 
 from fleetsim.errors import FleetsimError
@@ -44,24 +43,8 @@ def _alarm(signum: int, frame: FrameType | None) -> None:
     raise _Overrun
 
 
-@contextmanager
-def _deadline(seconds: float | None) -> Iterator[None]:
-    usable = (
-        seconds is not None
-        and hasattr(signal, "setitimer")
-        and threading.current_thread() is threading.main_thread()
-    )
-    if not usable:
-        yield
-        return
-    assert seconds is not None
-    previous = signal.signal(signal.SIGALRM, _alarm)
-    signal.setitimer(signal.ITIMER_REAL, seconds)
-    try:
-        yield
-    finally:
-        signal.setitimer(signal.ITIMER_REAL, 0.0)
-        signal.signal(signal.SIGALRM, previous)
+def _timer_usable() -> bool:
+    return hasattr(signal, "setitimer") and threading.current_thread() is threading.main_thread()
 
 
 def _planner_traceback(exc: BaseException) -> str:
@@ -74,19 +57,47 @@ def _planner_traceback(exc: BaseException) -> str:
 
 
 class PlannerGuard:
-    """Invokes planner methods with a timeout; counts calls and sums their wall time."""
+    """Invokes planner methods with a timeout; counts calls and sums the time spent inside them.
+
+    Use it as a context manager around a run: the ``SIGALRM`` handler is installed once on entry and the
+    previous one restored on exit, so each call only arms and disarms the timer.
+    """
 
     def __init__(self, timeout: float | None = 10.0) -> None:
         self.timeout = timeout
         self.calls = 0
         self.wall_time = 0.0
+        self._armed = False
+        self._previous: object = None
+
+    def __enter__(self) -> PlannerGuard:
+        if self.timeout is not None and _timer_usable():
+            self._previous = signal.signal(signal.SIGALRM, _alarm)
+            self._armed = True
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self._armed:
+            signal.setitimer(signal.ITIMER_REAL, 0.0)
+            signal.signal(signal.SIGALRM, self._previous)  # type: ignore[arg-type]
+            self._armed = False
 
     def __call__(self, method: str, call: Callable[..., object], vehicle_id: int, *args: object) -> object:
-        start = time.perf_counter()
+        armed = self._armed
+        clock = time.perf_counter
         try:
-            with _deadline(self.timeout):
+            if armed:
+                signal.setitimer(signal.ITIMER_REAL, self.timeout)  # type: ignore[arg-type]
+            start = clock()
+            try:
                 response = call(*args)
-            if self.timeout is not None and time.perf_counter() - start > self.timeout:
+            finally:
+                elapsed = clock() - start
+                if armed:
+                    signal.setitimer(signal.ITIMER_REAL, 0.0)
+                self.calls += 1
+                self.wall_time += elapsed
+            if self.timeout is not None and elapsed > self.timeout:
                 raise _Overrun  # the planner caught the timer's exception itself and returned late
             return response
         except RouteError:
@@ -97,6 +108,3 @@ class PlannerGuard:
         except Exception as exc:
             msg = f"{method}() for vehicle {vehicle_id} raised {type(exc).__name__}: {exc}"
             raise PlannerFault(msg, vehicle_id=vehicle_id, details=_planner_traceback(exc)) from None
-        finally:
-            self.calls += 1
-            self.wall_time += time.perf_counter() - start

@@ -69,7 +69,7 @@ class _Run:
     def plan(self, now: float, events: list[list[Any]], plans: list[list[Any]]) -> bool:
         """Step 2; False when the planner failed and the run must end."""
         for vehicle_id in self.controller.tasks.busy_vehicles():
-            before = self.controller.plans[vehicle_id]
+            before = self.controller.plan_of(vehicle_id)
             try:
                 outcome = self.controller.consult(self.planner, vehicle_id, now)
             except (PlannerFault, PlannerError) as fault:
@@ -112,12 +112,16 @@ class _Run:
             events.append(["alert", alert.segment, list(alert.primary), list(alert.secondary)])
         return len(fresh)
 
-    def move(self, dt: float, end: float, events: list[list[Any]]) -> None:
-        """Step 4: every vehicle over the step ending at ``end``; entering a goal leg completes its task."""
+    def move(self, dt: float, end: float, events: list[list[Any]]) -> list[int]:
+        """Step 4: every vehicle over the step ending at ``end``; entering a goal leg completes its task.
+
+        Returns the vehicles whose state changed.
+        """
         controller = self.controller
         busy = set(controller.tasks.busy_vehicles())
+        changed = []
         for vehicle_id, driver in self.drivers.items():
-            plan = controller.plans[vehicle_id]
+            plan = controller.plan_of(vehicle_id)
             motion = driver.step(plan, dt)
             if motion.plan is not plan:
                 controller.set_plan(motion.plan)
@@ -128,8 +132,10 @@ class _Run:
             if motion.moved or motion.entered:
                 self.last_activity = end
                 controller.set_state(driver.state(motion.plan))
+                changed.append(vehicle_id)
             elif vehicle_id in busy:
                 self.waiting_time[vehicle_id] += dt
+        return changed
 
     def deadlock(self, now: float) -> DeadlockReport:
         waiting = tuple(v for v in self.controller.tasks.busy_vehicles() if self.drivers[v].speed == 0.0)
@@ -147,8 +153,19 @@ def run_scenario(
     on_progress: Callable[[RunProgress], None] | None = None,
 ) -> RunResult:
     """Simulate ``scenario`` with ``planner`` (a fresh instance) and judge the run against its ``expect``."""
+    with PlannerGuard(planner_timeout) as guard:
+        return _simulate(scenario, planner, guard, planner_name, keep_trace, on_progress)
+
+
+def _simulate(
+    scenario: Scenario,
+    planner: Planner,
+    guard: PlannerGuard,
+    planner_name: str,
+    keep_trace: bool,
+    on_progress: Callable[[RunProgress], None] | None,
+) -> RunResult:
     started = time.perf_counter()
-    guard = PlannerGuard(planner_timeout)
     run = _Run(scenario, planner, guard, keep_trace)
     settings = scenario.settings
     dt = settings.time_step
@@ -174,9 +191,10 @@ def run_scenario(
         rejected = any(e[0] == "reject" for e in events)
         alerted = run.check_reservations(now, events) > 0 if planned_ok else False
         end = (step + 1) * dt  # times are multiples of dt, never sums of them
-        if planned_ok:
-            run.move(dt, end, events)
-        run.trace.record(step, [vehicle_record(s) for _, s in sorted(run.controller.states.items())], plans, events)
+        moved = run.move(dt, end, events) if planned_ok else []
+        # The trace holds what changed; at step 0 that is everyone (the start), later only who moved.
+        recorded = sorted(run.drivers) if step == 0 else moved
+        run.trace.record(step, [vehicle_record(run.controller.state_of(v)) for v in recorded], plans, events)
         if not planned_ok:
             ended = "planner-error"
         elif run.controller.tasks.all_done():
