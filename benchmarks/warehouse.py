@@ -1,19 +1,27 @@
 """Generated warehouse-like layouts for benchmarks: a lattice of junctions joined by straights.
 
 Each junction has a horizontal and a vertical straight crossing it and four 90° curves (10 waypoints,
-radius 1 m) joining its arms; long straights join neighbouring junctions: 8 segments per junction.
+radius 1 m) joining its arms; long straights (*aisles*) join neighbouring junctions: 8 segments per
+junction. :func:`write_fleet_scenario` puts a seeded fleet with tasks on such a lattice as a scenario
+folder.
 """
 
 from __future__ import annotations
 
 import math
+import random
+from pathlib import Path
 
+import networkx as nx
 import numpy as np
 
-from fleetsim.enums import Direction, Shape
+from fleetsim.enums import Direction, Shape, Traverse
+from fleetsim.layout import Layout, build_layout
 from fleetsim.layout.segment import Point, Segment
+from fleetsim.load.tiled_writer import write_map
+from fleetsim.scenario import DEFAULT_VEHICLE_TYPE
 
-__all__ = ["warehouse", "warehouse_with_at_least"]
+__all__ = ["aisles", "warehouse", "warehouse_with_at_least", "write_fleet_scenario"]
 
 SPACING = 6.0  # m between junction centres
 CURVE_RADIUS = 1.0
@@ -49,3 +57,82 @@ def warehouse(junctions_per_side: int) -> list[Segment]:
 
 def warehouse_with_at_least(segment_count: int) -> list[Segment]:
     return warehouse(max(1, math.ceil(math.sqrt(segment_count / 8))))
+
+
+def aisles(junctions_per_side: int) -> list[int]:
+    """Ids of the long straights of :func:`warehouse`: the 7th and 8th segment of each junction."""
+    return [8 * k + offset for k in range(junctions_per_side**2) for offset in (7, 8)]
+
+
+def _reachable(layout: Layout, segment: int, hops: int) -> set[int]:
+    """Segments a vehicle on ``segment`` (either way) reaches within ``hops`` legs, ``segment`` excluded."""
+    found: set[int] = set()
+    for traverse in Traverse:
+        lengths = nx.single_source_shortest_path_length(layout.graph, (segment, traverse), cutoff=hops)
+        found.update(s for s, _ in lengths)
+    found.discard(segment)
+    return found
+
+
+def write_fleet_scenario(
+    folder: Path,
+    vehicles: int,
+    *,
+    seed: int = 1,
+    tasks_per_vehicle: tuple[int, int] = (2, 3),
+    aisles_per_vehicle: float = 4.0,
+    hops: int = 8,
+) -> Path:
+    """A lattice sized for ``vehicles`` (about ``aisles_per_vehicle`` aisles each) as a scenario folder.
+
+    Vehicles start on distinct aisles whose conflict sets are disjoint (the loader rejects conflicting
+    starts). Each gets ``tasks_per_vehicle`` (inclusive range) tasks, each goal an aisle reachable within
+    ``hops`` legs of the previous goal (or the start). Vehicles park on their last goal, so last goals
+    conflict with no earlier goal and no goal conflicts with an earlier vehicle's last goal: every task
+    stays reachable. Goals near the edge can run out of such aisles; then the rule is relaxed for that
+    goal. Seeded: the same arguments give the same files. Returns ``folder``.
+    """
+    side = max(2, math.ceil(math.sqrt(aisles_per_vehicle * vehicles / 2)))
+    segments = warehouse(side)
+    layout = build_layout(segments, vehicle_radius=DEFAULT_VEHICLE_TYPE.swept_radius)
+    rng = random.Random(seed)
+    shuffled = aisles(side)
+    rng.shuffle(shuffled)
+    starts: list[int] = []
+    taken: set[int] = set()  # segments conflicting with a chosen start
+    for aisle in shuffled:
+        if len(starts) == vehicles:
+            break
+        if aisle not in taken:
+            starts.append(aisle)
+            taken |= layout.conflicts(aisle)
+    if len(starts) < vehicles:
+        msg = f"vehicles={vehicles!r} must fit on non-conflicting aisles of a {side}x{side} lattice ({len(starts)} do)"
+        raise ValueError(msg)
+
+    aisle_ids = set(shuffled)
+    near_parked: set[int] = set()  # conflicts with some vehicle's last goal: no goal may go there
+    near_goals: set[int] = set()  # conflicts with any goal so far: no last goal may go there
+    rows: list[tuple[int, int]] = []
+    for vehicle_id, start in enumerate(starts, start=1):
+        here = start
+        count = rng.randint(*tasks_per_vehicle)
+        for number in range(count):
+            reachable = sorted(_reachable(layout, here, hops) & aisle_ids)
+            allowed = [s for s in reachable if s not in near_parked]
+            if number == count - 1:
+                allowed = [s for s in allowed if s not in near_goals] or allowed
+            goal = rng.choice(allowed or reachable)
+            near_goals |= layout.conflicts(goal)
+            rows.append((vehicle_id, goal))
+            here = goal
+        near_parked |= layout.conflicts(here)
+
+    folder.mkdir(parents=True, exist_ok=True)
+    write_map(folder / "map.json", segments)
+    vehicle_lines = ["vehicle_id,start_segment_id,segment_orientation"]
+    vehicle_lines += [f"{v},{s},forward" for v, s in enumerate(starts, start=1)]
+    (folder / "vehicles.csv").write_text("\n".join(vehicle_lines) + "\n", encoding="utf-8")
+    task_lines = ["vehicle_id,goal_segment_id", *(f"{v},{g}" for v, g in rows)]
+    (folder / "tasks.csv").write_text("\n".join(task_lines) + "\n", encoding="utf-8")
+    return folder

@@ -1,0 +1,166 @@
+"""Simulated steps per second, realtime factor and planner vs harness share of wall time, per fleet size.
+
+    python benchmarks/simulation.py [--sizes 10,100,1000] [--time-limit 60] [--large-time-limit 5]
+                                    [--planning-period 0.1] [--seed 1] [--profile 100:ReservingPlanner] [--top 30]
+
+Targets (issue): 100 vehicles with ReservingPlanner run at >= 20x realtime with the harness's own share
+of wall time <= 25 %, and 1000 vehicles run at all.
+
+Each fleet gets a generated warehouse lattice with about four aisles per vehicle, vehicles on
+non-conflicting aisles and 2-3 tasks each to aisles a few junctions away (``warehouse.write_fleet_scenario``;
+seeded). The scenario folder is loaded like any other, with ``stop_on`` empty (BFS runs go on after
+alerts) and a fixed ``time_limit`` so every run simulates comparable time; fleets of 1000 or more use
+``--large-time-limit`` (each of their steps takes about a second). Every other setting is the default
+(``--planning-period`` excepted, for exploring). Both reference planners run on each fleet, without a
+trace kept. The planner share is the time inside planner calls (the guard's measure,
+``Metrics.planner_wall_time``, which includes the guard's own per-call cost of arming the timeout); the
+harness share is the rest of the run's wall time.
+
+``--profile SIZE:PLANNER`` runs that case once more under cProfile and prints its own time by module
+and the functions with the most own time (cProfile slows pure-Python code about 2x; read shares, not
+seconds).
+"""
+
+from __future__ import annotations
+
+import argparse
+import cProfile
+import pstats
+import sys
+import tempfile
+from collections import defaultdict
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).parent))
+
+from warehouse import write_fleet_scenario  # noqa: E402
+
+from fleetsim.load.scenario import load_scenario_dir  # noqa: E402
+from fleetsim.planners import BFSPlanner, ReservingPlanner  # noqa: E402
+from fleetsim.planning.protocol import Planner  # noqa: E402
+from fleetsim.scenario import Scenario, ScenarioSettings  # noqa: E402
+from fleetsim.sim.loop import run_scenario  # noqa: E402
+from fleetsim.sim.result import RunResult  # noqa: E402
+
+PLANNERS: dict[str, type[Planner]] = {"BFSPlanner": BFSPlanner, "ReservingPlanner": ReservingPlanner}
+LARGE_FLEET = 1000
+TARGET_SIZE, TARGET_PLANNER, TARGET_REALTIME, TARGET_HARNESS = 100, "ReservingPlanner", 20.0, 0.25
+HEADER = (
+    f"{'vehicles':>8} {'planner':<16} {'sim s':>6} {'steps':>6} {'wall s':>8} {'steps/s':>8} {'realtime':>8} "
+    f"{'planner':>7} {'harness':>7} {'calls':>7} {'tasks':>11} {'alerts':>6}  ended"
+)
+
+
+def fleet_scenario(folder: Path, vehicles: int, settings: ScenarioSettings, seed: int) -> Scenario:
+    write_fleet_scenario(folder, vehicles, seed=seed)
+    return load_scenario_dir(folder, settings=settings)
+
+
+def row(vehicles: int, planner: str, result: RunResult) -> str:
+    m = result.metrics
+    planner_share = m.planner_wall_time / m.wall_time
+    tasks = f"{result.tasks_completed}/{result.tasks_total}"
+    return (
+        f"{vehicles:>8} {planner:<16} {result.sim_time:>6.1f} {result.steps:>6} {m.wall_time:>8.2f} "
+        f"{result.steps / m.wall_time:>8.1f} {m.realtime_factor or 0.0:>7.2f}x {planner_share:>7.1%} "
+        f"{1 - planner_share:>7.1%} {m.planner_calls:>7} {tasks:>11} {len(result.collisions):>6}  {result.ended}"
+    )
+
+
+def _area(filename: str) -> str:
+    """A profile entry's module, relative to the package (``fleetsim/sim/loop.py``), or a coarse bucket."""
+    path = filename.replace("\\", "/")
+    if "/fleetsim/" in path:
+        return "fleetsim/" + path.rsplit("/fleetsim/", 1)[1]
+    if filename.startswith(("~", "<")):
+        return "builtins (C functions: dict, tuple, numpy, json, ...)"
+    return "other: " + path.rsplit("/", 2)[-2] + "/" + path.rsplit("/", 1)[-1]
+
+
+def show_profile(profile: cProfile.Profile, top: int) -> None:
+    stats = pstats.Stats(profile)
+    entries = stats.stats  # type: ignore[attr-defined]  # {(file, line, name): (cc, nc, tt, ct, callers)}
+    total = sum(tt for _, _, tt, _, _ in entries.values())
+    by_area: dict[str, float] = defaultdict(float)
+    for (filename, _, _), (_, _, tt, _, _) in entries.items():
+        by_area[_area(filename)] += tt
+    print(f"\nown time by module (total {total:.2f} s under the profiler):")
+    for area, seconds in sorted(by_area.items(), key=lambda item: -item[1]):
+        if seconds / total >= 0.005:
+            print(f"  {seconds / total:6.1%} {seconds:8.2f} s  {area}")
+    print(f"\ntop {top} functions by own time (calls, own s, share, cumulative s):")
+    ranked = sorted(entries.items(), key=lambda item: -item[1][2])[:top]
+    for (filename, line, name), (_, calls, tt, ct, _) in ranked:
+        where = "builtin" if filename.startswith(("~", "<")) else f"{_area(filename)}:{line}"
+        print(f"  {calls:>9} {tt:8.2f} {tt / total:6.1%} {ct:8.2f}  {name} ({where})")
+
+
+def parse_sizes(text: str) -> list[int]:
+    sizes = [part.strip() for part in text.split(",")]
+    if not all(size.isdigit() and int(size) > 0 for size in sizes):
+        msg = f"--sizes={text!r} must be positive fleet sizes separated by commas, e.g. 10,100,1000"
+        raise argparse.ArgumentTypeError(msg)
+    return [int(size) for size in sizes]
+
+
+def parse_profile(text: str) -> tuple[int, str]:
+    size, _, planner = text.partition(":")
+    if planner not in PLANNERS or not size.isdigit():
+        msg = f"--profile={text!r} must be SIZE:PLANNER with PLANNER one of {', '.join(PLANNERS)}"
+        raise argparse.ArgumentTypeError(msg)
+    return int(size), planner
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--sizes", type=parse_sizes, default=[10, 100, 1000])
+    parser.add_argument("--time-limit", type=float, default=60.0, help="simulated seconds per run")
+    parser.add_argument(
+        "--large-time-limit", type=float, default=5.0, help=f"simulated seconds for fleets of {LARGE_FLEET} or more"
+    )
+    parser.add_argument("--planning-period", type=float, default=ScenarioSettings().planning_period)
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--profile", type=parse_profile, metavar="SIZE:PLANNER")
+    parser.add_argument("--top", type=int, default=30, help="functions listed with --profile")
+    args = parser.parse_args()
+
+    def settings(size: int) -> ScenarioSettings:
+        time_limit = args.large_time_limit if size >= LARGE_FLEET else args.time_limit
+        return ScenarioSettings(time_limit=time_limit, stop_on=(), planning_period=args.planning_period)
+
+    results: dict[tuple[int, str], RunResult] = {}
+    print(HEADER)
+    with tempfile.TemporaryDirectory() as tmp:
+        for size in args.sizes:
+            scenario = fleet_scenario(Path(tmp) / f"warehouse-{size}", size, settings(size), args.seed)
+            for name, planner in PLANNERS.items():
+                result = run_scenario(scenario, planner(), planner_name=name, keep_trace=False)
+                results[size, name] = result
+                print(row(size, name, result), flush=True)
+        if args.profile is not None:
+            size, name = args.profile
+            scenario = fleet_scenario(Path(tmp) / f"profile-{size}", size, settings(size), args.seed)
+            profile = cProfile.Profile()
+            result = profile.runcall(run_scenario, scenario, PLANNERS[name](), planner_name=name, keep_trace=False)
+            print(f"\nprofiled (under cProfile):\n{HEADER}\n{row(size, name, result)}")
+            show_profile(profile, args.top)
+
+    print()
+    target = results.get((TARGET_SIZE, TARGET_PLANNER))
+    large = [result for (size, _), result in results.items() if size >= LARGE_FLEET]
+    if target is None or not large:
+        print(f"targets not checked: --sizes must include {TARGET_SIZE} and {LARGE_FLEET}")
+        return 0
+    m = target.metrics
+    realtime = m.realtime_factor or 0.0
+    harness = 1 - m.planner_wall_time / m.wall_time
+    print(f"{TARGET_SIZE} vehicles, {TARGET_PLANNER}: realtime {realtime:.1f}x [target >= {TARGET_REALTIME:g}x], "
+          f"harness share {harness:.1%} [target <= {TARGET_HARNESS:.0%}]")
+    print(f"{LARGE_FLEET}+ vehicles: {len(large)} runs finished ({', '.join(r.ended for r in large)}) [target: run at all]")
+    ok = realtime >= TARGET_REALTIME and harness <= TARGET_HARNESS
+    print("targets met" if ok else "TARGETS MISSED")
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
