@@ -22,14 +22,14 @@ import networkx as nx
 from fleetsim.enums import ConflictModel, JointKind, Traverse
 from fleetsim.errors import LayoutError
 from fleetsim.layout.conflicts import conflict_sets
-from fleetsim.layout.connections import Connection, find_connections, traverse_rank
+from fleetsim.layout.connections import Connection, find_connections
 from fleetsim.layout.lint import LintFinding, lint_layout
 from fleetsim.layout.segment import Segment
 
 __all__ = ["Connection", "Layout", "Step", "build_layout"]
 
 Step = tuple[int, Traverse, JointKind]  # (next or previous segment, its traverse, joint kind)
-StepIndex = Mapping[tuple[int, int], tuple[Step, ...]]
+StepIndex = Mapping[tuple[int, Traverse], tuple[Step, ...]]
 
 
 @dataclass(frozen=True, slots=True, eq=False, repr=False)
@@ -75,13 +75,19 @@ class Layout:
 
         A traverse the segment does not allow has no successors (empty tuple).
         """
+        found = self._successors.get((segment, traverse))  # hot in route searches: no checks on a hit
+        if found is not None:
+            return found
         self._require(segment)
-        return self._successors.get((segment, traverse_rank(Traverse(traverse))), ())
+        return self._successors.get((segment, Traverse(traverse)), ())
 
     def predecessors(self, segment: int, traverse: Traverse) -> tuple[Step, ...]:
         """The states from which a vehicle may enter ``segment`` driving ``traverse``."""
+        found = self._predecessors.get((segment, traverse))
+        if found is not None:
+            return found
         self._require(segment)
-        return self._predecessors.get((segment, traverse_rank(Traverse(traverse))), ())
+        return self._predecessors.get((segment, Traverse(traverse)), ())
 
     def conflicts(self, segment: int) -> frozenset[int]:
         """Segments a vehicle on ``segment`` could collide with, ``segment`` itself included."""
@@ -138,18 +144,15 @@ def _state_graph(segments: Mapping[int, Segment], connections: tuple[Connection,
 
 
 def _step_index(connections: tuple[Connection, ...]) -> tuple[StepIndex, StepIndex]:
-    """Successor and predecessor tuples per state, keyed by ``(segment, traverse_rank)``.
+    """Successor and predecessor tuples per ``(segment, traverse)`` state.
 
-    Integer keys because hashing a ``Traverse`` runs Python code, and maps hold 10,000+ segments.
     ``connections`` are sorted by (from state, to state), so each tuple comes out sorted as well.
     """
-    forward: defaultdict[tuple[int, int], list[Step]] = defaultdict(list)
-    backward: defaultdict[tuple[int, int], list[Step]] = defaultdict(list)
+    forward: defaultdict[tuple[int, Traverse], list[Step]] = defaultdict(list)
+    backward: defaultdict[tuple[int, Traverse], list[Step]] = defaultdict(list)
     for c in connections:
-        from_key = (c.from_segment, traverse_rank(c.from_traverse))
-        to_key = (c.to_segment, traverse_rank(c.to_traverse))
-        forward[from_key].append((c.to_segment, c.to_traverse, c.joint))
-        backward[to_key].append((c.from_segment, c.from_traverse, c.joint))
+        forward[(c.from_segment, c.from_traverse)].append((c.to_segment, c.to_traverse, c.joint))
+        backward[(c.to_segment, c.to_traverse)].append((c.from_segment, c.from_traverse, c.joint))
     return (
         MappingProxyType({key: tuple(steps) for key, steps in forward.items()}),
         MappingProxyType({key: tuple(steps) for key, steps in backward.items()}),

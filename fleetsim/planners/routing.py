@@ -8,6 +8,7 @@ corners; a vehicle that turns in place keeps its progress everywhere (it turns o
 from __future__ import annotations
 
 import heapq
+import math
 from collections import deque
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import replace
@@ -25,10 +26,12 @@ __all__ = [
     "next_states",
     "next_steps",
     "shortest_route",
+    "straight_line_estimate",
 ]
 
 State = tuple[int, Traverse, Progress]
 Cost = Callable[[int, Traverse, JointKind], float]  # (segment entered, its traverse, joint crossed)
+Estimate = Callable[[int, Traverse], float]  # a lower bound of the cost from a state to the goal
 
 
 def next_steps(layout: Layout, capability: TurnCapability, state: State) -> Iterator[tuple[State, JointKind]]:
@@ -78,6 +81,27 @@ def _order(state: State) -> tuple[int, int, int]:
     return segment, traverse is Traverse.BACKWARD, progress is Progress.REVERSE
 
 
+def straight_line_estimate(layout: Layout, goal: int) -> Estimate:
+    """An A* estimate that never overestimates a route's length to ``goal``.
+
+    From the exit of a state, the vehicle must still reach an end of the goal segment (at least the
+    straight-line distance) and then drive the whole goal segment.
+    """
+    target = layout.segments[goal]
+    (ax, ay), (bx, by) = target.first, target.last
+    length = target.length
+    segments = layout.segments
+    hypot = math.hypot
+
+    def estimate(segment: int, traverse: Traverse) -> float:
+        if segment == goal:
+            return 0.0
+        x, y = segments[segment].exit(traverse)
+        return min(hypot(x - ax, y - ay), hypot(x - bx, y - by)) + length
+
+    return estimate
+
+
 def shortest_route(
     layout: Layout,
     capability: TurnCapability,
@@ -85,29 +109,34 @@ def shortest_route(
     goal: int,
     arrive: Progress | None,
     cost: Cost,
+    estimate: Estimate | None = None,
 ) -> list[State] | None:
-    """Least total ``cost`` from ``start`` to segment ``goal`` (Dijkstra; ``start`` itself excluded).
+    """Least total ``cost`` from ``start`` to segment ``goal`` (``start`` itself excluded).
 
-    ``cost(segment, traverse, joint)`` is what driving on to a segment costs (at least its length). ``arrive`` is the
-    required progress on the goal segment; a vehicle that turns in place can always meet it on the last
-    leg, so for it only a curve-only vehicle's progress is constrained.
+    ``cost(segment, traverse, joint)`` is what driving on to a segment costs (at least its length);
+    ``estimate(segment, traverse)``, if given, a consistent lower bound of the cost still to come (A*;
+    see :func:`straight_line_estimate`), else 0 (Dijkstra). ``arrive`` is the required progress on the
+    goal segment; a vehicle that turns in place can always meet it on the last leg, so only a curve-only
+    vehicle's progress is constrained.
     """
     must_match = arrive is not None and capability is TurnCapability.CURVE
     best: dict[State, float] = {start: 0.0}
     came_from: dict[State, State] = {}
-    heap: list[tuple[float, tuple[int, int, int], State]] = [(0.0, _order(start), start)]
+    heap: list[tuple[float, tuple[int, int, int], float, State]] = [(0.0, _order(start), 0.0, start)]
+    infinity = math.inf
     while heap:
-        spent, _, state = heapq.heappop(heap)
-        if spent > best.get(state, float("inf")):
+        _, _, spent, state = heapq.heappop(heap)
+        if spent > best.get(state, infinity):
             continue
         if state != start and state[0] == goal and (not must_match or state[2] is arrive):
             return _rebuild(came_from, state)
         for following, joint in next_steps(layout, capability, state):
             total = spent + cost(following[0], following[1], joint)
-            if total < best.get(following, float("inf")):
+            if total < best.get(following, infinity):
                 best[following] = total
                 came_from[following] = state
-                heapq.heappush(heap, (total, _order(following), following))
+                bound = total + (estimate(following[0], following[1]) if estimate is not None else 0.0)
+                heapq.heappush(heap, (bound, _order(following), total, following))
     return None
 
 
