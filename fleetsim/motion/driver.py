@@ -101,6 +101,10 @@ class Driver:
         self._idle: StepMotion | None = None
         # Where the drivable stretch of a plan ends, measured from the start of its first leg.
         self._stretch: tuple[FleetPlan | None, float, bool] = (None, 0.0, False)
+        self._travelled = 0.0  # distance_at(elapsed) of the current profile
+        self._last_out: FleetPlan | None = None  # the plan the last step returned
+        start = layout.segments[vehicle.start_segment]
+        self.x, self.y, _ = start.pose_at(0.0, vehicle.traverse)  # the position, kept with the heading
 
     # -- the distance available ---------------------------------------------------------------------
 
@@ -143,7 +147,8 @@ class Driver:
         if idle is not None and idle.plan is plan:
             return idle
         self._idle = None
-        if self._profile is not None and not self._till_stop:
+        # Only a plan from outside (not the one this driver returned) can bring new fixed legs.
+        if self._profile is not None and not self._till_stop and plan is not self._last_out:
             reach, till_stop = self._reach_in(plan)
             if reach > self._remaining() + _EPS:  # new fixed legs: re-plan from the current speed
                 self._start(reach, till_stop)
@@ -172,17 +177,19 @@ class Driver:
         motion = StepMotion(new_plan, tuple(entered), driven, turned)
         if not motion.moved and not entered and self._profile is None and self._turn_left == 0.0:
             self._idle = motion
+        self._last_out = new_plan
         return motion
 
     def _remaining(self) -> float:
         assert self._profile is not None
-        return self._profile.distance - self._profile.distance_at(self._elapsed)
+        return self._profile.distance - self._travelled
 
     def _start(self, reach: float, till_stop: bool) -> None:
         self._profile = SpeedProfile.plan(
             min(self.speed, self.type.max_speed), self.type.acceleration, self.type.max_speed, reach
         )
         self._elapsed = 0.0
+        self._travelled = 0.0
         self._till_stop = till_stop
 
     def _at_leg_end(self, legs: list[FleetLeg]) -> bool:
@@ -194,7 +201,9 @@ class Driver:
         assert profile is not None
         t0 = self._elapsed
         t1 = min(t0 + budget, profile.stop_time)
-        distance = profile.advance(t0, t1)
+        travelled = profile.distance_at(t1)
+        distance = max(travelled - self._travelled, 0.0)  # the exact area under the profile over [t0, t1]
+        self._travelled = travelled
         self._elapsed = t1
         self._move(distance, legs, entered)
         if t1 >= profile.stop_time:
@@ -217,7 +226,7 @@ class Driver:
             self.distance = length  # the end of what may be driven now
             break
         leg = legs[0]
-        travel = self._layout.segments[leg.segment].pose_at(self.distance, leg.traverse)[2]
+        self.x, self.y, travel = self._layout.segments[leg.segment].pose_at(self.distance, leg.traverse)
         self.heading = _nose(travel, leg.progress)
 
     def _cross(self, legs: list[FleetLeg], entered: list[FleetLeg]) -> None:
@@ -251,6 +260,16 @@ class Driver:
     def state(self, plan: FleetPlan) -> VehicleState:
         leg = plan.legs[0]
         x, y, _ = self._layout.segments[leg.segment].pose_at(self.distance, leg.traverse)
+        return self._state(leg, x, y)
+
+    def moved_state(self, plan: FleetPlan) -> VehicleState:
+        """:meth:`state` after a step that drove: the position computed while driving is reused."""
+        leg = plan.legs[0]
+        if self.distance == 0.0 and self._turn_left == 0.0:
+            return self.state(plan)  # crossed onto a new leg at rest: no position computed yet
+        return self._state(leg, self.x, self.y)
+
+    def _state(self, leg: FleetLeg, x: float, y: float) -> VehicleState:
         return VehicleState(
             id=self.id,
             segment=leg.segment,

@@ -72,6 +72,8 @@ class FleetController:
         self._reservations = ReservationIndex(ConflictTable(self.layout))
         # The last snapshot handed out; reused until something it shows changes (most calls change nothing).
         self._snapshot: FleetSnapshot | None = None
+        # The alerts of the last reservation check, valid while no plan has changed since.
+        self._alerts: tuple[CollisionAlert, ...] | None = None
 
     # -- views ---------------------------------------------------------------------------------------
 
@@ -105,7 +107,9 @@ class FleetController:
 
     def alerts(self) -> tuple[CollisionAlert, ...]:
         """The reservation check over the plans in force (step 3)."""
-        return self._reservations.alerts(self._plans)
+        if self._alerts is None:
+            self._alerts = self._reservations.alerts(self._plans)
+        return self._alerts
 
     # -- changes -------------------------------------------------------------------------------------
 
@@ -113,6 +117,7 @@ class FleetController:
         """Replace a vehicle's plan without checks (the simulation drops legs it has driven past)."""
         self._plans[plan.vehicle_id] = plan
         self._snapshot = None
+        self._alerts = None
 
     def set_state(self, state: VehicleState) -> None:
         self._states[state.id] = state
@@ -121,7 +126,8 @@ class FleetController:
     def consult(self, planner: Planner, vehicle_id: int, time: float) -> CallOutcome | None:
         """Step 2 for one vehicle: ask the planner, check the response, apply what passes.
 
-        ``None`` when the vehicle has no more tasks. A :class:`RouteError` raised by the planner fails
+        ``None`` when the vehicle has no more tasks or the planner changed nothing. A :class:`RouteError`
+        raised by the planner fails
         the whole request; any other exception propagates to the caller (which reports a planner error).
         """
         task = self.tasks.head(vehicle_id)
@@ -134,6 +140,8 @@ class FleetController:
             items = validate_response(response, method, vehicle_id)
         except RouteError as error:
             return CallOutcome(vehicle_id, method, task, (), (), (error,), ())
+        if not items:
+            return None  # nothing to change (the most common answer)
         return self._apply(vehicle_id, method, task, items, time)
 
     def _context(self) -> CheckContext:
@@ -142,8 +150,6 @@ class FleetController:
     def _apply(
         self, vehicle_id: int, method: Method, task: Task, items: tuple[FleetPlan | RouteError, ...], time: float
     ) -> CallOutcome:
-        if not items:
-            return CallOutcome(vehicle_id, method, task, (), (), (), ())
         plans = [item for item in items if isinstance(item, FleetPlan)]
         errors = tuple(item for item in items if isinstance(item, RouteError))
         accepted: list[FleetPlan] = []
@@ -155,6 +161,7 @@ class FleetController:
                 continue
             self._plans[result.vehicle_id] = result
             self._snapshot = None
+            self._alerts = None
             self.tasks.mark_routed(result)
             goal = result.legs[0].goal_for_task
             if goal is not None and not self.tasks.is_completed(goal):
@@ -173,6 +180,7 @@ class FleetController:
             if any(leg.goal_for_task == task.id for leg in plan.legs):
                 legs = tuple(replace(leg, goal_for_task=None) if leg.goal_for_task == task.id else leg for leg in plan.legs)
                 self._plans[task.vehicle_id] = FleetPlan(task.vehicle_id, legs)
+                self._alerts = None
         return dropped
 
     def planning_round(self, planner: Planner, time: float) -> tuple[CallOutcome, ...]:

@@ -8,7 +8,7 @@ vehicle; raising a :class:`RouteError` fails the whole request. Plans and legs a
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Protocol, Union, runtime_checkable
 
 from fleetsim.enums import Progress, Traverse
@@ -82,6 +82,8 @@ class FleetPlan:
 
     vehicle_id: int
     legs: tuple[FleetLeg, ...]
+    # How many legs the committed prefix holds (derived; asked for on every step of every vehicle).
+    _fixed_count: int = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         _whole_number(self.vehicle_id, "vehicle_id")
@@ -89,21 +91,20 @@ class FleetPlan:
             msg = f"legs={self.legs!r} must be a sequence of FleetLeg"
             raise TypeError(msg)
         legs = tuple(self.legs)
+        count = 0
         for index, leg in enumerate(legs):
             if not isinstance(leg, FleetLeg):
                 msg = f"legs[{index}]={leg!r} must be a FleetLeg"
                 raise TypeError(msg)
+            if leg.fixed and count == index:
+                count += 1
         object.__setattr__(self, "legs", legs)
+        object.__setattr__(self, "_fixed_count", count)
 
     @property
     def fixed_legs(self) -> tuple[FleetLeg, ...]:
         """The committed prefix (for a well-formed plan; see the ``fixed-not-contiguous`` check)."""
-        count = 0
-        for leg in self.legs:
-            if not leg.fixed:
-                break
-            count += 1
-        return self.legs[:count]
+        return self.legs[: self._fixed_count]
 
     def __str__(self) -> str:
         return f"vehicle {self.vehicle_id}: " + ", ".join(map(str, self.legs))

@@ -131,7 +131,7 @@ class _Run:
                     events.append(["complete", leg.goal_for_task])
             if motion.moved or motion.entered:
                 self.last_activity = end
-                controller.set_state(driver.state(motion.plan))
+                controller.set_state(driver.moved_state(motion.plan))
                 changed.append(vehicle_id)
             elif vehicle_id in busy:
                 self.waiting_time[vehicle_id] += dt
