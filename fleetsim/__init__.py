@@ -46,6 +46,8 @@ from fleetsim.scenario import (
     Vehicle,
     VehicleType,
 )
+from fleetsim.sim import Divergence, Failure, RunResult, first_divergence, run_scenario
+from fleetsim.sim.planner_spec import PlannerSpecError, load_planner_factory
 
 __version__ = "0.1.0"
 
@@ -55,7 +57,9 @@ __all__ = [
     "Connection",
     "DEFAULT_VEHICLE_TYPE",
     "Direction",
+    "Divergence",
     "Expectations",
+    "Failure",
     "FleetLeg",
     "FleetPlan",
     "FleetSnapshot",
@@ -69,10 +73,12 @@ __all__ = [
     "MapError",
     "Planner",
     "PlannerError",
+    "PlannerSpecError",
     "Progress",
     "Rejection",
     "RejectionCode",
     "RouteError",
+    "RunResult",
     "Scenario",
     "ScenarioFileError",
     "ScenarioSettings",
@@ -90,10 +96,13 @@ __all__ = [
     "VehicleType",
     "build_layout",
     "discover_suites",
+    "first_divergence",
     "load_map",
+    "load_planner_factory",
     "load_scenario",
     "load_scenario_dir",
     "load_suite",
+    "run_scenario",
     "write_map",
     "__version__",
 ]
