@@ -152,6 +152,9 @@ class Driver:
             reach, till_stop = self._reach_in(plan)
             if reach > self._remaining() + _EPS:  # new fixed legs: re-plan from the current speed
                 self._start(reach, till_stop)
+        cruising = self._cruise(plan, dt)
+        if cruising is not None:
+            return cruising
         legs = list(plan.legs)
         entered: list[FleetLeg] = []
         driven = 0.0
@@ -179,6 +182,33 @@ class Driver:
             self._idle = motion
         self._last_out = new_plan
         return motion
+
+    def _cruise(self, plan: FleetPlan, dt: float) -> StepMotion | None:
+        """The common step, done directly: the profile goes on all step long and the leg does not end.
+
+        Exactly what the general loop would compute for such a step, without its bookkeeping.
+        """
+        profile = self._profile
+        if profile is None or self._turn_left != 0.0:
+            return None
+        t1 = self._elapsed + dt
+        if t1 >= profile.stop_time:
+            return None
+        travelled = profile.distance_at(t1)
+        distance = max(travelled - self._travelled, 0.0)
+        leg = plan.legs[0]
+        segment = self._layout.segments[leg.segment]
+        if self.distance + distance >= segment.length - _EPS:
+            return None
+        self._travelled = travelled
+        self._elapsed = t1
+        self.distance += distance
+        self.x, self.y, travel = segment.pose_at(self.distance, leg.traverse)
+        self.heading = _nose(travel, leg.progress)
+        self.speed = profile.speed_at(t1)
+        self.odometer += distance
+        self._last_out = plan
+        return StepMotion(plan, (), distance, False)
 
     def _remaining(self) -> float:
         assert self._profile is not None

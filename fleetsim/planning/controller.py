@@ -72,7 +72,8 @@ class FleetController:
         self._reservations = ReservationIndex(ConflictTable(self.layout))
         # The last snapshot handed out; reused until something it shows changes (most calls change nothing).
         self._snapshot: FleetSnapshot | None = None
-        # The alerts of the last reservation check, valid while no plan has changed since.
+        # The alerts of the last reservation check, valid while no plan has changed since. Plans that
+        # only lost legs (driven past) reserve less, so they can end alerts but never start one.
         self._alerts: tuple[CollisionAlert, ...] | None = None
 
     # -- views ---------------------------------------------------------------------------------------
@@ -114,10 +115,17 @@ class FleetController:
     # -- changes -------------------------------------------------------------------------------------
 
     def set_plan(self, plan: FleetPlan) -> None:
-        """Replace a vehicle's plan without checks (the simulation drops legs it has driven past)."""
+        """Replace a vehicle's plan without checks."""
         self._plans[plan.vehicle_id] = plan
         self._snapshot = None
         self._alerts = None
+
+    def drive_past(self, plan: FleetPlan) -> None:
+        """The vehicle drove past its first legs: ``plan`` is its plan without them."""
+        self._plans[plan.vehicle_id] = plan
+        self._snapshot = None
+        if self._alerts:  # with no alerts in force, fewer reservations cannot raise one
+            self._alerts = None
 
     def set_state(self, state: VehicleState) -> None:
         self._states[state.id] = state
@@ -142,6 +150,8 @@ class FleetController:
             return CallOutcome(vehicle_id, method, task, (), (), (error,), ())
         if not items:
             return None  # nothing to change (the most common answer)
+        if len(items) == 1 and items[0] == self._plans.get(getattr(items[0], "vehicle_id", None)):  # type: ignore[arg-type]
+            return None  # the plan in force, handed back unchanged
         return self._apply(vehicle_id, method, task, items, time)
 
     def _context(self) -> CheckContext:

@@ -124,7 +124,7 @@ class _Run:
             plan = controller.plan_of(vehicle_id)
             motion = driver.step(plan, dt)
             if motion.plan is not plan:
-                controller.set_plan(motion.plan)
+                controller.drive_past(motion.plan)
             for leg in motion.entered:
                 if leg.goal_for_task is not None and not controller.tasks.is_completed(leg.goal_for_task):
                     controller.tasks.complete(leg.goal_for_task, end)
