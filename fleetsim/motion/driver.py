@@ -15,7 +15,7 @@ the exact area under the profile and nothing waits for the next step without rea
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from typing import NamedTuple
 
 from fleetsim.enums import Progress, Traverse
 from fleetsim.layout.layout import Layout
@@ -61,9 +61,11 @@ class HeadingTable:
         return _wrap(start - end)
 
 
-@dataclass(frozen=True, slots=True)
-class StepMotion:
-    """What a step did to one vehicle: its plan with passed legs dropped, the legs it entered, how far."""
+class StepMotion(NamedTuple):
+    """What a step did to one vehicle: its plan with passed legs dropped, the legs it entered, how far.
+
+    A named tuple: one is made for every moving vehicle on every step.
+    """
 
     plan: FleetPlan
     entered: tuple[FleetLeg, ...]

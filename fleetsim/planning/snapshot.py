@@ -10,7 +10,7 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
-from typing import TypeVar
+from typing import NamedTuple, TypeVar
 
 from fleetsim.enums import Progress, Traverse
 from fleetsim.layout.layout import Layout
@@ -20,12 +20,13 @@ from fleetsim.scenario import Task, Vehicle, VehicleType
 __all__ = ["FleetSnapshot", "VehicleState", "initial_plan", "initial_state", "read_only"]
 
 
-@dataclass(frozen=True, slots=True)
-class VehicleState:
+class VehicleState(NamedTuple):
     """Where a vehicle is and how it moves: on which leg, how far along it, its pose and speed.
 
     ``distance`` is metres driven along the current leg; ``heading`` (radians, counter-clockwise from +x)
-    is where the vehicle's nose points, the travel direction plus π when it is backing.
+    is where the vehicle's nose points, the travel direction plus π when it is backing. Immutable (a
+    named tuple: made for every moving vehicle on every step, so it must be cheap); use ``_replace`` to
+    derive a changed copy.
     """
 
     id: int

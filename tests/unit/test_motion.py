@@ -76,7 +76,7 @@ def _moving_start(first_length: float, more_length: float, at: float) -> tuple[f
     for _ in range(round(at / DT)):
         one = driver.step(one, DT).plan
         now += DT
-    v0, done = driver.speed, driver.distance
+    v0 = driver.speed
     both = plan((1, F, FWD), (2, F, FWD))
     return time_to_stop(driver, both, start=now) - at, v0, driver
 

@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from fleetsim import load_scenario, load_suite
-from fleetsim.enums import Direction, Progress, Shape, Traverse, TurnCapability
+from fleetsim.enums import Direction, Progress, Shape, TurnCapability
 from fleetsim.layout import Segment
 from fleetsim.load.scenario import load_scenario_dir
 from fleetsim.load.tiled_writer import write_map
@@ -38,7 +38,7 @@ def step_forward(controller: FleetController, time: float) -> None:
             nxt = plan.legs[1]
             controller.set_plan(FleetPlan(vehicle_id, plan.legs[1:]))
             state = controller.states[vehicle_id]
-            controller.set_state(replace(state, segment=nxt.segment, traverse=nxt.traverse, progress=nxt.progress))
+            controller.set_state(state._replace(segment=nxt.segment, traverse=nxt.traverse, progress=nxt.progress))
             if nxt.goal_for_task is not None:
                 controller.tasks.complete(nxt.goal_for_task, time)
 
