@@ -181,3 +181,22 @@ def test_a_planner_that_tries_to_change_what_it_was_given_fails(planner: object,
 def test_a_fault_leaves_the_scenario_reusable() -> None:
     run_faulty(Raising())
     assert run_scenario(CROSSING, ReservingPlanner()).passed
+
+
+def test_a_timer_set_by_someone_else_survives_a_run() -> None:
+    import signal
+
+    from fleetsim.sim.guard import PlannerGuard
+
+    fired: list[int] = []
+    previous = signal.signal(signal.SIGALRM, lambda signum, frame: fired.append(signum))
+    try:
+        signal.setitimer(signal.ITIMER_REAL, 30.0)
+        with PlannerGuard(timeout=1.0):
+            pass
+        delay, _ = signal.getitimer(signal.ITIMER_REAL)
+        assert 29.0 < delay <= 30.0  # put back, less the (tiny) time the guard was active
+        assert signal.getsignal(signal.SIGALRM) is not None and not fired
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0.0)
+        signal.signal(signal.SIGALRM, previous)
