@@ -8,6 +8,7 @@ Every malformed value becomes a :class:`~fleetsim.errors.MapError` naming file, 
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
@@ -105,10 +106,8 @@ def as_int(raw: object, name: str, where: Location) -> int:
     if isinstance(raw, int) and not isinstance(raw, bool):
         return raw
     if isinstance(raw, str):
-        try:
+        with contextlib.suppress(ValueError):  # not an integer text: reported below
             return int(raw.strip())
-        except ValueError:
-            pass
     if isinstance(raw, float) and raw.is_integer():
         return int(raw)
     msg = f"{name}={raw!r} must be an integer"

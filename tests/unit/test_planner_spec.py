@@ -21,7 +21,7 @@ from fleetsim.planners import ReservingPlanner
 
 
 class MyPlanner(ReservingPlanner):
-    pass
+    name = "a user's planner: the reference one under another name"
 
 
 def make_planner():
