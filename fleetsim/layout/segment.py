@@ -62,6 +62,11 @@ class Segment:
         return ax + t * (bx - ax), ay + t * (by - ay), heading
 
     @property
+    def along(self) -> tuple[float, ...]:
+        """The distance along the polyline at each waypoint (0 first, ``length`` last up to rounding)."""
+        return self._along
+
+    @property
     def first(self) -> Point:
         return self.waypoints[0]
 

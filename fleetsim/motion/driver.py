@@ -15,10 +15,12 @@ the exact area under the profile and nothing waits for the next step without rea
 from __future__ import annotations
 
 import math
+from bisect import bisect_right
 from typing import NamedTuple
 
 from fleetsim.enums import Progress, Traverse
 from fleetsim.layout.layout import Layout
+from fleetsim.layout.segment import Segment
 from fleetsim.motion.profile import SpeedProfile
 from fleetsim.planning.protocol import FleetLeg, FleetPlan
 from fleetsim.planning.snapshot import VehicleState
@@ -27,6 +29,9 @@ from fleetsim.scenario import Vehicle
 __all__ = ["Driver", "HeadingTable", "StepMotion"]
 
 _EPS = 1e-9  # metres or seconds below which a remainder is rounding noise
+# Makes a named tuple from a full tuple of its fields without the generated __new__'s keyword handling:
+# a fifth of the cost, for the state and motion made for every moving vehicle on every step.
+_new = tuple.__new__
 
 
 def _wrap(angle: float) -> float:
@@ -38,12 +43,70 @@ def _nose(travel_heading: float, progress: Progress) -> float:
     return _wrap(travel_heading + (math.pi if progress is Progress.REVERSE else 0.0))
 
 
+class Track(NamedTuple):
+    """One segment driven one way, laid out for locating a point by distance on every step.
+
+    :meth:`pose` gives exactly what :meth:`Segment.pose_at` gives (same arithmetic), with the pieces'
+    headings and the bisection fix-ups computed once.
+    """
+
+    length: float
+    backward: bool
+    along: tuple[float, ...]  # the segment's running distance at each waypoint
+    piece_of: tuple[int, ...]  # bisect_right(along, d) → the index of the piece holding d
+    # Per piece: (running distance at its start, ax, ay, bx − ax, by − ay, its length, travel heading,
+    # where the nose points driving forward on it, where it points backing).
+    pieces: tuple[tuple[float, float, float, float, float, float, float, float, float], ...]
+
+    @classmethod
+    def of(cls, segment: Segment, traverse: Traverse) -> Track:
+        along = segment.along
+        last = len(segment.waypoints) - 2
+        piece_of = []
+        for found in range(len(along) + 1):
+            index = min(max(found - 1, 0), last)
+            while index > 0 and along[index + 1] == along[index]:
+                index -= 1
+            piece_of.append(index)
+        backward = traverse is Traverse.BACKWARD
+        pieces = []
+        for index in range(last + 1):
+            (ax, ay), (bx, by) = segment.waypoints[index], segment.waypoints[index + 1]
+            heading = math.atan2(ay - by, ax - bx) if backward else math.atan2(by - ay, bx - ax)
+            noses = (_nose(heading, Progress.FORWARD), _nose(heading, Progress.REVERSE))
+            pieces.append((along[index], ax, ay, bx - ax, by - ay, along[index + 1] - along[index], heading, *noses))
+        return cls(segment.length, backward, along, tuple(piece_of), tuple(pieces))
+
+    def pose(self, distance: float) -> tuple[float, float, float]:
+        """``(x, y, travel heading)`` at ``distance`` (within ``[0, length]``) along the track."""
+        along = self.length - distance if self.backward else distance
+        start, ax, ay, dx, dy, piece, heading, _, _ = self.pieces[self.piece_of[bisect_right(self.along, along)]]
+        t = (along - start) / piece if piece > 0 else 0.0
+        return ax + t * dx, ay + t * dy, heading
+
+    def nose_pose(self, distance: float, reversing: bool) -> tuple[float, float, float]:
+        """``(x, y, nose heading)``: :meth:`pose` with the heading turned into where the nose points."""
+        along = self.length - distance if self.backward else distance
+        start, ax, ay, dx, dy, piece, _, forward, reverse = self.pieces[self.piece_of[bisect_right(self.along, along)]]
+        t = (along - start) / piece if piece > 0 else 0.0
+        return ax + t * dx, ay + t * dy, reverse if reversing else forward
+
+
 class HeadingTable:
-    """Travel headings where each (segment, traverse) starts and ends; one per layout, shared."""
+    """Travel headings where each (segment, traverse) starts and ends, and its :class:`Track`; one per
+    layout, shared by the drivers."""
 
     def __init__(self, layout: Layout) -> None:
         self._layout = layout
         self._ends: dict[tuple[int, Traverse], tuple[float, float]] = {}
+        self._tracks: dict[tuple[int, Traverse], Track] = {}
+
+    def track(self, segment: int, traverse: Traverse) -> Track:
+        key = (segment, traverse)
+        found = self._tracks.get(key)
+        if found is None:
+            found = self._tracks[key] = Track.of(self._layout.segments[segment], traverse)
+        return found
 
     def ends(self, segment: int, traverse: Traverse) -> tuple[float, float]:
         key = (segment, traverse)
@@ -71,6 +134,7 @@ class StepMotion(NamedTuple):
     entered: tuple[FleetLeg, ...]
     distance: float
     turned: bool
+    state: VehicleState | None = None  # the state after the step, when the step already made it
 
     @property
     def moved(self) -> bool:
@@ -105,6 +169,7 @@ class Driver:
         self._stretch: tuple[FleetPlan | None, float, bool] = (None, 0.0, False)
         self._travelled = 0.0  # distance_at(elapsed) of the current profile
         self._last_out: FleetPlan | None = None  # the plan the last step returned
+        self._on: tuple[FleetLeg, Track] | None = None  # the current leg and its track
         start = layout.segments[vehicle.start_segment]
         self.x, self.y, _ = start.pose_at(0.0, vehicle.traverse)  # the position, kept with the heading
 
@@ -179,7 +244,7 @@ class Driver:
                 self._start(reach, till_stop)
         self.odometer += driven
         new_plan = plan if len(legs) == len(plan.legs) else FleetPlan(plan.vehicle_id, tuple(legs))
-        motion = StepMotion(new_plan, tuple(entered), driven, turned)
+        motion = StepMotion(new_plan, tuple(entered), driven, turned, None)
         if not motion.moved and not entered and self._profile is None and self._turn_left == 0.0:
             self._idle = motion
         self._last_out = new_plan
@@ -188,7 +253,8 @@ class Driver:
     def _cruise(self, plan: FleetPlan, dt: float) -> StepMotion | None:
         """The common step, done directly: the profile goes on all step long and the leg does not end.
 
-        Exactly what the general loop would compute for such a step, without its bookkeeping.
+        Exactly what the general loop would compute for such a step, without its bookkeeping; the new
+        state is made here too, from what was just computed.
         """
         profile = self._profile
         if profile is None or self._turn_left != 0.0:
@@ -196,21 +262,30 @@ class Driver:
         t1 = self._elapsed + dt
         if t1 >= profile.stop_time:
             return None
-        travelled = profile.distance_at(t1)
+        travelled, speed = profile.running_at(t1)
         distance = max(travelled - self._travelled, 0.0)
         leg = plan.legs[0]
-        segment = self._layout.segments[leg.segment]
-        if self.distance + distance >= segment.length - _EPS:
+        track = self._track(leg)
+        along = self.distance + distance
+        if along >= track.length - _EPS:
             return None
         self._travelled = travelled
         self._elapsed = t1
-        self.distance += distance
-        self.x, self.y, travel = segment.pose_at(self.distance, leg.traverse)
-        self.heading = _nose(travel, leg.progress)
-        self.speed = profile.speed_at(t1)
+        self.distance = along
+        x, y, heading = track.nose_pose(along, leg.progress is Progress.REVERSE)
+        self.x, self.y, self.heading = x, y, heading
+        self.speed = speed
         self.odometer += distance
         self._last_out = plan
-        return StepMotion(plan, (), distance, False)
+        state = _new(VehicleState, (self.id, leg.segment, leg.traverse, self.progress, along, speed, x, y, heading, self.type))
+        return _new(StepMotion, (plan, (), distance, False, state))
+
+    def _track(self, leg: FleetLeg) -> Track:
+        """The track of the leg the vehicle is on, kept while it stays on that leg."""
+        on = self._on
+        if on is None or on[0] is not leg:
+            on = self._on = (leg, self._headings.track(leg.segment, leg.traverse))
+        return on[1]
 
     def _remaining(self) -> float:
         assert self._profile is not None

@@ -21,7 +21,7 @@ area under the profile (``advance``); it never runs backwards and never overshoo
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Literal
 
 __all__ = ["SpeedProfile"]
@@ -48,6 +48,14 @@ class SpeedProfile:
     brake_from: float  # time the deceleration phase starts
     stop_time: float  # tz
     deceleration: float  # normally == acceleration; larger only in the "brake" case
+    # distance_at(accelerate_until) and distance_at(brake_from), computed once for the per-step path.
+    _accelerated_distance: float = field(init=False, repr=False, compare=False)
+    _cruised_distance: float = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        accelerated = self._accelerated()
+        object.__setattr__(self, "_accelerated_distance", accelerated)
+        object.__setattr__(self, "_cruised_distance", self._cruised(accelerated))
 
     @classmethod
     def plan(cls, v0: float, acceleration: float, max_speed: float, distance: float) -> SpeedProfile:
@@ -99,13 +107,27 @@ class SpeedProfile:
         t = self._clamped(t, "t")
         if t >= self.stop_time:
             return self.distance
-        accelerated = self._accelerated()
+        accelerated = self._accelerated_distance
         if t <= self.accelerate_until:
             return min(accelerated, t * (self.v0 + 0.5 * self.acceleration * t))
-        cruised = self._cruised(accelerated)
+        cruised = self._cruised_distance
         if t <= self.brake_from:
             return min(cruised, accelerated + self.peak * (t - self.accelerate_until))
         return max(cruised, self._braked_at(t))
+
+    def running_at(self, t: float) -> tuple[float, float]:
+        """``(distance_at(t), speed_at(t))`` for ``0 <= t < stop_time``, unchecked: the per-step path.
+
+        The same arithmetic as those two methods, so the values are identical to theirs.
+        """
+        if t <= self.accelerate_until:
+            return (
+                min(self._accelerated_distance, t * (self.v0 + 0.5 * self.acceleration * t)),
+                min(self.peak, self.v0 + self.acceleration * t),
+            )
+        if t <= self.brake_from:
+            return min(self._cruised_distance, self._accelerated_distance + self.peak * (t - self.accelerate_until)), self.peak
+        return max(self._cruised_distance, self._braked_at(t)), self._braking_speed(t)
 
     def advance(self, t0: float, t1: float) -> float:
         """Distance covered from ``t0`` to ``t1`` (``t0 <= t1``): the exact area under the step."""

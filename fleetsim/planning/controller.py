@@ -141,15 +141,24 @@ class FleetController:
         task = self.tasks.head(vehicle_id)
         if task is None:
             return None
-        method: Method = "fix_legs" if self.tasks.is_routed(task.id) else "plan_routes"
-        call = planner.fix_legs if method == "fix_legs" else planner.plan_routes
+        if self.tasks.is_routed(task.id):
+            method: Method = "fix_legs"
+            call = planner.fix_legs
+        else:
+            method = "plan_routes"
+            call = planner.plan_routes
+        snapshot = self._snapshot
+        if snapshot is None or snapshot.time != time:
+            snapshot = self.snapshot(time)
         try:
-            response = self._invoke(method, call, vehicle_id, task, self.snapshot(time), self.layout)
+            response = self._invoke(method, call, vehicle_id, task, snapshot, self.layout)
+            if type(response) is list and not response:
+                return None  # nothing to change: the most common answer, so tested first
             items = validate_response(response, method, vehicle_id)
         except RouteError as error:
             return CallOutcome(vehicle_id, method, task, (), (), (error,), ())
         if not items:
-            return None  # nothing to change (the most common answer)
+            return None
         if len(items) == 1 and items[0] == self._plans.get(getattr(items[0], "vehicle_id", None)):  # type: ignore[arg-type]
             return None  # the plan in force, handed back unchanged
         return self._apply(vehicle_id, method, task, items, time)

@@ -32,6 +32,8 @@ class TaskBook:
         # Read-only views handed out on every planner call, rebuilt only after a change.
         self._queues_view: Mapping[int, tuple[Task, ...]] | None = None
         self._routed_view: frozenset[int] | None = None
+        self._busy: tuple[int, ...] | None = None  # busy_vehicles(), until a queue empties
+        self._undropped = False  # a task completed since the last drop_completed()
 
     # -- queries -------------------------------------------------------------------------------------
 
@@ -66,7 +68,9 @@ class TaskBook:
 
     def busy_vehicles(self) -> tuple[int, ...]:
         """Vehicles with tasks still queued, ascending."""
-        return tuple(vid for vid, queue in self._queues.items() if queue)
+        if self._busy is None:
+            self._busy = tuple(vid for vid, queue in self._queues.items() if queue)
+        return self._busy
 
     def pending(self) -> tuple[Task, ...]:
         """Tasks not yet completed, by task id."""
@@ -92,13 +96,18 @@ class TaskBook:
         """The vehicle entered (or stands on) the task's goal leg."""
         if task_id in self._tasks and task_id not in self._completed:
             self._completed[task_id] = time
+            self._undropped = True
 
     def drop_completed(self) -> tuple[Task, ...]:
         """Bookkeeping at the start of a step: completed tasks leave their queues (returned)."""
+        if not self._undropped:
+            return ()
+        self._undropped = False
         dropped = []
         for queue in self._queues.values():
             while queue and queue[0].id in self._completed:
                 dropped.append(queue.popleft())
         if dropped:
             self._queues_view = None
+            self._busy = None
         return tuple(dropped)

@@ -23,6 +23,8 @@ from fleetsim.planning.protocol import RouteError
 
 __all__ = ["PlannerFault", "PlannerGuard"]
 
+_clock = time.perf_counter
+
 
 class PlannerFault(FleetsimError):
     """The planner raised, overran its time, or returned something that is not a response."""
@@ -97,24 +99,32 @@ class PlannerGuard:
             self._armed = False
 
     def __call__(self, method: str, call: Callable[..., object], vehicle_id: int, *args: object) -> object:
-        clock = time.perf_counter
+        start = self._call_started = _clock()
         try:
-            start = self._call_started = clock()
-            try:
-                response = call(*args)
-            finally:
-                self._call_started = None
-                elapsed = clock() - start
-                self.calls += 1
-                self.wall_time += elapsed
-            if self.timeout is not None and elapsed > self.timeout:
-                raise _Overrun  # the planner caught the timer's exception itself and returned late
-            return response
+            response = call(*args)
         except RouteError:
+            self._account(start)
             raise
         except _Overrun:
-            msg = f"{method}() for vehicle {vehicle_id} did not return within the per-call timeout of {self.timeout:g} s"
-            raise PlannerFault(msg, vehicle_id=vehicle_id) from None
+            self._account(start)
+            raise self._overrun(method, vehicle_id) from None
         except Exception as exc:
+            self._account(start)
             msg = f"{method}() for vehicle {vehicle_id} raised {type(exc).__name__}: {exc}"
             raise PlannerFault(msg, vehicle_id=vehicle_id, details=_planner_traceback(exc)) from None
+        elapsed = _clock() - start
+        self._call_started = None
+        self.calls += 1
+        self.wall_time += elapsed
+        if self.timeout is not None and elapsed > self.timeout:
+            raise self._overrun(method, vehicle_id)  # it caught the timer's exception and returned late
+        return response
+
+    def _overrun(self, method: str, vehicle_id: int) -> PlannerFault:
+        msg = f"{method}() for vehicle {vehicle_id} did not return within the per-call timeout of {self.timeout:g} s"
+        return PlannerFault(msg, vehicle_id=vehicle_id)
+
+    def _account(self, start: float) -> None:
+        self._call_started = None
+        self.calls += 1
+        self.wall_time += _clock() - start

@@ -27,27 +27,26 @@ CHECKPOINT_EVERY = 100  # steps between the running digests kept for locating a 
 VehicleRecord = tuple[int, int, str, str, int, int, int, int]
 
 
-def _q(value: float, scale: float) -> int:
-    return int(round(value * scale))  # round-half-even, and -0.0 becomes 0
+_TRAVERSE = {Traverse.FORWARD: "f", Traverse.BACKWARD: "b"}
+_PROGRESS = {Progress.FORWARD: "f", Progress.REVERSE: "r"}
+_DEGREES_PER_RADIAN = 180.0 / 3.141592653589793
 
 
 def vehicle_record(state: VehicleState) -> VehicleRecord:
-    """(id, segment, traverse, progress, x mm, y mm, heading centidegrees, speed mm/s)."""
+    """(id, segment, traverse, progress, x mm, y mm, heading centidegrees, speed mm/s).
+
+    ``round`` of a float is an int, rounded half to even, so -0.0 and tiny values become 0.
+    """
     return (
         state.id,
         state.segment,
-        "f" if state.traverse is Traverse.FORWARD else "b",
-        "f" if state.progress is Progress.FORWARD else "r",
-        _q(state.x, 1000.0),
-        _q(state.y, 1000.0),
-        _q(_degrees(state.heading), 100.0),
-        _q(state.speed, 1000.0),
+        _TRAVERSE[state.traverse],
+        _PROGRESS[state.progress],
+        round(state.x * 1000.0),
+        round(state.y * 1000.0),
+        round(state.heading * _DEGREES_PER_RADIAN * 100.0),
+        round(state.speed * 1000.0),
     )
-
-
-def _degrees(radians: float) -> float:
-    degrees = radians * (180.0 / 3.141592653589793)
-    return 0.0 if abs(degrees) < 1e-9 else degrees
 
 
 def plan_record(plan: FleetPlan) -> list[Any]:
