@@ -1,14 +1,149 @@
-"""The pytest11 entry point of fleetsim. It stays thin and imports little: hooks call into :mod:`fleetsim`."""
+"""The pytest11 entry point of fleetsim: options, hooks and the ``fleetsim_planner`` fixture.
+
+It stays thin: collection lives in :mod:`pytest_fleetsim._items`, the session's state and gating in
+:mod:`pytest_fleetsim._state`, and everything a run does in :mod:`fleetsim`. The harness is imported
+only when pytest is configured, not when the plugin module is loaded.
+"""
 
 from __future__ import annotations
 
+from collections.abc import Generator
+from fnmatch import fnmatch
 from importlib.metadata import PackageNotFoundError, version
+from pathlib import Path
 
 import pytest
+
+DEFAULT_SUITE_PATTERN = "*.fleetsim.yaml"
+
+
+def pytest_addoption(parser: pytest.Parser) -> None:
+    group = parser.getgroup("fleetsim", "fleetsim: fleet planner scenarios")
+    group.addoption(
+        "--planner",
+        "--fleetsim-planner",
+        dest="fleetsim_planner",
+        metavar="SPEC",
+        help="the planner under test: module:attr naming a class or zero-argument factory "
+        "(default: the fleetsim_planner ini option)",
+    )
+    group.addoption(
+        "--fleetsim-update-hashes",
+        action="store_true",
+        dest="fleetsim_update_hashes",
+        help="run each scenario twice and record its trace hash in the lock file beside its suite "
+        "(refused for a nondeterministic planner); prunes entries of removed scenarios",
+    )
+    group.addoption(
+        "--fleetsim-artifacts",
+        dest="fleetsim_artifacts",
+        metavar="DIR",
+        default="fleetsim-results",
+        help="folder for run artifacts (default: fleetsim-results)",
+    )
+    group.addoption(
+        "--fleetsim-record",
+        dest="fleetsim_record",
+        choices=("failed", "all", "none"),
+        default="failed",
+        help="which runs leave artifacts (default: failed)",
+    )
+    group.addoption(
+        "--fleetsim-metrics-json",
+        dest="fleetsim_metrics_json",
+        metavar="PATH",
+        help="write every scenario's metrics to this JSON file (a baseline for --fleetsim-compare)",
+    )
+    group.addoption(
+        "--fleetsim-compare",
+        dest="fleetsim_compare",
+        metavar="PATH",
+        help="compare metrics with a file written earlier by --fleetsim-metrics-json",
+    )
+    group.addoption(
+        "--fleetsim-compare-fail",
+        dest="fleetsim_compare_fail",
+        metavar="METRIC:LIMIT",
+        action="append",
+        help="fail the session when METRIC regressed by more than LIMIT against --fleetsim-compare: "
+        "makespan:5%% (relative) or makespan:2.5 (absolute); repeatable",
+    )
+    group.addoption(
+        "--fleetsim-planner-timeout",
+        dest="fleetsim_planner_timeout",
+        metavar="SECONDS",
+        type=float,
+        help="wall-clock limit per planner call (default: the fleetsim_planner_timeout ini option, 10; 0 = none)",
+    )
+    parser.addini("fleetsim_planner", "the planner under test (module:attr) when --planner is not given")
+    parser.addini(
+        "fleetsim_suite_patterns",
+        "file name patterns of fleetsim suites",
+        type="args",
+        default=[DEFAULT_SUITE_PATTERN],
+    )
+    parser.addini("fleetsim_planner_timeout", "wall-clock limit per planner call in seconds (0 = none)", default="10")
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    from pytest_fleetsim._state import STATE_KEY, FleetsimState
+
+    state = config.stash[STATE_KEY] = FleetsimState.configure(config)
+    config.pluginmanager.register(state, "fleetsim-state")  # it receives every test report
 
 
 def pytest_report_header(config: pytest.Config) -> str:
     try:
-        return f"fleetsim: {version('fleetsim')}"
+        installed = version("fleetsim")
     except PackageNotFoundError:  # running from a source tree that was never installed
-        return "fleetsim: (not installed)"
+        installed = "(not installed)"
+    from pytest_fleetsim._state import state_of
+
+    planner = state_of(config).planner
+    return f"fleetsim: {installed}, planner: {planner.spec if planner is not None else '(none given)'}"
+
+
+def pytest_collect_file(file_path: Path, parent: pytest.Collector) -> pytest.Collector | None:
+    patterns = parent.config.getini("fleetsim_suite_patterns")
+    if any(fnmatch(file_path.name, pattern) for pattern in patterns):
+        from pytest_fleetsim._items import SuiteFile
+
+        return SuiteFile.from_parent(parent, path=file_path)
+    return None
+
+
+@pytest.fixture
+def fleetsim_planner(request: pytest.FixtureRequest) -> object:
+    """The planner under test, made fresh for every run: by default from ``--planner``.
+
+    Override it in a conftest.py to return a planner class, a zero-argument factory, or an instance
+    (copied before each run). ``None`` skips the scenario tests, saying how to pass a planner.
+    """
+    from pytest_fleetsim._state import state_of
+
+    return state_of(request.config).planner
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]) -> Generator[None, pytest.TestReport, pytest.TestReport]:
+    report = yield
+    payload = getattr(item, "fleetsim_payload", None)
+    if call.when == "call" and payload is not None:
+        report.fleetsim = payload  # type: ignore[attr-defined]  # plain data: it travels from xdist workers
+    return report
+
+
+def pytest_sessionfinish(session: pytest.Session) -> None:
+    from pytest_fleetsim._state import state_of
+
+    state_of(session.config).finish(session)
+
+
+def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter, config: pytest.Config) -> None:
+    from pytest_fleetsim._state import state_of
+
+    lines = state_of(config).summary_lines()
+    if lines:
+        terminalreporter.write_sep("=", "fleetsim")
+        for line in lines:
+            terminalreporter.write_line(line)

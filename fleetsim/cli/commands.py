@@ -4,8 +4,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -14,6 +12,7 @@ from fleetsim.errors import LoadError
 from fleetsim.layout.layout import Layout, build_layout
 from fleetsim.load.scenario import load_scenario
 from fleetsim.load.suite import discover_suites, load_suite
+from fleetsim.load.text import write_text_atomically
 from fleetsim.load.tiled import TiledMap, load_map
 from fleetsim.recording.svg import render_layout_svg
 
@@ -146,19 +145,6 @@ def inspect(args: argparse.Namespace) -> int:
     else:
         _print_layout(tiled_map, layout)
     return 0
-
-
-def write_text_atomically(path: Path, text: str) -> None:
-    """Write to a temporary file beside ``path`` and rename, so a reader never sees half a file."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as handle:
-            handle.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        os.unlink(tmp)
-        raise
 
 
 def render(args: argparse.Namespace) -> int:

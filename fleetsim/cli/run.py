@@ -23,7 +23,8 @@ from fleetsim.load.scenario import load_scenario
 from fleetsim.load.scenario_files import did_you_mean
 from fleetsim.load.suite import SUITE_SUFFIX, ScenarioSpec, Suite, discover_suites, load_suite
 from fleetsim.sim.loop import RunProgress, run_scenario
-from fleetsim.sim.planner_spec import PlannerFactory, load_planner_factory
+from fleetsim.sim.planner_spec import PlannerFactory, PlannerSpecError, load_planner_factory
+from fleetsim.sim.report import failure_lines, format_table, summary_cells
 from fleetsim.sim.result import Failure, Metrics, RunResult
 
 __all__ = ["UsageError", "run"]
@@ -147,8 +148,10 @@ def _run_target(
         return _Outcome(target, _load_failure(target.label, factory.spec, target.error), loaded=False)
     assert target.suite is not None and target.spec is not None
     try:
+        if target.suite.planner is not None:  # the suite documents this planner, whatever was asked
+            factory = load_planner_factory(target.suite.planner)
         scenario = load_scenario(target.spec, target.suite)
-    except LoadError as error:
+    except (LoadError, PlannerSpecError) as error:
         return _Outcome(target, _load_failure(target.spec.name, factory.spec, error), loaded=False)
     result = run_scenario(
         scenario, factory(), planner_name=factory.spec, planner_timeout=timeout, on_progress=on_progress
@@ -156,9 +159,10 @@ def _run_target(
     return _Outcome(target, result, loaded=True)
 
 
-def _load_failure(name: str, planner: str, error: LoadError) -> RunResult:
+def _load_failure(name: str, planner: str, error: LoadError | PlannerSpecError) -> RunResult:
     """A result for a scenario that never ran, shaped like any other (its JSON has the same keys)."""
-    details = {"location": str(error.location)} if error.location is not None else {}
+    location = getattr(error, "location", None)
+    details = {"location": str(location)} if location is not None else {}
     metrics = Metrics(None, {}, {}, planner_calls=0, planner_wall_time=0.0, wall_time=0.0, sim_time=0.0)
     return RunResult(
         scenario=name,
@@ -239,60 +243,17 @@ def _isatty(stream: TextIO) -> bool:
 
 # -- the summary ----------------------------------------------------------------------------------
 
-_COLUMNS = ("scenario", "outcome", "tasks", "makespan", "alerts", "rejections", "hash", "realtime")
-
-
-def _row(outcome: _Outcome) -> tuple[str, ...]:
-    r = outcome.result
-    if not outcome.loaded:
-        return (outcome.target.label, outcome.word, "-", "-", "-", "-", "-", "-")
-    makespan = r.metrics.makespan
-    factor = r.metrics.realtime_factor
-    return (
-        outcome.target.label,
-        outcome.word,
-        f"{r.tasks_completed}/{r.tasks_total}",
-        "-" if makespan is None else f"{makespan:.1f} s",
-        str(len(r.collisions)),
-        str(len(r.rejections)),
-        r.trace_hash[:12],
-        "-" if factor is None else f"{factor:.0f}x",
-    )
-
 
 def _print_summary(outcomes: list[_Outcome], stream: TextIO) -> None:
-    rows = [_COLUMNS, *map(_row, outcomes)]
-    widths = [max(len(row[i]) for row in rows) for i in range(len(_COLUMNS))]
-    for row in rows:
-        print("  ".join(cell.ljust(width) for cell, width in zip(row, widths)).rstrip(), file=stream)
+    rows = [summary_cells(o.target.label, o.word, o.result if o.loaded else None) for o in outcomes]
+    for line in format_table(rows):
+        print(line, file=stream)
     words = [o.word for o in outcomes]
     counts = ", ".join(f"{words.count(w)} {w}" for w in ("passed", "failed", "xfailed", "xpassed") if w in words)
-    planner = outcomes[0].result.planner if outcomes else ""
-    print(f"\n{len(outcomes)} scenario(s) with {planner}: {counts}", file=stream)
+    planners = ", ".join(dict.fromkeys(o.result.planner for o in outcomes))  # first-seen order
+    print(f"\n{len(outcomes)} scenario(s) with {planners}: {counts}", file=stream)
     for outcome in outcomes:
         if outcome.counts_as_failure:
-            _print_failures(outcome, stream)
-
-
-def _print_failures(outcome: _Outcome, stream: TextIO) -> None:
-    failures = outcome.result.failures
-    print(f"\nFAILED {outcome.target.label}", file=stream)
-    for failure in failures[:FAILURES_SHOWN]:
-        print(f"  {failure.kind} at t={failure.time:.2f} s:", file=stream)
-        print(_indent(_failure_text(outcome.result, failure), "    "), file=stream)
-    if len(failures) > FAILURES_SHOWN:
-        print(f"  ... and {len(failures) - FAILURES_SHOWN} more failure(s) (--json lists them all)", file=stream)
-
-
-def _failure_text(result: RunResult, failure: Failure) -> str:
-    if failure.kind == "collision":
-        for event in result.collisions:
-            if event.time == failure.time and event.alert.segment == failure.details.get("segment"):
-                return event.alert.text()  # the thesis's alert text
-    if failure.kind == "planner-error" and failure.details.get("traceback"):
-        return f"{failure.message}\n{str(failure.details['traceback']).rstrip()}"
-    return failure.message
-
-
-def _indent(text: str, prefix: str) -> str:
-    return "\n".join(prefix + line for line in text.splitlines())
+            print(f"\nFAILED {outcome.target.label}", file=stream)
+            for line in failure_lines(outcome.result, FAILURES_SHOWN, "--json lists them all"):
+                print("  " + line, file=stream)

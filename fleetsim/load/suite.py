@@ -58,6 +58,7 @@ class Suite:
     description: str
     vehicle_types: Mapping[str, VehicleType]
     scenarios: tuple[ScenarioSpec, ...]
+    planner: str | None = None  # a planner spec the suite is pinned to (it documents that planner)
 
 
 def discover_suites(paths: Iterable[Path | str]) -> list[Path]:
@@ -104,6 +105,7 @@ def load_suite(path: Path | str) -> Suite:
         description=data.get("description", ""),
         vehicle_types=MappingProxyType(vehicle_types),
         scenarios=scenarios,
+        planner=data.get("planner"),
     )
 
 

@@ -1,12 +1,14 @@
-"""Reading a user's text file (map, template, suite, CSV) with located errors."""
+"""Text files: reading a user's file (map, template, suite, CSV) with located errors; writing ours whole."""
 
 from __future__ import annotations
 
+import os
+import tempfile
 from pathlib import Path
 
 from fleetsim.errors import LoadError, Location
 
-__all__ = ["read_text_file"]
+__all__ = ["read_text_file", "write_text_atomically"]
 
 
 def read_text_file(path: Path, error_type: type[LoadError], where: Location | None = None) -> str:
@@ -31,3 +33,27 @@ def read_text_file(path: Path, error_type: type[LoadError], where: Location | No
         line = raw.count(b"\n", 0, exc.start) + 1
         msg = f"not UTF-8 text: byte {raw[exc.start:exc.start + 1]!r} cannot be decoded"
         raise error_type(msg, Location(path, line=line) if where is None else place) from None
+
+
+def write_text_atomically(path: Path, text: str) -> None:
+    """Write to a temporary file beside ``path`` and rename, so a reader never sees half a file."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as handle:
+            handle.write(text)
+        os.chmod(tmp, _mode_for(path))  # mkstemp makes it private (0600); a written file should not be
+        os.replace(tmp, path)
+    except BaseException:
+        os.unlink(tmp)
+        raise
+
+
+def _mode_for(path: Path) -> int:
+    """The file's current permissions, or what a plain ``open()`` would give a new file."""
+    try:
+        return path.stat().st_mode & 0o777
+    except OSError:
+        umask = os.umask(0)
+        os.umask(umask)
+        return 0o666 & ~umask

@@ -188,7 +188,7 @@ def judge(  # noqa: PLR0913 - the facts of a run, named
     if deadlock is not None and not expect.deadlock:
         failures.append(Failure("deadlock", deadlock.time, f"deadlock: {deadlock.message}", {"waiting": list(deadlock.waiting), "cycle": list(deadlock.cycle)}))
     if expect.deadlock and deadlock is None:
-        failures.append(Failure("expectation", end_time, "the scenario expects a deadlock, but the run ended without one"))
+        failures.append(Failure("expectation", end_time, "the scenario expects a deadlock, but the run ended without one", {"expect": "deadlock"}))
     wanted = tasks_total if expect.tasks == "all" else expect.tasks
     if tasks_completed < wanted and planner_error is None and (deadlock is None or not expect.deadlock):
         listing = ", ".join(f"task {t.id} (vehicle {t.vehicle_id} to segment {t.goal_segment})" for t in pending[:5])
@@ -196,10 +196,10 @@ def judge(  # noqa: PLR0913 - the facts of a run, named
         kind = "timeout" if ended == "time-limit" else "expectation"
         reason = "the time limit was reached" if ended == "time-limit" else f"the run ended ({ended})"
         msg = f"{tasks_completed} of {tasks_total} tasks completed, {wanted} expected; {reason} with {listing}{more} pending"
-        failures.append(Failure(kind, end_time, msg, {"pending": [t.id for t in pending]}))
+        failures.append(Failure(kind, end_time, msg, {"pending": [t.id for t in pending], "expect": "tasks"}))
     if expect.max_makespan is not None and makespan is not None and makespan > expect.max_makespan:
         msg = f"makespan {makespan:.2f} s exceeds max_makespan {expect.max_makespan:g} s"
-        failures.append(Failure("expectation", makespan, msg))
+        failures.append(Failure("expectation", makespan, msg, {"expect": "max_makespan"}))
     return tuple(failures)
 
 
@@ -210,10 +210,10 @@ def _judge_rejections(expect: Expectations, rejections: tuple[RejectionEvent, ..
             for e in rejections
         ]
     if expect.rejections == "any":
-        return [] if rejections else [Failure("expectation", 0.0, "the scenario expects plan rejections, but there were none")]
+        return [] if rejections else [Failure("expectation", 0.0, "the scenario expects plan rejections, but there were none", {"expect": "rejections"})]
     seen = {e.rejection.code.value for e in rejections}
     missing = [code for code in expect.rejections if code not in seen]
-    return [Failure("expectation", _first(rejections), f"the scenario expects a {code} rejection, but there was none") for code in missing]
+    return [Failure("expectation", _first(rejections), f"the scenario expects a {code} rejection, but there was none", {"expect": "rejections"}) for code in missing]
 
 
 def _judge_collisions(expect: Expectations, collisions: tuple[AlertEvent, ...]) -> list[Failure]:
@@ -223,10 +223,15 @@ def _judge_collisions(expect: Expectations, collisions: tuple[AlertEvent, ...]) 
             for e in collisions
         ]
     if expect.collisions == "any":
-        return [] if collisions else [Failure("expectation", 0.0, "the scenario expects collision alerts, but there were none")]
+        return [] if collisions else [Failure("expectation", 0.0, "the scenario expects collision alerts, but there were none", {"expect": "collisions"})]
     seen = {e.alert.segment for e in collisions}
     missing = [segment for segment in expect.collisions if segment not in seen]
     return [
-        Failure("expectation", _first(collisions), f"the scenario expects a collision alert on segment {segment}, but there was none")
+        Failure(
+            "expectation",
+            _first(collisions),
+            f"the scenario expects a collision alert on segment {segment}, but there was none",
+            {"expect": "collisions"},
+        )
         for segment in missing
     ]

@@ -31,5 +31,5 @@ def run_suites(hash_seed: str) -> dict[str, str]:
 def test_trace_hashes_are_the_same_under_different_hash_seeds() -> None:
     first = run_suites("0")
     second = run_suites("12345")
-    assert sorted(first) == ["corridor-passing-bay", "crossing", "loop-one-way", "mixed-shapes"]
+    assert sorted(first) == ["corridor-head-on", "corridor-passing-bay", "crossing", "crossing-collides", "loop-one-way", "mixed-shapes"]
     assert first == second

@@ -10,7 +10,7 @@ import pytest
 def test_plugin_is_registered_and_reports_its_version(pytester: pytest.Pytester) -> None:
     pytester.makepyfile("def test_nothing():\n    pass\n")
     result = pytester.runpytest_subprocess()
-    result.stdout.fnmatch_lines([f"fleetsim: {version('fleetsim')}"])
+    result.stdout.fnmatch_lines([f"fleetsim: {version('fleetsim')}, planner: (none given)"])
     result.assert_outcomes(passed=1)
 
 

@@ -79,10 +79,13 @@ def copy_examples(root: Path, *folders: str) -> None:
 def test_the_shipped_suites_pass_with_the_reserving_planner(capsys: pytest.CaptureFixture[str]) -> None:
     status, out, err = run(capsys, "run", str(SUITES), "--planner", RESERVING)
     assert status == 0, out + err
-    header, *rows = out.splitlines()[:5]
+    header, *rows = out.splitlines()[:7]
     assert header.split() == ["scenario", "outcome", "tasks", "makespan", "alerts", "rejections", "hash", "realtime"]
-    assert [row.split()[:2] for row in rows] == [[name, "passed"] for name in NAMES]
-    assert f"4 scenario(s) with {RESERVING}: 4 passed" in out
+    expected = [f"caught-bugs.fleetsim.yaml::{name}" for name in ("crossing-collides", "corridor-head-on")]
+    expected += [f"examples.fleetsim.yaml::{name}" for name in NAMES]
+    assert [row.split()[:2] for row in rows] == [[name, "passed"] for name in expected]
+    # The caught-bugs suite is pinned to BFSPlanner, whatever --planner says.
+    assert f"6 scenario(s) with fleetsim.planners:BFSPlanner, {RESERVING}: 6 passed" in out
     assert "FAILED" not in out
 
 
@@ -148,7 +151,8 @@ def test_a_selector_runs_one_scenario(capsys: pytest.CaptureFixture[str]) -> Non
 def test_a_scenario_named_twice_runs_once_in_the_order_given(capsys: pytest.CaptureFixture[str]) -> None:
     status, out, _ = run(capsys, "run", f"{EXAMPLES}::mixed-shapes", str(SUITES), "--planner", RESERVING, "--json")
     assert status == 0
-    assert [r["scenario"] for r in json_lines(out)] == ["mixed-shapes", "crossing", "loop-one-way", "corridor-passing-bay"]
+    names = [r["scenario"] for r in json_lines(out)]
+    assert names == ["mixed-shapes", "crossing-collides", "corridor-head-on", "crossing", "loop-one-way", "corridor-passing-bay"]
 
 
 # -- failures -------------------------------------------------------------------------------------

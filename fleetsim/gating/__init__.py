@@ -1,0 +1,1 @@
+"""Gating planner changes in CI: recorded trace hashes (lock files) and metric baselines."""

@@ -1,0 +1,89 @@
+"""Running a scenario for a gate: judge it, then hold its trace hash against the recorded one.
+
+In *check* mode a run's hash must equal the hash recorded for its planner and scenario; a missing or
+different hash is a failure that says how to record it or from when on the behaviour changed. In
+*update* mode the scenario runs twice with fresh planners; equal hashes give a lock entry to record,
+different ones are a ``nondeterministic`` failure naming the first diverging step, and nothing is
+recorded.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from typing import Literal
+
+from fleetsim.gating.lockfile import LockEntry, compare_run
+from fleetsim.planning.protocol import Planner
+from fleetsim.scenario import Scenario
+from fleetsim.sim.loop import run_scenario
+from fleetsim.sim.result import Failure, RunResult
+from fleetsim.sim.trace import first_divergence
+
+__all__ = ["CheckedRun", "HashMode", "run_checked"]
+
+HashMode = Literal["check", "update", "ignore"]
+
+
+@dataclass(frozen=True, slots=True)
+class CheckedRun:
+    """The judged run (hash failures included) and, in update mode, the entry to record."""
+
+    result: RunResult
+    record: LockEntry | None = None
+
+
+def run_checked(  # noqa: PLR0913 - the facts of a gated run, named
+    scenario: Scenario,
+    make_planner: Callable[[], Planner],
+    *,
+    identity: str,
+    mode: HashMode,
+    recorded: LockEntry | None,
+    record_hint: str,
+    planner_timeout: float | None,
+    keep_trace: bool = False,
+) -> CheckedRun:
+    """Run ``scenario`` with a planner from ``make_planner`` and gate its hash as ``mode`` says.
+
+    ``record_hint`` completes "record it with ..." in the message for a missing hash.
+    """
+
+    def run() -> RunResult:
+        keep = keep_trace or mode == "update"  # a second run is compared line by line
+        return run_scenario(scenario, make_planner(), planner_name=identity, planner_timeout=planner_timeout, keep_trace=keep)
+
+    result = run()
+    if mode == "ignore" or result.ended == "planner-error":
+        return CheckedRun(result)  # a broken run has no behaviour worth pinning
+    if mode == "update":
+        again = run()
+        if again.trace_hash != result.trace_hash:
+            return CheckedRun(_failed(result, _nondeterministic(result, again, scenario.settings.time_step)))
+        return CheckedRun(result, LockEntry.from_run(result.trace_hash, result.steps, result.checkpoints))
+    if recorded is None:
+        msg = f"no trace hash is recorded for planner {identity!r} in this scenario; record it with:\n  {record_hint}"
+        return CheckedRun(_failed(result, Failure("hash-missing", result.sim_time, msg, {"planner": identity})))
+    mismatch = compare_run(recorded, result.trace_hash, result.steps, result.checkpoints, scenario.settings.time_step)
+    if mismatch is None:
+        return CheckedRun(result)
+    details = {"recorded": mismatch.recorded, "actual": mismatch.actual, "since": mismatch.since_time}
+    msg = f"{mismatch.message}\nif the change is intended, record the new hash with:\n  {record_hint}"
+    return CheckedRun(_failed(result, Failure("hash-mismatch", mismatch.since_time or 0.0, msg, details)))
+
+
+def _nondeterministic(first: RunResult, second: RunResult, time_step: float) -> Failure:
+    assert first.trace is not None and second.trace is not None
+    divergence = first_divergence(first.trace.lines, second.trace.lines, time_step)
+    where = str(divergence) if divergence is not None else "the traces differ"
+    msg = (
+        f"the planner is not deterministic: two runs of this scenario gave different trace hashes "
+        f"({first.trace_hash[:12]} and {second.trace_hash[:12]}); {where}. Nothing was recorded. Look for "
+        "iteration over sets, unseeded random numbers or wall-clock time in the planner"
+    )
+    time = divergence.time if divergence is not None else 0.0
+    return Failure("nondeterministic", time, msg, {"hashes": [first.trace_hash, second.trace_hash]})
+
+
+def _failed(result: RunResult, failure: Failure) -> RunResult:
+    return replace(result, status="failed", failures=(*result.failures, failure))

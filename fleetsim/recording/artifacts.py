@@ -1,0 +1,57 @@
+"""The artifact folder of a recorded run: what a reviewer opens after a failure.
+
+Each recorded run gets ``ROOT/<suite file stem>/<scenario name>/`` holding ``result.json`` (the
+object of ``fleetsim run --json``) and, when the run kept its trace, ``trace.jsonl`` (the canonical
+trace whose SHA-256 is the run's hash, one step per line, for diffing two runs). A folder is rewritten
+as a whole, so stale files from an earlier run never sit next to new ones. Files are written under a
+temporary name and renamed, so an interrupted run never leaves a half-written file behind.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import shutil
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from fleetsim.load.text import write_text_atomically
+from fleetsim.sim.result import RunResult
+
+__all__ = ["RESULT_FILE", "TRACE_FILE", "artifact_folder", "write_run_artifacts"]
+
+RESULT_FILE = "result.json"
+TRACE_FILE = "trace.jsonl"
+_UNSAFE = re.compile(r"[^A-Za-z0-9._-]+")
+
+
+def _safe(name: str) -> str:
+    """A file-system-safe form of a suite or scenario name (names are checked identifiers, mostly)."""
+    cleaned = _UNSAFE.sub("_", name).strip("._")
+    return cleaned or "_"
+
+
+def artifact_folder(root: Path, suite_path: Path, scenario: str) -> Path:
+    """``root/<suite stem>/<scenario>``; the stem drops ``.fleetsim.yaml``."""
+    stem = suite_path.name.removesuffix(".yaml").removesuffix(".yml").removesuffix(".fleetsim")
+    return root / _safe(stem) / _safe(scenario)
+
+
+def write_run_artifacts(folder: Path, result: RunResult, extra: Mapping[str, Any] | None = None) -> dict[str, str]:
+    """Write the run's files into ``folder`` (replacing what was there); their paths by kind.
+
+    ``extra`` adds keys to ``result.json`` (the suite file, the pytest node id, ...).
+    """
+    if folder.exists():
+        shutil.rmtree(folder)
+    folder.mkdir(parents=True)
+    paths = {"folder": str(folder), "result": str(folder / RESULT_FILE)}
+    if result.trace is not None and result.trace.lines:
+        paths["trace"] = str(folder / TRACE_FILE)
+        write_text_atomically(folder / TRACE_FILE, "\n".join(result.trace.lines) + "\n")
+    document = result.to_dict()
+    document["artifacts"] = {**document["artifacts"], **paths}
+    document.update(extra or {})
+    write_text_atomically(folder / RESULT_FILE, json.dumps(document, indent=2, sort_keys=True) + "\n")
+    return paths

@@ -1,0 +1,119 @@
+"""Run results as text for people: the summary table and failure details (CLI and pytest plugin alike).
+
+Both front ends show the same columns and the same failure wording, so a scenario reads the same in a
+terminal, in a pytest report and in CI logs.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from fleetsim.sim.result import Failure, RunResult
+
+__all__ = ["SUMMARY_COLUMNS", "broken_expectation", "failure_lines", "failure_report", "failure_text", "format_table", "summary_cells"]
+
+# What each failure kind breaks, in the words of the suite file (SPEC §13 ``expect``) or the harness.
+_BROKEN = {
+    "rejection": "expect.rejections: none",
+    "collision": "expect.collisions: none",
+    "deadlock": "expect.deadlock: false",
+    "timeout": "expect.tasks",
+    "planner-error": "the planner failed",
+    "hash-mismatch": "the recorded trace hash",
+    "hash-missing": "the recorded trace hash",
+    "nondeterministic": "a deterministic planner",
+    "load-error": "loading the scenario",
+}
+
+SUMMARY_COLUMNS = ("scenario", "outcome", "tasks", "makespan", "alerts", "rejections", "hash", "realtime")
+
+
+def summary_cells(label: str, outcome: str, result: RunResult | None) -> tuple[str, ...]:
+    """One row of the summary table; ``result`` is ``None`` for a scenario that never ran."""
+    if result is None or not result.trace_hash:
+        return (label, outcome, "-", "-", "-", "-", "-", "-")
+    makespan = result.metrics.makespan
+    factor = result.metrics.realtime_factor
+    return (
+        label,
+        outcome,
+        f"{result.tasks_completed}/{result.tasks_total}",
+        "-" if makespan is None else f"{makespan:.1f} s",
+        str(len(result.collisions)),
+        str(len(result.rejections)),
+        result.trace_hash[:12],
+        "-" if factor is None else f"{factor:.0f}x",
+    )
+
+
+def format_table(rows: Sequence[Sequence[str]], header: Sequence[str] = SUMMARY_COLUMNS) -> list[str]:
+    """Left-aligned columns two spaces apart, header first."""
+    table = [tuple(header), *map(tuple, rows)]
+    widths = [max(len(row[i]) for row in table) for i in range(len(header))]
+    return ["  ".join(cell.ljust(width) for cell, width in zip(row, widths)).rstrip() for row in table]
+
+
+def failure_text(result: RunResult, failure: Failure) -> str:
+    """What went wrong, in the words a planner author needs: the thesis's alert text for a collision,
+    the planner's own traceback for a planner error."""
+    if failure.kind == "collision":
+        for event in result.collisions:
+            if event.time == failure.time and event.alert.segment == failure.details.get("segment"):
+                return event.alert.text()
+    if failure.kind == "planner-error" and failure.details.get("traceback"):
+        return f"{failure.message}\n{str(failure.details['traceback']).rstrip()}"
+    return failure.message
+
+
+def broken_expectation(failure: Failure) -> str:
+    """Which expectation (or harness rule) a failure broke, as the user would look it up."""
+    expect = failure.details.get("expect")
+    if expect:
+        return f"expect.{expect}"
+    return _BROKEN.get(failure.kind, failure.kind)
+
+
+def failure_report(result: RunResult, *, heading: str, shown: int = 5) -> str:
+    """The whole story of a failed run for a test report: what ran, what broke, where the files are.
+
+    Failures are grouped by the expectation they broke, the first ``shown`` of each group in full.
+    """
+    lines = []
+    if result.failures:  # first, since pytest's short summary shows a report's first line
+        first = result.failures[0]
+        more = f" (and {len(result.failures) - 1} more)" if len(result.failures) > 1 else ""
+        lines.append(f"{first.kind} at t={first.time:.2f} s: {failure_text(result, first).splitlines()[0]}{more}")
+    lines.append(heading)
+    if result.trace_hash:
+        lines.append(
+            f"run ended ({result.ended}) at t = {result.sim_time:.2f} s after {result.steps} steps; "
+            f"tasks {result.tasks_completed}/{result.tasks_total} completed; trace hash {result.trace_hash[:12]}"
+        )
+    groups: dict[str, list[Failure]] = {}
+    for failure in result.failures:
+        groups.setdefault(broken_expectation(failure), []).append(failure)
+    for broken, failures in groups.items():
+        count = f" ({len(failures)} times)" if len(failures) > 1 else ""
+        lines += ["", f"broken: {broken}{count}"]
+        for failure in failures[:shown]:
+            lines.append(f"  {failure.kind} at t={failure.time:.2f} s:")
+            lines += ["    " + line for line in failure_text(result, failure).splitlines()]
+        if len(failures) > shown:
+            lines.append(f"  ... and {len(failures) - shown} more (all in result.json)")
+    if result.artifacts:
+        lines.append("")
+        files = [path for kind, path in sorted(result.artifacts.items()) if kind != "folder"]
+        lines += [("artifacts: " if i == 0 else "           ") + path for i, path in enumerate(files)]
+    return "\n".join(lines)
+
+
+def failure_lines(result: RunResult, shown: int, more_hint: str) -> list[str]:
+    """The first ``shown`` failures, each as ``kind at t=...:`` with its text indented below."""
+    lines = []
+    for failure in result.failures[:shown]:
+        lines.append(f"{failure.kind} at t={failure.time:.2f} s:")
+        lines += ["  " + line for line in failure_text(result, failure).splitlines()]
+    hidden = len(result.failures) - shown
+    if hidden > 0:
+        lines.append(f"... and {hidden} more failure(s) ({more_hint})")
+    return lines

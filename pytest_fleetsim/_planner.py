@@ -1,0 +1,61 @@
+"""What the ``fleetsim_planner`` fixture may give, turned into fresh planners and a stable identity.
+
+The fixture may return a planner factory from ``--planner`` (the plugin's own fixture), a planner class,
+a zero-argument function returning a planner, or a planner instance. Every run needs a fresh planner
+(hash recording runs a scenario twice), so an instance is deep-copied before its first use and each
+further run gets a copy of that pristine copy.
+"""
+
+from __future__ import annotations
+
+import copy
+import inspect
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from fleetsim.planning.protocol import Planner
+from fleetsim.sim.planner_spec import METHODS, PlannerFactory, PlannerSpecError
+
+__all__ = ["PlannerSource", "planner_source"]
+
+
+@dataclass(frozen=True, slots=True)
+class PlannerSource:
+    """Fresh planners on demand; ``identity`` keys recorded hashes (``module:attr``)."""
+
+    identity: str
+    make: Callable[[], Planner]
+    from_option: bool  # built from --planner / the ini option (so a command can repeat it)
+
+
+def _path(obj: object) -> str:
+    return f"{getattr(obj, '__module__', '?')}:{getattr(obj, '__qualname__', type(obj).__qualname__)}"
+
+
+def _is_planner(obj: object) -> bool:
+    return not inspect.isclass(obj) and all(callable(getattr(obj, name, None)) for name in METHODS)
+
+
+def planner_source(value: object) -> PlannerSource:
+    """The source for a ``fleetsim_planner`` fixture value; :class:`PlannerSpecError` if it is none."""
+    if isinstance(value, PlannerFactory):
+        return PlannerSource(value.spec, value, from_option=True)
+    if _is_planner(value):
+        try:
+            pristine = copy.deepcopy(value)
+        except Exception as exc:  # a planner holding a socket, a lock, ...
+            msg = (
+                f"the fleetsim_planner fixture returned a planner instance that cannot be copied "
+                f"({type(exc).__name__}: {exc}); return its class or a zero-argument factory instead, so every "
+                "run gets a fresh planner"
+            )
+            raise PlannerSpecError(msg, _path(type(value))) from None
+        return PlannerSource(_path(type(value)), lambda: copy.deepcopy(pristine), from_option=False)
+    if callable(value):
+        identity = _path(value)
+        return PlannerSource(identity, PlannerFactory(identity, value), from_option=False)
+    msg = (
+        f"the fleetsim_planner fixture returned {value!r}; it must return a planner (an object with "
+        "plan_routes and fix_legs), a planner class, or a zero-argument function that makes one"
+    )
+    raise PlannerSpecError(msg, repr(value))

@@ -1,0 +1,329 @@
+"""The plugin's state for one pytest session: options, the planner, lock files, results, gating.
+
+Workers and a serial session run scenarios (:meth:`FleetsimState.run_item`). Only the controlling
+process (the serial session, or pytest-xdist's controller) receives every report, and only it writes lock
+files and the metrics document and decides on regressions, so nothing is written twice and nothing
+depends on how tests were spread over workers.
+"""
+
+from __future__ import annotations
+
+import shlex
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any, Literal
+
+import pytest
+
+from fleetsim.errors import FleetsimError, LoadError
+from fleetsim.gating.baseline import (
+    Comparison,
+    ScenarioMetrics,
+    Threshold,
+    compare,
+    parse_threshold,
+    read_metrics,
+    write_metrics,
+)
+from fleetsim.gating.lockfile import HashLock, LockEntry, LockFileError, lock_path_for
+from fleetsim.gating.verify import run_checked
+from fleetsim.load.scenario import load_scenario
+from fleetsim.load.suite import load_suite
+from fleetsim.recording.artifacts import artifact_folder, write_run_artifacts
+from fleetsim.sim.planner_spec import PlannerFactory, PlannerSpecError, load_planner_factory
+from fleetsim.sim.report import failure_report, format_table, summary_cells
+from fleetsim.sim.result import RunResult
+from pytest_fleetsim._items import ScenarioFailed, ScenarioItem
+from pytest_fleetsim._planner import planner_source
+
+__all__ = ["NO_PLANNER", "FleetsimState", "state_of"]
+
+STATE_KEY = pytest.StashKey["FleetsimState"]()
+NO_PLANNER = (
+    "no planner to test: run pytest with --planner module:Planner (a class or zero-argument factory), set "
+    "fleetsim_planner in the [pytest] ini section, or override the fleetsim_planner fixture in conftest.py"
+)
+RecordMode = Literal["failed", "all", "none"]
+
+
+def state_of(config: pytest.Config) -> FleetsimState:
+    return config.stash[STATE_KEY]
+
+
+@dataclass
+class _Outcome:
+    """What the controller learned about one scenario test from its report."""
+
+    nodeid: str
+    suite: str
+    index: int
+    outcome: str
+    payload: dict[str, Any]
+
+
+@dataclass(eq=False)
+class FleetsimState:
+    config: pytest.Config
+    planner: PlannerFactory | None
+    update_hashes: bool
+    artifacts: Path
+    record: RecordMode
+    timeout: float | None
+    metrics_json: Path | None
+    baseline: dict[str, ScenarioMetrics] | None
+    baseline_path: Path | None
+    thresholds: tuple[Threshold, ...]
+    _locks: dict[Path, HashLock] = field(default_factory=dict)
+    outcomes: dict[str, _Outcome] = field(default_factory=dict)
+    notes: list[str] = field(default_factory=list)
+    comparison: Comparison | None = None
+
+    # -- set-up -------------------------------------------------------------------------------------
+
+    @classmethod
+    def configure(cls, config: pytest.Config) -> FleetsimState:
+        """Read and check every option; a mistake is a :class:`pytest.UsageError` before any test runs."""
+        option = config.option
+        spec = option.fleetsim_planner or config.getini("fleetsim_planner") or None
+        try:
+            planner = load_planner_factory(spec) if spec else None
+        except PlannerSpecError as error:
+            details = f"\n{error.details.rstrip()}" if error.details else ""
+            raise pytest.UsageError(f"--planner: {error}{details}") from None
+        thresholds = []
+        for text in option.fleetsim_compare_fail or ():
+            try:
+                thresholds.append(parse_threshold(text))
+            except FleetsimError as error:
+                raise pytest.UsageError(str(error)) from None
+        baseline_path = _path(config, option.fleetsim_compare)
+        if thresholds and baseline_path is None:
+            raise pytest.UsageError("--fleetsim-compare-fail needs --fleetsim-compare PATH (the baseline metrics to compare with)")
+        baseline = None
+        if baseline_path is not None and not hasattr(config, "workerinput"):
+            try:
+                baseline = read_metrics(baseline_path)
+            except FleetsimError as error:
+                raise pytest.UsageError(f"--fleetsim-compare: {error}") from None
+        timeout = float(option.fleetsim_planner_timeout or config.getini("fleetsim_planner_timeout") or 0)
+        return cls(
+            config=config,
+            planner=planner,
+            update_hashes=bool(option.fleetsim_update_hashes),
+            artifacts=_path(config, option.fleetsim_artifacts) or Path("fleetsim-results"),
+            record=option.fleetsim_record,
+            timeout=timeout if timeout > 0 else None,
+            metrics_json=_path(config, option.fleetsim_metrics_json),
+            baseline=baseline,
+            baseline_path=baseline_path,
+            thresholds=tuple(thresholds),
+        )
+
+    @property
+    def is_controller(self) -> bool:
+        return not hasattr(self.config, "workerinput")
+
+    # -- one scenario -------------------------------------------------------------------------------
+
+    def run_item(self, item: ScenarioItem, fixture_value: object) -> None:
+        """Run the item's scenario; raise :class:`ScenarioFailed` with the whole story if it failed."""
+        heading = f"fleetsim scenario {item.spec.name!r} ({_relative(self.config, item.path)}:{item.spec.line})"
+        try:
+            if item.suite.planner is not None:  # the suite documents this planner, whatever was asked
+                fixture_value = load_planner_factory(item.suite.planner)
+            elif fixture_value is None:
+                pytest.skip(NO_PLANNER)
+            source = planner_source(fixture_value)
+        except PlannerSpecError as error:
+            raise ScenarioFailed(f"{heading}\n\n{error}") from None
+        heading += f" with planner {source.identity}"
+        try:
+            scenario = load_scenario(item.spec, item.suite)
+            lock = self._lock(item.suite.path)
+        except (LoadError, LockFileError) as error:
+            raise ScenarioFailed(f"{heading}\n\n{error}") from None
+        hint = f"pytest {shlex.quote(item.nodeid)} --fleetsim-update-hashes"
+        if source.from_option and item.suite.planner is None:
+            hint += f" --planner {shlex.quote(source.identity)}"
+        try:
+            checked = run_checked(
+                scenario,
+                source.make,
+                identity=source.identity,
+                mode="update" if self.update_hashes else "check",
+                recorded=lock.get(source.identity, item.spec.name),
+                record_hint=hint,
+                planner_timeout=self.timeout,
+                keep_trace=self.record != "none",
+            )
+        except PlannerSpecError as error:  # the planner could not even be made
+            raise ScenarioFailed(f"{heading}\n\nplanner-error: {error}\n{error.details}".rstrip()) from None
+        result = checked.result
+        if self.record == "all" or (self.record == "failed" and not result.passed):
+            result = self._write_artifacts(item, result)
+        self._describe(item, result, checked.record, source.identity)
+        if not result.passed:
+            raise ScenarioFailed(failure_report(result, heading=heading))
+
+    def _lock(self, suite: Path) -> HashLock:
+        path = lock_path_for(suite)
+        if path not in self._locks:
+            self._locks[path] = HashLock.load(path)
+        return self._locks[path]
+
+    def _write_artifacts(self, item: ScenarioItem, result: RunResult) -> RunResult:
+        folder = artifact_folder(self.artifacts, item.path, item.spec.name)
+        extra = {"suite": str(item.path), "nodeid": item.nodeid, "line": item.spec.line}
+        paths = write_run_artifacts(folder, result, extra)
+        shown = {kind: _relative(self.config, Path(path)) for kind, path in paths.items()}
+        return replace(result, artifacts={**result.artifacts, **shown})
+
+    def _describe(self, item: ScenarioItem, result: RunResult, record: LockEntry | None, identity: str) -> None:
+        """JUnit properties, and the payload that travels to the controller with the test's report."""
+        metrics = result.metrics
+        item.user_properties += [
+            ("fleetsim_planner", identity),
+            ("fleetsim_trace_hash", result.trace_hash),
+            ("fleetsim_tasks", f"{result.tasks_completed}/{result.tasks_total}"),
+            ("fleetsim_makespan", "" if metrics.makespan is None else f"{metrics.makespan:.3f}"),
+            ("fleetsim_alerts", str(len(result.collisions))),
+            ("fleetsim_rejections", str(len(result.rejections))),
+            ("fleetsim_sim_time", f"{result.sim_time:.3f}"),
+        ]
+        item.user_properties += [(f"fleetsim_artifact_{kind}", path) for kind, path in sorted(result.artifacts.items())]
+        item.fleetsim_payload = {
+            "suite": str(item.path),
+            "scenario": item.spec.name,
+            "index": item.index,
+            "planner": identity,
+            "metrics": ScenarioMetrics.from_result(item.nodeid, "failed", result).to_dict(),  # outcome: see _metrics
+            "cells": list(summary_cells(item.spec.name, "", result)),
+            "record": None if record is None else {"hash": record.hash, "steps": record.steps, "checkpoints": list(record.checkpoints)},
+        }
+
+    # -- the controller -----------------------------------------------------------------------------
+
+    def pytest_runtest_logreport(self, report: pytest.TestReport) -> None:
+        """Every test report reaches the controller, from whichever worker ran the test."""
+        payload = getattr(report, "fleetsim", None)
+        if not isinstance(payload, dict) or report.when != "call":
+            return
+        wasxfail = hasattr(report, "wasxfail")
+        if report.skipped and wasxfail:
+            outcome = "xfailed"
+        elif report.passed:
+            outcome = "xpassed" if wasxfail else "passed"
+        else:
+            outcome = "failed"
+        self.outcomes[report.nodeid] = _Outcome(report.nodeid, payload["suite"], payload["index"], outcome, payload)
+
+    def finish(self, session: pytest.Session) -> None:
+        """Write what the session recorded and gate on regressions (controller only)."""
+        if not self.is_controller:
+            return
+        ordered = self.ordered()
+        if self.update_hashes:
+            self._record_hashes(ordered)
+        else:
+            self._note_stale_entries(ordered)
+        rows = [self._metrics(o) for o in ordered]
+        if self.metrics_json is not None:
+            write_metrics(self.metrics_json, rows)
+            self.notes.append(f"metrics of {len(rows)} scenario(s) written to {self.metrics_json}")
+        if self.baseline is not None:
+            self.comparison = compare(self.baseline, {row.id: row for row in rows}, self.thresholds)
+            if self.comparison.regressions and session.exitstatus == pytest.ExitCode.OK:
+                session.exitstatus = pytest.ExitCode.TESTS_FAILED
+
+    def ordered(self) -> list[_Outcome]:
+        return sorted(self.outcomes.values(), key=lambda o: (o.suite, o.index))
+
+    def _metrics(self, outcome: _Outcome) -> ScenarioMetrics:
+        # Only the report says how the test ended (an xfail marker turns a failure into "xfailed").
+        return ScenarioMetrics.from_dict({**outcome.payload["metrics"], "outcome": outcome.outcome}, where=outcome.nodeid)
+
+    def _record_hashes(self, ordered: list[_Outcome]) -> None:
+        by_suite: dict[str, list[_Outcome]] = {}
+        for outcome in ordered:
+            by_suite.setdefault(outcome.suite, []).append(outcome)
+        for suite, outcomes in by_suite.items():
+            path = lock_path_for(Path(suite))
+            try:
+                lock = HashLock.load(path)
+            except LockFileError as error:
+                self.notes.append(f"not recorded: {error}")
+                continue
+            counts = {"new": 0, "changed": 0, "unchanged": 0}
+            for outcome in outcomes:
+                record = outcome.payload["record"]
+                if record is None:
+                    continue  # not recordable: the failure report says why
+                entry = LockEntry(record["hash"], record["steps"], tuple(record["checkpoints"]))
+                before = lock.get(outcome.payload["planner"], outcome.payload["scenario"])
+                counts["new" if before is None else "unchanged" if before == entry else "changed"] += 1
+                if before != entry:
+                    lock.set(outcome.payload["planner"], outcome.payload["scenario"], entry)
+            pruned = self._prune(lock, Path(suite))
+            written = lock.save()
+            parts = [f"{sum(counts.values())} hash(es) recorded ({', '.join(f'{n} {k}' for k, n in counts.items())})"]
+            if pruned:
+                parts.append(f"{len(pruned)} stale entr{'y' if len(pruned) == 1 else 'ies'} pruned ({_pairs(pruned)})")
+            self.notes.append(f"{_relative(self.config, path)}: {', '.join(parts)}{'' if written else ' (file unchanged)'}")
+
+    def _prune(self, lock: HashLock, suite: Path) -> list[tuple[str, str]]:
+        try:
+            names = [spec.name for spec in load_suite(suite).scenarios]
+        except FleetsimError:
+            return []  # a suite that does not load was reported at collection; keep its entries
+        return lock.prune(names)
+
+    def _note_stale_entries(self, ordered: list[_Outcome]) -> None:
+        for suite in sorted({o.suite for o in ordered}):
+            try:
+                stale = self._lock(Path(suite)).stale([spec.name for spec in load_suite(Path(suite)).scenarios])
+            except FleetsimError:
+                continue
+            if stale:
+                path = _relative(self.config, lock_path_for(Path(suite)))
+                self.notes.append(
+                    f"{path} holds {len(stale)} stale entr{'y' if len(stale) == 1 else 'ies'} for scenarios no longer in "
+                    f"the suite ({_pairs(stale)}); --fleetsim-update-hashes prunes them"
+                )
+
+    # -- the terminal -------------------------------------------------------------------------------
+
+    def summary_lines(self) -> list[str]:
+        ordered = self.ordered()
+        several = len({o.suite for o in ordered}) > 1
+        rows = []
+        for outcome in ordered:
+            cells = list(outcome.payload["cells"])
+            cells[0] = f"{Path(outcome.suite).name}::{cells[0]}" if several else cells[0]
+            cells[1] = outcome.outcome
+            rows.append(cells)
+        lines = format_table(rows) if rows else []
+        if self.comparison is not None:
+            source = f" with {_relative(self.config, self.baseline_path)}" if self.baseline_path else ""
+            lines += ["", f"compared{source}:", *self.comparison.lines()]
+        if self.notes:
+            lines += ["", *self.notes]
+        return lines
+
+
+def _pairs(pairs: list[tuple[str, str]]) -> str:
+    return ", ".join(f"{planner} / {scenario}" for planner, scenario in pairs)
+
+
+def _path(config: pytest.Config, value: str | None) -> Path | None:
+    if not value:
+        return None
+    return config.invocation_params.dir / value
+
+
+def _relative(config: pytest.Config, path: Path | None) -> str:
+    if path is None:
+        return ""
+    try:
+        return str(path.relative_to(config.invocation_params.dir))
+    except ValueError:
+        return str(path)
