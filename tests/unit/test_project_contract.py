@@ -19,7 +19,7 @@ def test_ci_runs_exactly_the_readme_test_command() -> None:
 def test_readme_opens_with_the_main_job_and_the_test_commands() -> None:
     readme = (ROOT / "README.md").read_text(encoding="utf-8")
     blocks = re.findall(r"```sh\n(.+?)\n```", readme, flags=re.S)
-    assert blocks[0] == "pip install -e . && fleetsim run scenario_suites --planner fleetsim.planners:ReservingPlanner"
+    assert blocks[0] == "pip install -e . && pytest scenario_suites --planner fleetsim.planners:ReservingPlanner"
     assert blocks[1].endswith("pip install -e '.[test]' && python -m pytest")
 
 
