@@ -12,6 +12,8 @@ from fleetsim.errors import SuiteError
 from fleetsim.load.suite import Suite, discover_suites, load_suite
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Expectations, ScenarioSettings
 
+SUITES = Path(__file__).resolve().parents[2] / "scenario_suites"
+
 FILES = ("crossing/map.json", "crossing/vehicles.csv", "crossing/tasks.csv",
          "maps/loop.tmx", "loop/vehicles.csv", "loop/tasks.csv")
 
@@ -230,3 +232,14 @@ def test_discover_finds_suite_files_sorted_and_skips_hidden_directories(tmp_path
 def test_discover_rejects_a_path_that_does_not_exist(tmp_path: Path) -> None:
     with pytest.raises(SuiteError, match="no such file or directory"):
         discover_suites([tmp_path / "missing"])
+
+
+def test_a_suite_may_pin_its_planner_and_a_malformed_pin_is_located(tmp_path: Path) -> None:
+    pinned = load_suite(SUITES / "caught-bugs.fleetsim.yaml")
+    assert pinned.planner == "fleetsim.planners:BFSPlanner"
+    assert load_suite(SUITES / "examples.fleetsim.yaml").planner is None
+    text = (SUITES / "caught-bugs.fleetsim.yaml").read_text(encoding="utf-8")
+    bad = tmp_path / "caught-bugs.fleetsim.yaml"
+    bad.write_text(text.replace("planner: fleetsim.planners:BFSPlanner", "planner: BFSPlanner"), encoding="utf-8")
+    with pytest.raises(SuiteError, match=r"caught-bugs\.fleetsim\.yaml:\d+:\d+: .*'BFSPlanner'"):
+        load_suite(bad)
