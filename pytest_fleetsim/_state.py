@@ -132,16 +132,17 @@ class FleetsimState:
             if item.suite.planner is not None:  # the suite documents this planner, whatever was asked
                 fixture_value = load_planner_factory(item.suite.planner)
             elif fixture_value is None:
-                pytest.skip(NO_PLANNER)
+                # Located at the scenario, not here, so -rs points at the suite file.
+                raise pytest.skip.Exception(NO_PLANNER, _use_item_location=True)
             source = planner_source(fixture_value)
         except PlannerSpecError as error:
-            raise ScenarioFailed(f"{heading}\n\n{error}") from None
+            raise ScenarioFailed(_story(str(error), heading)) from None
         heading += f" with planner {source.identity}"
         try:
             scenario = load_scenario(item.spec, item.suite)
             lock = self._lock(item.suite.path)
         except (LoadError, LockFileError) as error:
-            raise ScenarioFailed(f"{heading}\n\n{error}") from None
+            raise ScenarioFailed(_story(str(error), heading)) from None
         hint = f"pytest {shlex.quote(item.nodeid)} --fleetsim-update-hashes"
         if source.from_option and item.suite.planner is None:
             hint += f" --planner {shlex.quote(source.identity)}"
@@ -157,7 +158,7 @@ class FleetsimState:
                 keep_trace=self.record != "none",
             )
         except PlannerSpecError as error:  # the planner could not even be made
-            raise ScenarioFailed(f"{heading}\n\nplanner-error: {error}\n{error.details}".rstrip()) from None
+            raise ScenarioFailed(_story(f"planner-error: {error}", heading, error.details)) from None
         result = checked.result
         if self.record == "all" or (self.record == "failed" and not result.passed):
             result = self._write_artifacts(item, result)
@@ -308,6 +309,12 @@ class FleetsimState:
         if self.notes:
             lines += ["", *self.notes]
         return lines
+
+
+def _story(error: str, heading: str, details: str = "") -> str:
+    """A failure before any run: the error's first line first (pytest's short summary shows it)."""
+    first, _, rest = error.partition("\n")
+    return "\n".join(part for part in (first, heading, rest, details.rstrip()) if part)
 
 
 def _pairs(pairs: list[tuple[str, str]]) -> str:
