@@ -143,7 +143,8 @@ class FleetsimState:
             lock = self._lock(item.suite.path)
         except (LoadError, LockFileError) as error:
             raise ScenarioFailed(_story(str(error), heading)) from None
-        hint = f"pytest {shlex.quote(item.nodeid)} --fleetsim-update-hashes"
+        # Relative to where pytest was run, like pytest's own FAILED lines, so it can be pasted there.
+        hint = f"pytest {shlex.quote(self.config.cwd_relative_nodeid(item.nodeid))} --fleetsim-update-hashes"
         if source.from_option and item.suite.planner is None:
             hint += f" --planner {shlex.quote(source.identity)}"
         try:

@@ -38,6 +38,7 @@ RESULT_KEYS = {
     "scenario", "planner", "status", "failures", "trace_hash", "sim_time",
     "steps", "tasks", "rejections", "collisions", "metrics", "artifacts",
 }  # SPEC §10
+NO_BASELINE = "*--fleetsim-compare: *missing.json: no such metrics file; write one with --fleetsim-metrics-json*"
 WALL_CLOCK = {"wall_time", "planner_wall_time", "realtime_factor"}  # the only figures that may differ
 
 SUITE_HEAD = """\
@@ -188,6 +189,10 @@ def fleetsim_table(result: pytest.RunResult) -> list[list[str]]:
     return rows
 
 
+def without_wall_clock(row: Mapping[str, Any]) -> dict[str, Any]:
+    return {key: value for key, value in row.items() if key not in WALL_CLOCK}
+
+
 def metric_rows(path: Path) -> list[dict[str, Any]]:
     document = json.loads(path.read_text(encoding="utf-8"))
     assert document["format"] == "fleetsim-metrics/1"
@@ -249,6 +254,20 @@ def test_missing_hash_fails_with_a_command_that_records_it_beside_the_suite(
     assert not (project.path / LOCK_FILE).exists()
 
     project.runpytest_inprocess("suites", "--planner", RESERVING).assert_outcomes(passed=1)
+
+
+def test_record_command_works_from_the_folder_pytest_was_run_in(
+    project: pytest.Pytester, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    suite = make_project(project.path / "suites", ["crossing"])  # the rootdir (tox.ini) is one level up
+    monkeypatch.chdir(suite.parent)
+
+    missing = project.runpytest_inprocess(SUITE_FILE, "--planner", RESERVING)
+    missing.stdout.fnmatch_lines([f"FAILED {SUITE_FILE}::crossing - hash-missing at t=*"])  # pytest's own id
+    recording = project.runpytest_inprocess(*shlex.split(hint_in(missing))[1:])
+
+    recording.assert_outcomes(passed=1)
+    assert suite.with_name(LOCK_FILE).exists()
 
 
 def test_recording_keeps_other_planners_and_writes_sorted_lines(
@@ -350,14 +369,19 @@ def test_stale_entries_are_reported_in_check_mode_and_pruned_on_update(
 
     check.assert_outcomes(passed=1)
     check.stdout.fnmatch_lines(
-        [f"{LOCK_FILE} holds 2 stale entries for scenarios no longer in the suite ({stale}); --fleetsim-update-hashes prunes them"]
+        [
+            f"{LOCK_FILE} holds 2 stale entries for scenarios no longer in the suite ({stale}); "
+            "--fleetsim-update-hashes prunes them"
+        ]
     )
     assert lock.read_bytes() == before
 
     update = project.runpytest_inprocess("--planner", RESERVING, "--fleetsim-update-hashes")
 
     update.assert_outcomes(passed=1)
-    update.stdout.fnmatch_lines([f"{LOCK_FILE}: 1 hash(es) recorded (0 new, 0 changed, 1 unchanged), 2 stale entries pruned ({stale})"])
+    update.stdout.fnmatch_lines(
+        [f"{LOCK_FILE}: 1 hash(es) recorded (0 new, 0 changed, 1 unchanged), 2 stale entries pruned ({stale})"]
+    )
     crossing = {"crossing": recorded["crossing"]}
     assert lock.read_text(encoding="utf-8") == lock_text({RESERVING: crossing, LATE: crossing})
 
@@ -375,13 +399,17 @@ def test_nondeterministic_planner_is_refused_naming_the_first_diverging_step(
     result.stdout.fnmatch_lines([f"{LOCK_FILE}: 0 hash(es) recorded (0 new, 0 changed, 0 unchanged) (file unchanged)"])
     assert (lock.read_bytes(), lock.stat().st_mtime_ns) == (before, mtime)
     text = result.stdout.str()
-    found = re.search(r"nondeterministic at t=(\S+) s: the planner is not deterministic: .*first divergence at step (\d+) \(t = (\S+) s\)", text)
+    found = re.search(
+        r"nondeterministic at t=(\S+) s: the planner is not deterministic: .*first divergence at step (\d+) \(t = (\S+) s\)", text
+    )
     assert found, text
     assert "Nothing was recorded." in text
     # The first run waited 4 calls, the second 8: their traces, recorded apart, first differ at that step.
     first = json.loads((project.path / "fleetsim-results/gating/crossing/result.json").read_text(encoding="utf-8"))
     assert first["failures"][0]["kind"] == "nondeterministic"
-    later = project.runpytest_inprocess("--planner", "gating_planners:Later", "--fleetsim-artifacts", "later", "--fleetsim-record", "all")
+    later = project.runpytest_inprocess(
+        "--planner", "gating_planners:Later", "--fleetsim-artifacts", "later", "--fleetsim-record", "all"
+    )
     later.assert_outcomes(failed=1)
     a = (project.path / "fleetsim-results/gating/crossing/trace.jsonl").read_text(encoding="utf-8").splitlines()
     b = (project.path / "later/gating/crossing/trace.jsonl").read_text(encoding="utf-8").splitlines()
@@ -536,8 +564,8 @@ def test_makespan_within_the_limit_passes_the_session(project: pytest.Pytester, 
     ("options", "message"),
     [
         (["--fleetsim-compare", "base.json", "--fleetsim-compare-fail", "speed:5%"], "*unknown metric 'speed'*known: *makespan*"),
-        (["--fleetsim-compare", "missing.json", "--fleetsim-compare-fail", "makespan:5%"], "*--fleetsim-compare: *missing.json: no such metrics file*"),
-        (["--fleetsim-compare", "missing.json"], "*--fleetsim-compare: *missing.json: no such metrics file*"),
+        (["--fleetsim-compare", "missing.json", "--fleetsim-compare-fail", "makespan:5%"], NO_BASELINE),
+        (["--fleetsim-compare", "missing.json"], NO_BASELINE),
         (["--fleetsim-compare-fail", "makespan:5%"], "*--fleetsim-compare-fail needs --fleetsim-compare PATH*"),
     ],
     ids=["unknown-metric", "missing-baseline", "missing-baseline-without-limits", "limit-without-baseline"],
@@ -569,14 +597,20 @@ def test_xdist_gives_the_serial_ids_outcomes_and_hashes(project: pytest.Pytester
     serial.assert_outcomes(passed=2, failed=1)
     spread.assert_outcomes(passed=2, failed=1)
     assert "2 workers [3 items]" in spread.stdout.str()
-    deterministic = [[{k: v for k, v in row.items() if k not in WALL_CLOCK} for row in metric_rows(project.path / f"{run}.json")] for run in ("serial", "spread")]
-    assert deterministic[0] == deterministic[1]
-    assert [row["trace_hash"] for row in deterministic[0] if row["outcome"] == "passed"] == [recorded["crossing"].hash, recorded["loop-one-way"].hash]
+    rows = [[without_wall_clock(row) for row in metric_rows(project.path / f"{run}.json")] for run in ("serial", "spread")]
+    assert rows[0] == rows[1]
+    assert [(row["id"], row["outcome"], row["trace_hash"]) for row in rows[0]] == [
+        (f"{SUITE_FILE}::corridor-passing-bay", "failed", recorded["corridor-passing-bay"].hash),
+        (f"{SUITE_FILE}::crossing", "passed", recorded["crossing"].hash),
+        (f"{SUITE_FILE}::loop-one-way", "passed", recorded["loop-one-way"].hash),
+    ]
     assert junit_cases(project.path / "serial.xml") == junit_cases(project.path / "spread.xml")
     assert [row[:7] for row in fleetsim_table(serial)] == [row[:7] for row in fleetsim_table(spread)]  # suite order, both
 
 
-def test_xdist_update_writes_the_lock_once_as_a_serial_update_does(project: pytest.Pytester, recorded: dict[str, LockEntry]) -> None:
+def test_xdist_update_writes_the_lock_once_as_a_serial_update_does(
+    project: pytest.Pytester, recorded: dict[str, LockEntry]
+) -> None:
     suite = make_project(project.path)
     lock = suite.with_name(LOCK_FILE)
     common = ("--planner", RESERVING, "--fleetsim-update-hashes")
