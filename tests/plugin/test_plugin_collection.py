@@ -47,7 +47,7 @@ from fleetsim.planners import ReservingPlanner
 
 
 class ConftestPlanner(ReservingPlanner):
-    """The reference planner under its own name, so the lock file shows which override ran."""
+    "The reference planner under its own name, so the lock file shows which override ran."
 
 
 def make_planner():
