@@ -8,6 +8,7 @@ depends on how tests were spread over workers.
 
 from __future__ import annotations
 
+import os
 import shlex
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -144,7 +145,8 @@ class FleetsimState:
         except (LoadError, LockFileError) as error:
             raise ScenarioFailed(_story(str(error), heading)) from None
         # Relative to where pytest was run, like pytest's own FAILED lines, so it can be pasted there.
-        hint = f"pytest {shlex.quote(self.config.cwd_relative_nodeid(item.nodeid))} --fleetsim-update-hashes"
+        here = os.path.relpath(item.path, self.config.invocation_params.dir)
+        hint = f"pytest {shlex.quote(f'{here}::{item.name}')} --fleetsim-update-hashes"
         if source.from_option and item.suite.planner is None:
             hint += f" --planner {shlex.quote(source.identity)}"
         try:
