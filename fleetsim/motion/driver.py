@@ -46,7 +46,7 @@ def _nose(travel_heading: float, progress: Progress) -> float:
 class Track(NamedTuple):
     """One segment driven one way, laid out for locating a point by distance on every step.
 
-    :meth:`pose` gives exactly what :meth:`Segment.pose_at` gives (same arithmetic), with the pieces'
+    :meth:`nose_pose` gives the point exactly as :meth:`Segment.pose_at` does (same arithmetic), with the pieces'
     headings and the bisection fix-ups computed once.
     """
 
@@ -77,15 +77,9 @@ class Track(NamedTuple):
             pieces.append((along[index], ax, ay, bx - ax, by - ay, along[index + 1] - along[index], heading, *noses))
         return cls(segment.length, backward, along, tuple(piece_of), tuple(pieces))
 
-    def pose(self, distance: float) -> tuple[float, float, float]:
-        """``(x, y, travel heading)`` at ``distance`` (within ``[0, length]``) along the track."""
-        along = self.length - distance if self.backward else distance
-        start, ax, ay, dx, dy, piece, heading, _, _ = self.pieces[self.piece_of[bisect_right(self.along, along)]]
-        t = (along - start) / piece if piece > 0 else 0.0
-        return ax + t * dx, ay + t * dy, heading
-
     def nose_pose(self, distance: float, reversing: bool) -> tuple[float, float, float]:
-        """``(x, y, nose heading)``: :meth:`pose` with the heading turned into where the nose points."""
+        """``(x, y, nose heading)`` at ``distance`` (within ``[0, length]``): the point exactly as
+        :meth:`Segment.pose_at` gives it, and where the nose points driving forward or backing there."""
         along = self.length - distance if self.backward else distance
         start, ax, ay, dx, dy, piece, _, forward, reverse = self.pieces[self.piece_of[bisect_right(self.along, along)]]
         t = (along - start) / piece if piece > 0 else 0.0
