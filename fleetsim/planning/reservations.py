@@ -6,9 +6,9 @@ reservation of one vehicle must carry no reservation of any other vehicle; each 
 a collision alert listing its primary and secondary holders. Planned legs never reserve.
 
 The check is vectorised over a segment-indexed conflict table (CSR arrays built once per layout), and a
-:class:`ReservationIndex` keeps each vehicle's reservations as arrays until its plan changes (plans are
-immutable, so an unchanged plan is the same object), so a step's check stays cheap for 1000 vehicles on
-a 10,000-segment map.
+:class:`ReservationIndex` keeps per-segment sums of the reservations in force, updated only for the
+vehicles whose plan changed (plans are immutable, so an unchanged plan is the same object), so a step's
+check stays cheap for 1000 vehicles on a 10,000-segment map.
 """
 
 from __future__ import annotations
@@ -86,53 +86,90 @@ def fixed_segments(plan: FleetPlan) -> list[int]:
 
 
 class ReservationIndex:
-    """Each vehicle's primary reservations (segment positions), recomputed only when its plan changes."""
+    """The reservations of the plans in force, kept up to date as plans change, and their alerts.
+
+    Per segment it holds how many reservations it carries, the sum and the sum of squares of their
+    holders' ranks (a small number per vehicle), and how many of them are primary. A segment is reserved
+    by two or more vehicles iff its holders' ranks are not all equal: n·Σr² − (Σr)² > 0, exact in
+    float64 for these integer sizes and found without sorting. A check folds in only the vehicles whose
+    plan object changed since the last one (plans are immutable): the reservations they dropped count
+    −1, the new ones +1, in one ``bincount`` per sum.
+    """
 
     def __init__(self, table: ConflictTable) -> None:
         self.table = table
-        self._cache: dict[int, tuple[FleetPlan, list[int]]] = {}
+        n = len(table)
+        self._count = np.zeros(n)
+        self._total = np.zeros(n)
+        self._squares = np.zeros(n)
+        self._primaries = np.zeros(n)
+        self._held: dict[int, tuple[FleetPlan, list[int]]] = {}  # vehicle -> (plan, primary positions)
+        self._rank: dict[int, int] = {}  # vehicle -> rank, from 1 in order of first sight
+        self._vehicle_of: list[int] = [-1]  # rank -> vehicle
 
-    def _primary(self, vehicle_id: int, plan: FleetPlan) -> list[int]:
-        cached = self._cache.get(vehicle_id)
-        if cached is not None and cached[0] is plan:
-            return cached[1]
+    def _expand(self, primary: IntArray) -> tuple[IntArray, IntArray]:
+        """Every primary reservation's conflict set (which includes the segment itself): for each
+        reservation, its index in ``primary``, and the reserved segment position."""
+        table = self.table
+        counts = table.indptr[primary + 1] - table.indptr[primary]
+        origin = np.repeat(np.arange(len(primary), dtype=np.int64), counts)
+        return origin, table.indices[np.repeat(table.indptr[primary], counts) + ragged_arange(counts)]
+
+    def _fold(self, plans: Mapping[int, FleetPlan]) -> None:
+        """Bring the per-segment sums up to ``plans``: out with what changed plans held, in with the new."""
+        held = self._held
+        gone = [vehicle for vehicle in held if vehicle not in plans]
+        changed = [vehicle for vehicle, plan in plans.items() if (entry := held.get(vehicle)) is None or entry[0] is not plan]
+        if not gone and not changed:
+            return
+        primary: list[int] = []  # the primary reservations leaving and arriving,
+        signs: list[float] = []  # -1 leaving, +1 arriving,
+        ranks: list[float] = []  # and their holders' ranks
         position = self.table.position
-        primary = [position[segment] for segment in fixed_segments(plan)]
-        self._cache[vehicle_id] = (plan, primary)
-        return primary
+        for vehicle in sorted(gone + changed):
+            old = held.pop(vehicle, None)
+            if old is not None:
+                primary += old[1]
+                signs += [-1.0] * len(old[1])
+                ranks += [float(self._rank[vehicle])] * len(old[1])
+            plan = plans.get(vehicle)
+            if plan is not None:
+                rank = self._rank.get(vehicle)
+                if rank is None:
+                    rank = self._rank[vehicle] = len(self._vehicle_of)
+                    self._vehicle_of.append(vehicle)
+                new = [position[segment] for segment in fixed_segments(plan)]
+                held[vehicle] = (plan, new)
+                primary += new
+                signs += [1.0] * len(new)
+                ranks += [float(rank)] * len(new)
+        if not primary:
+            return
+        n = len(self.table)
+        primaries = np.array(primary, dtype=np.int64)
+        sign, rank_of = np.array(signs), np.array(ranks)
+        origin, reserved = self._expand(primaries)
+        sign_r, rank_r = sign[origin], rank_of[origin]
+        self._count += np.bincount(reserved, weights=sign_r, minlength=n)
+        self._total += np.bincount(reserved, weights=sign_r * rank_r, minlength=n)
+        self._squares += np.bincount(reserved, weights=sign_r * rank_r * rank_r, minlength=n)
+        self._primaries += np.bincount(primaries, weights=sign, minlength=n)
 
     def alerts(self, plans: Mapping[int, FleetPlan]) -> tuple[CollisionAlert, ...]:
         """Collision alerts for the plans in force, sorted by segment id."""
-        vehicle_ids = sorted(plans)
-        flat: list[int] = []
-        lengths: list[int] = []
-        for vehicle_id in vehicle_ids:
-            primary = self._primary(vehicle_id, plans[vehicle_id])
-            flat.extend(primary)
-            lengths.append(len(primary))
-        if not flat:
-            return ()
-        table = self.table
-        p_seg = np.array(flat, dtype=np.int64)
-        p_veh = np.repeat(np.arange(len(vehicle_ids), dtype=np.int64), lengths)
-        # Every primary reservation expands into its conflict set (which includes the segment itself).
-        counts = table.indptr[p_seg + 1] - table.indptr[p_seg]
-        s_veh = np.repeat(p_veh, counts)
-        s_seg = table.indices[np.repeat(table.indptr[p_seg], counts) + ragged_arange(counts)]
-        # A segment is reserved by two or more vehicles iff the vehicle ranks on it are not all equal:
-        # n·Σv² − (Σv)² > 0 (exact in float64 for these integer sizes), found without sorting.
-        n = len(self.table)
-        weights = s_veh.astype(np.float64)
-        count = np.bincount(s_seg, minlength=n).astype(np.float64)
-        total = np.bincount(s_seg, weights=weights, minlength=n)
-        squares = np.bincount(s_seg, weights=weights * weights, minlength=n)
-        shared = count * squares - total * total > 0.5
-        has_primary = np.zeros(n, dtype=bool)
-        has_primary[p_seg] = True
-        alerting = np.flatnonzero(has_primary & shared)
+        self._fold(plans)
+        shared = self._count * self._squares - self._total * self._total > 0.5
+        alerting = np.flatnonzero((self._primaries > 0.5) & shared)
         if len(alerting) == 0:
             return ()
-        return _describe(alerting, p_seg, p_veh, s_seg, s_veh, vehicle_ids, self.table)
+        vehicles = sorted(self._held)
+        p_seg = np.array([k for vehicle in vehicles for k in self._held[vehicle][1]], dtype=np.int64)
+        p_veh = np.repeat(
+            np.array([self._rank[vehicle] for vehicle in vehicles], dtype=np.int64),
+            [len(self._held[vehicle][1]) for vehicle in vehicles],
+        )
+        origin, s_seg = self._expand(p_seg)
+        return _describe(alerting, p_seg, p_veh, s_seg, p_veh[origin], self._vehicle_of, self.table)
 
 
 def find_alerts(plans: Mapping[int, FleetPlan], table: ConflictTable) -> tuple[CollisionAlert, ...]:
@@ -154,7 +191,7 @@ def _describe(
     p_veh: IntArray,
     s_seg: IntArray,
     s_veh: IntArray,
-    vehicle_ids: list[int],
+    vehicle_of: list[int],
     table: ConflictTable,
 ) -> tuple[CollisionAlert, ...]:
     primaries = _holders(p_seg, p_veh, alerting)
@@ -164,8 +201,8 @@ def _describe(
         alerts.append(
             CollisionAlert(
                 segment=int(table.ids[position]),
-                primary=tuple(vehicle_ids[k] for k in sorted(first)),
-                secondary=tuple(vehicle_ids[k] for k in sorted(everyone - first)),
+                primary=tuple(sorted(vehicle_of[k] for k in first)),
+                secondary=tuple(sorted(vehicle_of[k] for k in everyone - first)),
             )
         )
     return tuple(alerts)

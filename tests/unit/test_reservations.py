@@ -11,6 +11,7 @@ from hypothesis import strategies as st
 from fleetsim.enums import Direction, Progress, Shape, Traverse
 from fleetsim.layout import Layout, Segment, build_layout
 from fleetsim.planning import CollisionAlert, ConflictTable, FleetLeg, FleetPlan, find_alerts
+from fleetsim.planning.reservations import ReservationIndex
 
 RADIUS = 0.5  # two segments conflict when closer than 1 m
 
@@ -185,3 +186,18 @@ def test_find_alerts_agrees_with_a_set_based_reference(data: st.DataObject) -> N
     layout = data.draw(layouts())
     plans = data.draw(fleets(layout))
     assert find_alerts(plans, ConflictTable(layout)) == reference_alerts(plans, layout)
+
+
+@settings(max_examples=100, deadline=None)
+@given(data=st.data())
+def test_an_index_kept_across_plan_changes_agrees_with_the_reference_at_every_check(data: st.DataObject) -> None:
+    # One index sees a sequence of fleets: vehicles change plans, keep the same plan object, leave, come
+    # back; the sums it folds changes into must give what a from-scratch check gives each time.
+    layout = data.draw(layouts())
+    index = ReservationIndex(ConflictTable(layout))
+    plans: dict[int, FleetPlan] = {}
+    for _ in range(data.draw(st.integers(1, 6))):
+        changes = data.draw(fleets(layout))
+        leaving = data.draw(st.sets(st.sampled_from(sorted(plans)), max_size=2)) if plans else set()
+        plans = {vid: plan for vid, plan in plans.items() if vid not in leaving} | changes
+        assert index.alerts(plans) == reference_alerts(plans, layout)
