@@ -205,9 +205,43 @@ class Driver:
 
     def step(self, plan: FleetPlan, dt: float) -> StepMotion:
         idle = self._idle
-        if idle is not None and idle.plan is plan:
-            return idle
-        self._idle = None
+        if idle is not None:
+            if idle.plan is plan:
+                return idle
+            self._idle = None
+        profile = self._profile
+        if profile is not None and plan is self._last_out and self._turn_left == 0.0:
+            # The commonest step of all, the cruise on an unchanged plan, written out in full: this is
+            # _cruise with Track.nose_pose inlined (same arithmetic), for the 10^5 such steps a
+            # simulated minute of a large fleet takes.
+            t1 = self._elapsed + dt
+            on = self._on
+            if t1 < profile.stop_time and on is not None and on[0] is plan.legs[0]:
+                travelled, speed = profile.running_at(t1)
+                distance = travelled - self._travelled
+                if distance < 0.0:
+                    distance = 0.0
+                along = self.distance + distance
+                track = on[1]
+                if along < track.length - _EPS:
+                    leg = on[0]
+                    self._travelled = travelled
+                    self._elapsed = t1
+                    self.distance = along
+                    self.speed = speed
+                    self.odometer += distance
+                    coordinate = track.length - along if track.backward else along
+                    start, ax, ay, dx, dy, piece, _, forward, reverse = track.pieces[
+                        track.piece_of[bisect_right(track.along, coordinate)]
+                    ]
+                    fraction = (coordinate - start) / piece if piece > 0 else 0.0
+                    x = self.x = ax + fraction * dx
+                    y = self.y = ay + fraction * dy
+                    heading = self.heading = reverse if leg.progress is Progress.REVERSE else forward
+                    state = _new(
+                        VehicleState, (self.id, leg.segment, leg.traverse, self.progress, along, speed, x, y, heading, self.type)
+                    )
+                    return _new(StepMotion, (plan, (), distance, False, state))
         # Only a plan from outside (not the one this driver returned) can bring new fixed legs.
         if self._profile is not None and not self._till_stop and plan is not self._last_out:
             reach, till_stop = self._reach_in(plan)

@@ -26,7 +26,7 @@ from fleetsim.scenario import Scenario
 from fleetsim.sim.deadlock import wait_for_cycle, wait_for_graph
 from fleetsim.sim.guard import PlannerFault, PlannerGuard
 from fleetsim.sim.result import AlertEvent, DeadlockReport, Ending, Failure, Metrics, RejectionEvent, RunResult, judge
-from fleetsim.sim.trace import Trace, plan_record, vehicle_record
+from fleetsim.sim.trace import Trace, VehicleRecord, plan_record, vehicle_record
 
 __all__ = ["RunProgress", "run_scenario"]
 
@@ -69,10 +69,12 @@ class _Run:
 
     def plan(self, now: float, events: list[list[Any]], plans: list[list[Any]]) -> bool:
         """Step 2; False when the planner failed and the run must end."""
+        consult = self.controller.consultant(self.planner, now)
+        plan_of = self.controller.plan_of
         for vehicle_id in self.controller.tasks.busy_vehicles():
-            before = self.controller.plan_of(vehicle_id)
+            before = plan_of(vehicle_id)
             try:
-                outcome = self.controller.consult(self.planner, vehicle_id, now)
+                outcome = consult(vehicle_id)
             except (PlannerFault, PlannerError) as fault:
                 self._planner_failed(fault, vehicle_id, now, events)
                 return False
@@ -113,22 +115,22 @@ class _Run:
             events.append(["alert", alert.segment, list(alert.primary), list(alert.secondary)])
         return len(fresh)
 
-    def move(self, dt: float, end: float, events: list[list[Any]]) -> list[int]:
+    def move(self, dt: float, end: float, events: list[list[Any]]) -> list[VehicleRecord]:
         """Step 4: every vehicle over the step ending at ``end``; entering a goal leg completes its task.
 
-        Returns the vehicles whose state changed. (The per-vehicle path here runs 10^5 times a
-        simulated minute in a large fleet, so it reads the motion's fields directly.)
+        Returns the trace records of the vehicles whose state changed, by id. (The per-vehicle path here
+        runs 10^5 times a simulated minute in a large fleet, so it reads the motion's fields directly.)
         """
         controller = self.controller
         tasks = controller.tasks
         plan_of = controller.plan_of
         busy = self._busy_set(tasks.busy_vehicles())
         waiting = self.waiting_time
-        changed = []
+        states = []
+        records = []
         for vehicle_id, driver in self.drivers.items():
             plan = plan_of(vehicle_id)
-            motion = driver.step(plan, dt)
-            new_plan, entered, distance, turned, state = motion
+            new_plan, entered, distance, turned, state = driver.step(plan, dt)
             if new_plan is not plan:
                 controller.drive_past(new_plan)
             for leg in entered:
@@ -137,11 +139,13 @@ class _Run:
                     events.append(["complete", leg.goal_for_task])
             if distance > 0.0 or turned or entered:
                 self.last_activity = end
-                controller.set_state(state or driver.moved_state(new_plan))
-                changed.append(vehicle_id)
+                state = state or driver.moved_state(new_plan)
+                states.append(state)
+                records.append(vehicle_record(state))
             elif vehicle_id in busy:
                 waiting[vehicle_id] += dt
-        return changed
+        controller.set_states(states)
+        return records
 
     def _busy_set(self, busy: tuple[int, ...]) -> frozenset[int]:
         if busy is not self._busy[0]:
@@ -204,8 +208,9 @@ def _simulate(
         end = (step + 1) * dt  # times are multiples of dt, never sums of them
         moved = run.move(dt, end, events) if planned_ok else []
         # The trace holds what changed; at step 0 that is everyone (the start), later only who moved.
-        recorded = sorted(run.drivers) if step == 0 else moved
-        run.trace.record(step, [vehicle_record(run.controller.state_of(v)) for v in recorded], plans, events)
+        if step == 0:
+            moved = [vehicle_record(run.controller.state_of(v)) for v in run.drivers]
+        run.trace.record(step, moved, plans, events)
         if not planned_ok:
             ended = "planner-error"
         elif run.controller.tasks.all_done():
