@@ -80,11 +80,26 @@ def build_parser() -> argparse.ArgumentParser:
     _add_layout_options(inspect)
     inspect.set_defaults(run=commands.inspect)
 
-    render = sub.add_parser("render", help="draw a map as SVG", description=commands.render.__doc__)
-    render.add_argument("map", metavar="MAP", help="a Tiled map (.json, .tmj or .tmx)")
+    render = sub.add_parser(
+        "render",
+        help="draw a map, or one step of a recorded run, as SVG",
+        description=commands.render.__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    render.add_argument("map", nargs="?", metavar="MAP", help="a Tiled map (.json, .tmj or .tmx); leave out with --trace")
     render.add_argument("-o", "--output", required=True, metavar="OUT.svg", help="where to write the picture")
     render.add_argument(
         "--highlight", type=int, metavar="ID", help="draw this segment yellow, its successors green, its conflicts grey"
+    )
+    render.add_argument(
+        "--trace", metavar="PATH", help="draw a step of a recorded run: its artifact folder or its trace.jsonl"
+    )
+    render.add_argument(
+        "--step", type=int, metavar="N", help="with --trace: the step to draw (default: the first failure's, else the last)"
+    )
+    render.add_argument(
+        "--suite", metavar="SUITE::SCENARIO",
+        help="with --trace: the scenario the run was of (default: the suite and scenario named in result.json)",
     )
     _add_layout_options(render)
     render.set_defaults(run=commands.render)

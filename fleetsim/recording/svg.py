@@ -8,6 +8,7 @@ other) in grey.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
 from xml.sax.saxutils import escape
 
@@ -26,19 +27,27 @@ _CONFLICT = "#9a9a9a"
 
 @dataclass(frozen=True, slots=True)
 class _Frame:
-    """World metres (y up) to SVG user units (y down), with a margin around the layout."""
+    """World metres (y up) to SVG user units (y down), with a margin around the layout.
+
+    ``top`` user units are left free above the layout (for a caption).
+    """
 
     min_x: float
     max_y: float
     scale: float
     width: float
     height: float
+    top: float = 0.0
 
     def point(self, p: Point) -> tuple[float, float]:
-        return (p[0] - self.min_x) * self.scale, (self.max_y - p[1]) * self.scale
+        return (p[0] - self.min_x) * self.scale, (self.max_y - p[1]) * self.scale + self.top
+
+    def points(self, points: Iterable[Point]) -> str:
+        """An SVG ``points`` attribute value."""
+        return " ".join(f"{x:.2f},{y:.2f}" for x, y in map(self.point, points))
 
 
-def _frame(layout: Layout, margin: float, pixels_per_metre: float) -> _Frame:
+def _frame(layout: Layout, margin: float, pixels_per_metre: float, top: float = 0.0) -> _Frame:
     xs = [x for seg in layout.segments.values() for x, _ in seg.waypoints]
     ys = [y for seg in layout.segments.values() for _, y in seg.waypoints]
     min_x, max_x = min(xs) - margin, max(xs) + margin
@@ -48,7 +57,24 @@ def _frame(layout: Layout, margin: float, pixels_per_metre: float) -> _Frame:
         max_y=max_y,
         scale=pixels_per_metre,
         width=(max_x - min_x) * pixels_per_metre,
-        height=(max_y - min_y) * pixels_per_metre,
+        height=(max_y - min_y) * pixels_per_metre + top,
+        top=top,
+    )
+
+
+def _document(frame: _Frame, title: str, body: Iterable[str]) -> str:
+    """A standalone SVG document of ``frame``'s size on a white background; ``title`` is escaped."""
+    return "\n".join(
+        [
+            '<?xml version="1.0" encoding="UTF-8"?>',
+            f'<svg xmlns="http://www.w3.org/2000/svg" width="{frame.width:.0f}" height="{frame.height:.0f}" '
+            f'viewBox="0 0 {frame.width:.2f} {frame.height:.2f}">',
+            f"<title>{escape(title)}</title>",
+            '<rect width="100%" height="100%" fill="white"/>',
+            *body,
+            "</svg>",
+            "",
+        ]
     )
 
 
@@ -66,22 +92,23 @@ def _point_at(segment: Segment, fraction: float) -> tuple[Point, float]:
     return b, math.atan2(b[1] - a[1], b[0] - a[0])
 
 
-def _arrow(frame: _Frame, tip: Point, heading: float, size: float, colour: str) -> str:
-    """A filled triangle pointing along ``heading`` (world radians) with its tip at ``tip``."""
+def _arrow(frame: _Frame, tip: Point, heading: float, size: float, colour: str, attributes: str = "") -> str:
+    """A filled triangle pointing along ``heading`` (world radians) with its tip at ``tip``.
+
+    ``attributes`` are put into the element as they are (a class, an opacity).
+    """
     back = heading + math.pi
     corners = [
         tip,
         (tip[0] + size * math.cos(back + 0.45), tip[1] + size * math.sin(back + 0.45)),
         (tip[0] + size * math.cos(back - 0.45), tip[1] + size * math.sin(back - 0.45)),
     ]
-    points = " ".join(f"{x:.2f},{y:.2f}" for x, y in map(frame.point, corners))
-    return f'<polygon points="{points}" fill="{colour}"/>'
+    return f'<polygon {attributes + " " if attributes else ""}points="{frame.points(corners)}" fill="{colour}"/>'
 
 
 def _segment_svg(frame: _Frame, segment: Segment, colour: str, width: float, arrow: float) -> list[str]:
-    points = " ".join(f"{x:.2f},{y:.2f}" for x, y in map(frame.point, segment.waypoints))
     parts = [
-        f'<polyline class="segment" data-segment="{segment.id}" points="{points}" fill="none" '
+        f'<polyline class="segment" data-segment="{segment.id}" points="{frame.points(segment.waypoints)}" fill="none" '
         f'stroke="{colour}" stroke-width="{width:.2f}" stroke-linecap="round" stroke-linejoin="round"/>'
     ]
     # One arrow per allowed traverse, placed a little either side of the middle so both show.
@@ -155,16 +182,4 @@ def render_layout_svg(layout: Layout, *, highlight: int | None = None, pixels_pe
         body.append('<g font-family="sans-serif" fill="#111">')
         body.extend(_legend(frame, font * 0.6, highlight))
         body.append("</g>")
-    source = escape(str(layout.source)) if layout.source is not None else "layout"
-    return "\n".join(
-        [
-            '<?xml version="1.0" encoding="UTF-8"?>',
-            f'<svg xmlns="http://www.w3.org/2000/svg" width="{frame.width:.0f}" height="{frame.height:.0f}" '
-            f'viewBox="0 0 {frame.width:.2f} {frame.height:.2f}">',
-            f"<title>{source}</title>",
-            '<rect width="100%" height="100%" fill="white"/>',
-            *body,
-            "</svg>",
-            "",
-        ]
-    )
+    return _document(frame, str(layout.source) if layout.source is not None else "layout", body)

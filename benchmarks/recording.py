@@ -1,0 +1,74 @@
+"""What recording a run as MCAP costs: time over an unrecorded run, and file size.
+
+    python benchmarks/recording.py [--vehicles 100] [--seconds 60] [--every 1] [--repeat 3] [--seed 1]
+
+Target (issue): on the 100-vehicle benchmark (generated warehouse, ReservingPlanner, 60 s simulated),
+recording adds at most 30 % to the wall time of an unrecorded run. The recorded run keeps its trace (the
+recording is drawn from it) and then writes the MCAP; the unrecorded run keeps no trace, as a CI run
+without artifacts does. Each figure is the best of ``--repeat`` runs (this machine's timing is noisy).
+Also printed: the file size per 1000 vehicle-seconds (vehicles x simulated seconds).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).parent))
+
+from warehouse import write_fleet_scenario  # noqa: E402
+
+from fleetsim.load.scenario import load_scenario_dir  # noqa: E402
+from fleetsim.planners import ReservingPlanner  # noqa: E402
+from fleetsim.recording.recorder import record_mcap  # noqa: E402
+from fleetsim.scenario import ScenarioSettings  # noqa: E402
+from fleetsim.sim.loop import run_scenario  # noqa: E402
+
+TARGET_OVERHEAD = 0.30
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--vehicles", type=int, default=100)
+    parser.add_argument("--seconds", type=float, default=60.0)
+    parser.add_argument("--every", type=int, default=1, help="record every N-th step")
+    parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--seed", type=int, default=1)
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        write_fleet_scenario(folder / "scenario", args.vehicles, seed=args.seed)
+        settings = ScenarioSettings(time_limit=args.seconds, stop_on=())
+        scenario = load_scenario_dir(folder / "scenario", settings=settings)
+        plain, recorded, writing = [], [], []
+        size = messages = 0
+        for _ in range(args.repeat):
+            started = time.perf_counter()
+            result = run_scenario(scenario, ReservingPlanner(), keep_trace=False)
+            plain.append(time.perf_counter() - started)
+            started = time.perf_counter()
+            result = run_scenario(scenario, ReservingPlanner(), keep_trace=True)
+            assert result.trace is not None
+            written = time.perf_counter()
+            recording = record_mcap(folder / "run.mcap", scenario, result.trace.lines, every=args.every)
+            finished = time.perf_counter()
+            recorded.append(finished - started)
+            writing.append(finished - written)
+            size, messages = recording.size, recording.messages
+        base, total = min(plain), min(recorded)
+        overhead = total / base - 1.0
+        vehicle_seconds = args.vehicles * result.sim_time
+        print(f"{args.vehicles} vehicles, ReservingPlanner, {result.sim_time:.0f} s simulated, every {args.every} step(s)")
+        print(f"  unrecorded run        {base:7.3f} s")
+        print(f"  recorded run          {total:7.3f} s  (writing the MCAP {min(writing):.3f} s)")
+        print(f"  overhead              {overhead:7.1%}  [target <= {TARGET_OVERHEAD:.0%}]")
+        print(f"  file                  {size / 1e6:7.2f} MB, {messages} messages")
+        print(f"  per 1000 vehicle-s    {size / vehicle_seconds * 1000 / 1e6:7.2f} MB")
+        return 0 if overhead <= TARGET_OVERHEAD else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

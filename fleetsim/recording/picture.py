@@ -1,0 +1,198 @@
+"""A still SVG picture of one moment of a run (SPEC §11 ★): map, plans, vehicles, alerts, caption.
+
+A reviewer of a failed CI run should see at a glance what went wrong without installing RViz: the
+failure picture is the frame (from :mod:`fleetsim.recording.replay`) of the step where the first
+failure happened, with the segments of the collision alerts in force in orange, every vehicle's plan
+in its colour (fixed legs thick, planned legs dashed) and the failure as the caption. The drawing is
+deterministic (fixed order, fixed number formats), so pictures of the same run are byte-identical.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import replace
+from xml.sax.saxutils import escape
+
+from fleetsim.enums import Traverse
+from fleetsim.layout.segment import Point
+from fleetsim.recording.colours import svg_colour, vehicle_colours
+from fleetsim.recording.replay import Frame, Pose, frame_at
+from fleetsim.recording.svg import _arrow, _document, _Frame, _frame, _label_svg, _point_at, _segment_svg
+from fleetsim.scenario import Scenario, Vehicle
+from fleetsim.sim.result import Failure, RunResult
+
+__all__ = ["failure_caption", "failure_picture", "failure_step", "render_frame_svg"]
+
+_MAP = "#a8a8a8"
+_ALERT = "#ff8c00"
+_INK = "#111111"
+_LEGEND = "thick: fixed legs \u00b7 dashed: planned legs \u00b7 orange: segments with a collision alert"
+# Failures stamped with the start of the step they happened in (the loop's ``now``); the others carry
+# the end of a step (deadlock, time limit, expectations).
+_AT_STEP_START = frozenset({"rejection", "collision", "planner-error"})
+
+
+def render_frame_svg(scenario: Scenario, frame: Frame, *, caption: str, pixels_per_metre: float = 40.0) -> str:
+    """Draw ``frame`` of a run of ``scenario`` as an SVG document with ``caption`` on top."""
+    font = 0.4 * pixels_per_metre
+    caption_line = " ".join(caption.split())  # one line: a newline would run off the picture
+    view = _frame(scenario.layout, margin=1.5, pixels_per_metre=pixels_per_metre, top=3.2 * font)
+    # Wide enough for the caption even on a small map (about 0.6 em per character of sans-serif).
+    needed = 2 * font + 0.6 * font * max(len(caption_line), len(_LEGEND) * 0.7)
+    view = replace(view, width=max(view.width, needed))
+    colours = {vid: svg_colour(rgba) for vid, rgba in vehicle_colours(scenario).items()}
+    body = [
+        *_alerts_svg(scenario, frame, view),
+        *_map_svg(scenario, view),
+        *_plans_svg(scenario, frame, view, colours),
+        *_labels_svg(scenario, view),
+        *_vehicles_svg(scenario, frame, view, colours, font * 0.8),
+        '<g class="caption" font-family="sans-serif">',
+        f'<text class="caption-text" x="{font:.1f}" y="{1.4 * font:.1f}" font-size="{font:.1f}" fill="{_INK}">'
+        f"{escape(caption_line)}</text>",
+        f'<text class="legend" x="{font:.1f}" y="{2.6 * font:.1f}" font-size="{0.7 * font:.1f}" fill="#555555">'
+        f"{escape(_LEGEND)}</text>",
+        "</g>",
+    ]
+    return _document(view, f"{scenario.name}: step {frame.step}", body)
+
+
+def _alerts_svg(scenario: Scenario, frame: Frame, view: _Frame) -> list[str]:
+    """Orange bands under the map for every segment that carries an alert in force."""
+    parts = ['<g class="alerts">']
+    for sid in sorted({alert.segment for alert in frame.alerts}):
+        parts.append(
+            f'<polyline class="alert" data-segment="{sid}" points="{view.points(scenario.layout.segments[sid].waypoints)}" '
+            f'fill="none" stroke="{_ALERT}" stroke-opacity="0.85" stroke-width="{0.5 * view.scale:.2f}" '
+            'stroke-linecap="round" stroke-linejoin="round"/>'
+        )
+    parts.append("</g>")
+    return parts
+
+
+def _map_svg(scenario: Scenario, view: _Frame) -> list[str]:
+    layout = scenario.layout
+    parts = ['<g class="map">']
+    for sid in sorted(layout.segments):
+        parts.extend(_segment_svg(view, layout.segments[sid], _MAP, 0.05 * view.scale, arrow=0.25))
+    parts.append("</g>")
+    return parts
+
+
+def _labels_svg(scenario: Scenario, view: _Frame) -> list[str]:
+    """Segment ids, drawn over the plans so an alert's segment can be read off the picture."""
+    layout = scenario.layout
+    return [
+        '<g class="segment-labels" font-family="sans-serif" fill="#555555">',
+        *(_label_svg(view, layout.segments[sid], 0.3 * view.scale) for sid in sorted(layout.segments)),
+        "</g>",
+    ]
+
+
+def _plans_svg(scenario: Scenario, frame: Frame, view: _Frame, colours: dict[int, tuple[str, float]]) -> list[str]:
+    """Each vehicle's plan in its colour: fixed legs thick, planned legs thin and dashed."""
+    layout = scenario.layout
+    thick, thin = 0.2 * view.scale, 0.07 * view.scale
+    parts: list[str] = []
+    for vid in sorted(frame.plans):
+        colour, opacity = colours[vid]
+        parts.append(f'<g class="plan" data-vehicle="{vid}" stroke="{colour}" stroke-opacity="{opacity:.3f}" fill="none">')
+        for index, leg in enumerate(frame.plans[vid].legs):
+            segment = layout.segments[leg.segment]
+            kind = "fixed" if leg.fixed else "planned"
+            style = f'stroke-width="{thick:.2f}"' if leg.fixed else f'stroke-width="{thin:.2f}" stroke-dasharray="{3 * thin:.2f} {2 * thin:.2f}"'
+            parts.append(
+                f'<polyline class="leg {kind}" data-segment="{leg.segment}" data-leg="{index}" '
+                f'points="{view.points(segment.waypoints)}" {style} stroke-linecap="round" stroke-linejoin="round"/>'
+            )
+            # The traverse: an arrow in the middle of the leg, pointing the way the vehicle will drive.
+            tip, heading = _point_at(segment, 0.5)
+            if leg.traverse is Traverse.BACKWARD:
+                heading += math.pi
+            parts.append(_arrow(view, tip, heading, 0.3, colour, f'class="leg-arrow" fill-opacity="{opacity:.3f}"'))
+        parts.append("</g>")
+    return parts
+
+
+def _vehicles_svg(
+    scenario: Scenario, frame: Frame, view: _Frame, colours: dict[int, tuple[str, float]], font: float
+) -> list[str]:
+    """Rotated rectangles (length along the heading) with a white triangle at the nose and the id."""
+    parts = ['<g class="vehicles" font-family="sans-serif">']
+    for vehicle in sorted(scenario.vehicles, key=lambda v: v.id):
+        pose = frame.poses[vehicle.id]
+        colour, opacity = colours[vehicle.id]
+        body, nose = _vehicle_outline(vehicle, pose)
+        # The id beside the vehicle, on its left: never on the path ahead or behind it.
+        side = 0.5 * vehicle.type.width + 0.9 * font / view.scale
+        label_x, label_y = view.point((pose.x - side * math.sin(pose.heading), pose.y + side * math.cos(pose.heading)))
+        parts += [
+            f'<g class="vehicle" data-vehicle="{vehicle.id}" data-segment="{pose.segment}">',
+            f'<polygon class="vehicle-body" points="{view.points(body)}" fill="{colour}" fill-opacity="{opacity:.3f}" '
+            f'stroke="{_INK}" stroke-width="{0.03 * view.scale:.2f}"/>',
+            f'<polygon class="vehicle-nose" points="{view.points(nose)}" fill="#ffffff"/>',
+            f'<text class="vehicle-label" x="{label_x:.2f}" y="{label_y:.2f}" font-size="{font:.1f}" '
+            f'font-weight="bold" text-anchor="middle" dominant-baseline="middle" fill="{_INK}" stroke="#ffffff" stroke-width="{0.25 * font:.2f}" '
+            f'paint-order="stroke">{vehicle.id}</text>',
+            "</g>",
+        ]
+    parts.append("</g>")
+    return parts
+
+
+def _vehicle_outline(vehicle: Vehicle, pose: Pose) -> tuple[list[Point], list[Point]]:
+    """The body's corners and the nose triangle's, in world metres, for ``pose``."""
+    half_length, half_width = 0.5 * vehicle.type.length, 0.5 * vehicle.type.width
+    ax, ay = math.cos(pose.heading), math.sin(pose.heading)  # along the nose
+    nx, ny = -ay, ax  # to the vehicle's left
+
+    def at(along: float, left: float) -> Point:
+        return (pose.x + along * ax + left * nx, pose.y + along * ay + left * ny)
+
+    body = [at(half_length, half_width), at(-half_length, half_width), at(-half_length, -half_width), at(half_length, -half_width)]
+    depth = min(0.6 * half_length, 1.2 * half_width)
+    nose = [at(half_length, 0.0), at(half_length - depth, 0.7 * half_width), at(half_length - depth, -0.7 * half_width)]
+    return body, nose
+
+
+# -- the moment of failure ------------------------------------------------------------------------
+
+
+def _step_of(failure: Failure, time_step: float, last_step: int) -> int:
+    ticks = round(failure.time / time_step)
+    step = ticks if failure.kind in _AT_STEP_START else ticks - 1
+    return min(max(step, 0), last_step)
+
+
+def failure_step(failures: Sequence[Failure], time_step: float, last_step: int) -> tuple[int, Failure] | None:
+    """The step (0..``last_step``) of the earliest failure and that failure; None without failures.
+
+    Rejections, collision alerts and planner errors carry the time the step started (the reservation
+    check runs before motion), so they belong to step ``time / time_step``; every other failure carries
+    the time a step ended, so it belongs to the step before. Ties go to the failure listed first.
+    """
+    found = [(_step_of(failure, time_step, last_step), index) for index, failure in enumerate(failures)]
+    if not found:
+        return None
+    step, index = min(found)
+    return step, failures[index]
+
+
+def failure_caption(failure: Failure) -> str:
+    """``t = 12.30 s — collision: <first line of the message>``."""
+    first_line = failure.message.splitlines()[0] if failure.message else ""
+    return f"t = {failure.time:.2f} s \u2014 {failure.kind}: {first_line}"
+
+
+def failure_picture(scenario: Scenario, result: RunResult) -> tuple[int, str] | None:
+    """The step of ``result``'s first failure and its picture; None for a passed run or no kept trace."""
+    if result.passed or result.trace is None or len(result.trace.lines) < 2:
+        return None
+    lines = result.trace.lines
+    found = failure_step(result.failures, scenario.settings.time_step, last_step=len(lines) - 2)
+    if found is None:
+        return None
+    step, failure = found
+    frame = frame_at(scenario, lines, step)
+    return step, render_frame_svg(scenario, frame, caption=failure_caption(failure))

@@ -1,0 +1,321 @@
+"""Recording a run as one MCAP file that RViz 2 (through ``ros2 bag play``) and Foxglove replay (SPEC §11).
+
+The recording is drawn from the run's trace (:mod:`fleetsim.recording.replay`), so it shows exactly what
+the hashed trace says happened and costs nothing while the simulation runs. The file follows the ros2
+profile: CDR messages, ``ros2msg`` schemas named ``pkg/msg/Type``, zstd chunks, a statistics record, and
+on every channel the ``offered_qos_profiles`` metadata in the integer YAML form that rosbag2 on Humble
+and Jazzy both parse (without it nothing latches on playback). Every message's log time equals its
+header stamp and the ``/clock`` value of its step: never 0, never decreasing.
+
+Topics:
+
+- ``/clock``; ``/tf`` (map → ``vehicle_<id>`` every recorded step); ``/tf_static`` (map → ``fleet``).
+- ``/robot_description``: one URDF for the fleet — root link ``fleet``, one link per vehicle (box body,
+  cylinder rear bumper showing the heading, in the vehicle's colour) joined to it by a floating joint
+  (RViz draws nothing for a URDF with several roots).
+- ``/fleetsim/map``: the segments (LINE_LIST); ``/fleetsim/labels``: vehicle ids, locked to their frames.
+- ``/fleetsim/plans``: each vehicle's plan in its colour, fixed legs thick, planned legs thin.
+- ``/fleetsim/alerts``: segments of the collision alerts in force, orange, with the alert text.
+- ``/fleetsim/sim_time``: a text marker with the simulated time.
+- ``/rosout``: rejections, route errors and alerts (warnings), planner errors (errors), completed tasks.
+
+The file is written under a temporary name and renamed when complete, so an interrupted recording never
+leaves a half-written file where a reviewer looks.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+from xml.sax.saxutils import quoteattr
+
+from mcap.writer import CompressionType, Writer
+
+from fleetsim import __version__
+from fleetsim.enums import Traverse
+from fleetsim.planning.protocol import FleetPlan
+from fleetsim.planning.reservations import CollisionAlert
+from fleetsim.recording import messages as m
+from fleetsim.recording.colours import vehicle_colours
+from fleetsim.recording.replay import Frame, replay
+from fleetsim.scenario import Scenario
+
+__all__ = ["QOS_TRANSIENT_LOCAL", "QOS_VOLATILE", "TOPICS", "Recording", "fleet_urdf", "record_mcap"]
+
+
+def _qos(durability: int, depth: int) -> str:
+    # rmw enums as integers: history 1 keep_last, reliability 1 reliable, durability 1 transient_local /
+    # 2 volatile, liveliness 1 automatic; zero durations mean "default" (no deadline, no lifespan).
+    return (
+        f"- history: 1\n  depth: {depth}\n  reliability: 1\n  durability: {durability}\n"
+        "  deadline:\n    sec: 0\n    nsec: 0\n  lifespan:\n    sec: 0\n    nsec: 0\n"
+        "  liveliness: 1\n  liveliness_lease_duration:\n    sec: 0\n    nsec: 0\n"
+        "  avoid_ros_namespace_conventions: false\n"
+    )
+
+
+QOS_TRANSIENT_LOCAL = _qos(1, 1)
+QOS_VOLATILE = _qos(2, 10)
+
+_ARRAY = "visualization_msgs/msg/MarkerArray"
+# topic -> (message type, latched)
+TOPICS: dict[str, tuple[str, bool]] = {
+    "/clock": ("rosgraph_msgs/msg/Clock", False),
+    "/robot_description": ("std_msgs/msg/String", True),
+    "/tf_static": ("tf2_msgs/msg/TFMessage", True),
+    "/tf": ("tf2_msgs/msg/TFMessage", False),
+    "/fleetsim/map": (_ARRAY, True),
+    "/fleetsim/labels": (_ARRAY, True),
+    "/fleetsim/plans": (_ARRAY, False),
+    "/fleetsim/alerts": (_ARRAY, False),
+    "/fleetsim/sim_time": (_ARRAY, False),
+    "/rosout": ("rcl_interfaces/msg/Log", False),
+}
+
+_MAP_GREY = (0.55, 0.58, 0.65, 1.0)
+_ORANGE = (1.0, 0.55, 0.0, 1.0)
+_WHITE = (1.0, 1.0, 1.0, 1.0)
+_FIXED_WIDTH, _PLANNED_WIDTH, _MAP_WIDTH, _ALERT_WIDTH = 0.18, 0.06, 0.05, 0.35
+_INFO, _WARN, _ERROR = 20, 30, 40
+
+
+@dataclass(frozen=True, slots=True)
+class Recording:
+    """What a recording wrote."""
+
+    path: Path
+    messages: int
+    frames: int  # steps recorded
+    size: int  # bytes
+
+
+def _frame_name(vehicle_id: int) -> str:
+    return f"vehicle_{vehicle_id}"
+
+
+def fleet_urdf(scenario: Scenario) -> str:
+    """One robot for the whole fleet: root link ``fleet``, one floating-jointed link per vehicle."""
+    colours = vehicle_colours(scenario)
+    parts = ['<?xml version="1.0"?>', f"<robot name={quoteattr('fleetsim_' + scenario.name)}>", '  <link name="fleet"/>']
+    for vehicle in sorted(scenario.vehicles, key=lambda v: v.id):
+        kind = vehicle.type
+        name = _frame_name(vehicle.id)
+        rgba = " ".join(f"{c:.3f}" for c in colours[vehicle.id])
+        bumper = min(kind.width, kind.length) / 4.0
+        parts += [
+            f'  <link name="{name}">',
+            f'    <visual name="body"><origin xyz="0 0 {kind.height / 2:.4f}"/>'
+            f'<geometry><box size="{kind.length:.4f} {kind.width:.4f} {kind.height:.4f}"/></geometry>'
+            f'<material name="{name}_colour"><color rgba="{rgba}"/></material></visual>',
+            f'    <visual name="rear_bumper"><origin xyz="{-kind.length / 2:.4f} 0 {kind.height / 2:.4f}"/>'
+            f'<geometry><cylinder radius="{bumper:.4f}" length="{kind.height:.4f}"/></geometry>'
+            f'<material name="{name}_colour"><color rgba="{rgba}"/></material></visual>',
+            "  </link>",
+            f'  <joint name="{name}_joint" type="floating"><parent link="fleet"/><child link="{name}"/></joint>',
+        ]
+    parts.append("</robot>")
+    return "\n".join(parts) + "\n"
+
+
+class _Bag:
+    """The MCAP writer with the ros2 channels registered and per-channel sequence numbers."""
+
+    def __init__(self, stream: Any) -> None:
+        self.writer = Writer(stream, compression=CompressionType.ZSTD)
+        self.writer.start(profile="ros2", library=f"fleetsim {__version__}")
+        self.channels: dict[str, int] = {}
+        self.sequence: dict[str, int] = {}
+        self.count = 0
+        schemas: dict[str, int] = {}
+        for topic, (typename, latched) in TOPICS.items():
+            if typename not in schemas:
+                schemas[typename] = self.writer.register_schema(typename, "ros2msg", m.schema_text(typename))
+            qos = QOS_TRANSIENT_LOCAL if latched else QOS_VOLATILE
+            self.channels[topic] = self.writer.register_channel(topic, "cdr", schemas[typename], {"offered_qos_profiles": qos})
+            self.sequence[topic] = 0
+
+    def write(self, topic: str, time_ns: int, message: Any) -> None:
+        self.write_bytes(topic, time_ns, m.serialise(message))
+
+    def write_bytes(self, topic: str, time_ns: int, data: bytes) -> None:
+        self.sequence[topic] += 1
+        self.writer.add_message(self.channels[topic], time_ns, data, time_ns, self.sequence[topic])
+        self.count += 1
+
+
+class _Scene:
+    """Marker content of one scenario: geometry computed once, plans sent for the vehicles they changed."""
+
+    def __init__(self, scenario: Scenario) -> None:
+        self.scenario = scenario
+        self.colours = vehicle_colours(scenario)
+        self.ids = tuple(sorted(v.id for v in scenario.vehicles))
+        self.transforms = m.FleetTransforms("map", [_frame_name(vehicle_id) for vehicle_id in self.ids])
+        layout = scenario.layout
+        xs = [x for segment in layout.segments.values() for x, _ in segment.waypoints]
+        ys = [y for segment in layout.segments.values() for _, y in segment.waypoints]
+        self.top_left = (min(xs), max(ys) + 1.0)
+        self.letter = max(0.3, 0.02 * max(max(xs) - min(xs), max(ys) - min(ys)))
+        self._points: dict[tuple[int, float], list[Any]] = {}
+        self._shown: dict[int, FleetPlan] = {}  # the plan each vehicle's markers show
+        self._sent: dict[tuple[str, int], tuple[tuple[int, Traverse], ...]] = {}  # (namespace, vehicle) -> legs drawn
+        self._paths: dict[tuple[int, Traverse, float], list[Any]] = {}
+
+    def points(self, segments: Iterable[int], z: float) -> list[Any]:
+        """LINE_LIST points of ``segments`` at height ``z`` (each segment's made once)."""
+        pairs: list[Any] = []
+        for segment in segments:
+            cached = self._points.get((segment, z))
+            if cached is None:
+                cached = self._points[(segment, z)] = m.points(self.scenario.layout.segments[segment].waypoints, z)
+            pairs += cached
+        return pairs
+
+    def path(self, legs: Iterable[tuple[int, Traverse]], z: float) -> list[Any]:
+        """LINE_STRIP points along consecutive legs in driving order (each joint once)."""
+        path: list[Any] = []
+        for segment, traverse in legs:
+            cached = self._paths.get((segment, traverse, z))
+            if cached is None:
+                waypoints = self.scenario.layout.segments[segment].waypoints
+                ordered = waypoints if traverse is Traverse.FORWARD else waypoints[::-1]
+                cached = self._paths[(segment, traverse, z)] = m.path_points(ordered, z)
+            path += cached[1:] if path else cached
+        return path
+
+    def map_markers(self, time: m.Stamp) -> Any:
+        pairs = self.points(sorted(self.scenario.layout.segments), 0.0)
+        return m.marker_array([m.line_list(time, "segments", 0, pairs, _MAP_WIDTH, _MAP_GREY)])
+
+    def labels(self, time: m.Stamp) -> Any:
+        markers = []
+        for vehicle in sorted(self.scenario.vehicles, key=lambda v: v.id):
+            at = (0.0, 0.0, vehicle.type.height + 0.4)
+            size = max(0.25, 0.6 * vehicle.type.width)
+            markers.append(m.text_marker(time, _frame_name(vehicle.id), "labels", vehicle.id, str(vehicle.id), at, size, _WHITE, True))
+        return m.marker_array(markers)
+
+    def plans(self, time: m.Stamp, plans: Mapping[int, FleetPlan]) -> Any | None:
+        """Markers for the plans that changed since the last call (``None``: none did).
+
+        Each vehicle has two markers, its fixed legs and its planned legs; only a marker whose segments
+        changed is sent again (passing a leg changes the fixed ones only), an emptied one is deleted.
+        """
+        markers = [] if self._shown else [m.delete_all(time, "")]
+        for vehicle_id in self.ids:
+            plan = plans[vehicle_id]
+            if self._shown.get(vehicle_id) is plan:
+                continue
+            self._shown[vehicle_id] = plan
+            for namespace, fixed, width in (("fixed", True, _FIXED_WIDTH), ("planned", False, _PLANNED_WIDTH)):
+                legs = tuple((leg.segment, leg.traverse) for leg in plan.legs if leg.fixed is fixed)
+                key = (namespace, vehicle_id)
+                if self._sent.get(key, ()) == legs:
+                    continue
+                self._sent[key] = legs
+                if legs:
+                    path = self.path(legs, 0.02)
+                    markers.append(m.line_strip(time, namespace, vehicle_id, path, width, self.colours[vehicle_id]))
+                else:
+                    markers.append(m.delete(time, namespace, vehicle_id))
+        return m.marker_array(markers) if markers else None
+
+    def alerts(self, time: m.Stamp, alerts: Sequence[CollisionAlert]) -> Any:
+        markers = [m.delete_all(time, "")]
+        for number, alert in enumerate(alerts):
+            waypoints = self.scenario.layout.segments[alert.segment].waypoints
+            markers.append(m.line_list(time, "alert_segments", number, self.points([alert.segment], 0.05), _ALERT_WIDTH, _ORANGE))
+            x, y = waypoints[len(waypoints) // 2]
+            markers.append(m.text_marker(time, "map", "alert_text", number, f"COLLISION ALERT: {alert}", (x, y, 1.0), self.letter, _ORANGE))
+        return m.marker_array(markers)
+
+    def sim_time(self, time: m.Stamp, seconds: float) -> Any:
+        x, y = self.top_left
+        return m.marker_array([m.text_marker(time, "map", "sim_time", 0, f"t = {seconds:.2f} s", (x, y, 0.0), self.letter, _WHITE)])
+
+
+def _log_lines(event: Sequence[Any]) -> tuple[int, str] | None:
+    kind = event[0]
+    if kind == "complete":
+        return _INFO, f"task {event[1]} completed"
+    if kind == "reject":
+        return _WARN, f"plan rejected: {event[1]} (vehicle {event[2]}, leg {event[3]})"
+    if kind == "route-error":
+        return _WARN, f"route error for vehicle {event[1]}: {event[2]}"
+    if kind == "alert":
+        alert = CollisionAlert(event[1], tuple(event[2]), tuple(event[3]))
+        return _WARN, alert.text()
+    if kind == "planner-error":
+        return _ERROR, f"planner error for vehicle {event[1]}"
+    return None
+
+
+def _write_frames(bag: _Bag, scenario: Scenario, frames: Iterable[Frame], every: int) -> int:
+    scene = _Scene(scenario)
+    recorded = 0
+    shown_alerts: tuple[CollisionAlert, ...] | None = None
+    pending: Frame | None = None
+    started = False
+    for frame in frames:
+        due = frame.step % every == 0 or frame.plans_changed or bool(frame.events) or frame.alerts != shown_alerts
+        pending = None if due else frame
+        if not due:
+            continue
+        _write_frame(bag, scene, frame, first=not started, alerts_changed=frame.alerts != shown_alerts)
+        started = True
+        shown_alerts = frame.alerts
+        recorded += 1
+    if pending is not None:  # the last step is always shown
+        _write_frame(bag, scene, pending, first=not started, alerts_changed=False)
+        recorded += 1
+    return recorded
+
+
+def _write_frame(bag: _Bag, scene: _Scene, frame: Frame, *, first: bool, alerts_changed: bool) -> None:
+    time_ns = round(frame.time * 1e9)
+    time = m.stamp(time_ns)
+    bag.write("/clock", time_ns, m.clock(time))
+    if first:
+        bag.write("/robot_description", time_ns, m.string(fleet_urdf(scene.scenario)))
+        bag.write("/tf_static", time_ns, m.tf_message([m.transform(time, "map", "fleet", 0.0, 0.0, 0.0)]))
+        bag.write("/fleetsim/map", time_ns, scene.map_markers(time))
+        bag.write("/fleetsim/labels", time_ns, scene.labels(time))
+    poses = frame.poses
+    bag.write_bytes("/tf", time_ns, scene.transforms.serialise(time_ns, [(p.x, p.y, p.heading) for p in map(poses.__getitem__, scene.ids)]))
+    if first or frame.plans_changed:
+        plans = scene.plans(time, frame.plans)
+        if plans is not None:
+            bag.write("/fleetsim/plans", time_ns, plans)
+    if first or alerts_changed:
+        bag.write("/fleetsim/alerts", time_ns, scene.alerts(time, frame.alerts))
+    bag.write("/fleetsim/sim_time", time_ns, scene.sim_time(time, frame.time))
+    for event in frame.events:
+        line = _log_lines(event)
+        if line is not None:
+            bag.write("/rosout", time_ns, m.log(time, line[0], line[1]))
+
+
+def record_mcap(path: Path, scenario: Scenario, trace_lines: Sequence[str], *, every: int = 1) -> Recording:
+    """Write the run of ``scenario`` whose trace is ``trace_lines`` to ``path`` (``.mcap``).
+
+    ``every``: record every N-th step (steps with new plans, alerts or events, and the last, always).
+    """
+    if every < 1:
+        msg = f"every={every!r} must be a whole number of steps >= 1"
+        raise ValueError(msg)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    partial = path.with_name(f".{path.name}.partial")
+    try:
+        with partial.open("wb") as stream:
+            bag = _Bag(stream)
+            frames = _write_frames(bag, scenario, replay(scenario, trace_lines), every)
+            bag.writer.finish()
+        os.replace(partial, path)
+    finally:
+        with contextlib.suppress(FileNotFoundError):
+            partial.unlink()
+    return Recording(path, bag.count, frames, path.stat().st_size)
