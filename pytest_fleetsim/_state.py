@@ -31,6 +31,7 @@ from fleetsim.gating.verify import run_checked
 from fleetsim.load.scenario import load_scenario
 from fleetsim.load.suite import load_suite
 from fleetsim.recording.artifacts import artifact_folder, write_run_artifacts
+from fleetsim.scenario import Scenario
 from fleetsim.sim.planner_spec import PlannerFactory, PlannerSpecError, load_planner_factory
 from fleetsim.sim.report import failure_report, format_table, summary_cells
 from fleetsim.sim.result import RunResult
@@ -69,6 +70,7 @@ class FleetsimState:
     update_hashes: bool
     artifacts: Path
     record: RecordMode
+    record_every: int
     timeout: float | None
     metrics_json: Path | None
     baseline: dict[str, ScenarioMetrics] | None
@@ -107,12 +109,15 @@ class FleetsimState:
             except FleetsimError as error:
                 raise pytest.UsageError(f"--fleetsim-compare: {error}") from None
         timeout = float(option.fleetsim_planner_timeout or config.getini("fleetsim_planner_timeout") or 0)
+        if option.fleetsim_record_every < 1:
+            raise pytest.UsageError(f"--fleetsim-record-every={option.fleetsim_record_every} must be a whole number of steps >= 1")
         return cls(
             config=config,
             planner=planner,
             update_hashes=bool(option.fleetsim_update_hashes),
             artifacts=_path(config, option.fleetsim_artifacts) or Path("fleetsim-results"),
             record=option.fleetsim_record,
+            record_every=option.fleetsim_record_every,
             timeout=timeout if timeout > 0 else None,
             metrics_json=_path(config, option.fleetsim_metrics_json),
             baseline=baseline,
@@ -164,7 +169,7 @@ class FleetsimState:
             raise ScenarioFailed(_story(f"planner-error: {error}", heading, error.details)) from None
         result = checked.result
         if self.record == "all" or (self.record == "failed" and not result.passed):
-            result = self._write_artifacts(item, result)
+            result = self._write_artifacts(item, scenario, result)
         self._describe(item, result, checked.record, source.identity)
         if not result.passed:
             raise ScenarioFailed(failure_report(result, heading=heading))
@@ -175,10 +180,10 @@ class FleetsimState:
             self._locks[path] = HashLock.load(path)
         return self._locks[path]
 
-    def _write_artifacts(self, item: ScenarioItem, result: RunResult) -> RunResult:
+    def _write_artifacts(self, item: ScenarioItem, scenario: Scenario, result: RunResult) -> RunResult:
         folder = artifact_folder(self.artifacts, item.path, item.spec.name)
         extra = {"suite": str(item.path), "nodeid": item.nodeid, "line": item.spec.line}
-        paths = write_run_artifacts(folder, result, extra)
+        paths = write_run_artifacts(folder, result, extra, scenario=scenario, record_every=self.record_every)
         shown = {kind: _relative(self.config, Path(path)) for kind, path in paths.items()}
         return replace(result, artifacts={**result.artifacts, **shown})
 

@@ -46,7 +46,15 @@ def pytest_addoption(parser: pytest.Parser) -> None:
         dest="fleetsim_record",
         choices=("failed", "all", "none"),
         default="failed",
-        help="which runs leave artifacts (default: failed)",
+        help="which runs leave artifacts: result, trace, MCAP recording, RViz layout, failure picture (default: failed)",
+    )
+    group.addoption(
+        "--fleetsim-record-every",
+        dest="fleetsim_record_every",
+        metavar="N",
+        type=int,
+        default=1,
+        help="record every N-th step in the MCAP files (steps with new plans, alerts or events always; default: 1)",
     )
     group.addoption(
         "--fleetsim-metrics-json",

@@ -31,6 +31,16 @@ def _positive(text: str) -> float:
     return value
 
 
+def _steps(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} must be a whole number of steps >= 1")
+    return value
+
+
 def _non_negative(text: str) -> float:
     value = float(text)
     if not value >= 0:
@@ -116,6 +126,14 @@ def build_parser() -> argparse.ArgumentParser:
     run_parser.add_argument(
         "--planner-timeout", type=_non_negative, default=10.0, metavar="SECONDS",
         help="wall-clock limit per planner call; 0 switches it off (default: %(default)g)",
+    )
+    run_parser.add_argument(
+        "--record", metavar="DIR", help="write each run's artifacts to DIR/<suite>/<scenario>/: run.mcap (RViz 2, Foxglove), "
+        "fleetsim.rviz, failure.svg when it failed, trace.jsonl, result.json"
+    )
+    run_parser.add_argument(
+        "--record-every", type=_steps, default=1, metavar="N",
+        help="with --record: record every N-th step (steps with new plans, alerts or events always; default: 1)",
     )
     run_parser.set_defaults(run=run)
     return parser

@@ -14,7 +14,7 @@ import json
 import shutil
 import sys
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, TextIO
 
@@ -22,6 +22,7 @@ from fleetsim.errors import FleetsimError, LoadError
 from fleetsim.load.scenario import load_scenario
 from fleetsim.load.scenario_files import did_you_mean
 from fleetsim.load.suite import SUITE_SUFFIX, ScenarioSpec, Suite, discover_suites, load_suite
+from fleetsim.recording.artifacts import artifact_folder, write_run_artifacts
 from fleetsim.sim.loop import RunProgress, run_scenario
 from fleetsim.sim.planner_spec import PlannerFactory, PlannerSpecError, load_planner_factory
 from fleetsim.sim.report import failure_lines, format_table, summary_cells
@@ -78,17 +79,20 @@ def run(args: argparse.Namespace) -> int:
     factory = load_planner_factory(args.planner)
     targets = _targets(args.suites)
     timeout = args.planner_timeout or None  # 0 switches the timeout off
+    record = (Path(args.record), args.record_every) if args.record else None
     table = sys.stderr if args.json else sys.stdout
     progress = _Progress(sys.stderr, len(targets))
     outcomes = []
     for index, target in enumerate(targets, 1):
         with progress.scenario(index, target.label):
-            outcome = _run_target(target, factory, timeout, progress.update)
+            outcome = _run_target(target, factory, timeout, progress.update, record)
         progress.done(outcome)
         outcomes.append(outcome)
         if args.json:
             print(json.dumps(_document(outcome)), flush=True)
     _print_summary(outcomes, table)
+    if record is not None:
+        print(f"artifacts: {record[0]}/<suite>/<scenario>/ (run.mcap with fleetsim.rviz, failure.svg, trace.jsonl, result.json)", file=table)
     return 1 if any(o.counts_as_failure for o in outcomes) else 0
 
 
@@ -142,7 +146,11 @@ def _suite_targets(file: Path, name: str | None, many: bool) -> list[_Target]:
 
 
 def _run_target(
-    target: _Target, factory: PlannerFactory, timeout: float | None, on_progress: Callable[[RunProgress], None]
+    target: _Target,
+    factory: PlannerFactory,
+    timeout: float | None,
+    on_progress: Callable[[RunProgress], None],
+    record: tuple[Path, int] | None = None,
 ) -> _Outcome:
     if target.error is not None:
         return _Outcome(target, _load_failure(target.label, factory.spec, target.error), loaded=False)
@@ -154,8 +162,15 @@ def _run_target(
     except (LoadError, PlannerSpecError) as error:
         return _Outcome(target, _load_failure(target.spec.name, factory.spec, error), loaded=False)
     result = run_scenario(
-        scenario, factory(), planner_name=factory.spec, planner_timeout=timeout, on_progress=on_progress
-    )
+        scenario, factory(), planner_name=factory.spec, planner_timeout=timeout, on_progress=on_progress,
+        keep_trace=record is not None,
+    )  # fmt: skip
+    if record is not None:
+        root, every = record
+        folder = artifact_folder(root, target.suite_path, target.spec.name)
+        extra = {"suite": str(target.suite_path), "line": target.spec.line}
+        paths = write_run_artifacts(folder, result, extra, scenario=scenario, record_every=every)
+        result = replace(result, artifacts={**result.artifacts, **paths})
     return _Outcome(target, result, loaded=True)
 
 

@@ -2,7 +2,9 @@
 
 Each recorded run gets ``ROOT/<suite file stem>/<scenario name>/`` holding ``result.json`` (the
 object of ``fleetsim run --json``) and, when the run kept its trace, ``trace.jsonl`` (the canonical
-trace whose SHA-256 is the run's hash, one step per line, for diffing two runs). A folder is rewritten
+trace whose SHA-256 is the run's hash, one step per line, for diffing two runs). Given the scenario,
+the folder also gets ``run.mcap`` (the run for RViz 2 and Foxglove), ``fleetsim.rviz`` (the RViz
+layout for it) and, for a failed run, ``failure.svg`` (the fleet at the first failure). A folder is rewritten
 as a whole, so stale files from an earlier run never sit next to new ones. Files are written under a
 temporary name and renamed, so an interrupted run never leaves a half-written file behind.
 """
@@ -17,12 +19,19 @@ from pathlib import Path
 from typing import Any
 
 from fleetsim.load.text import write_text_atomically
+from fleetsim.recording.picture import failure_picture
+from fleetsim.recording.recorder import record_mcap
+from fleetsim.scenario import Scenario
 from fleetsim.sim.result import RunResult
 
-__all__ = ["RESULT_FILE", "TRACE_FILE", "artifact_folder", "write_run_artifacts"]
+__all__ = ["MCAP_FILE", "PICTURE_FILE", "RESULT_FILE", "RVIZ_CONFIG", "RVIZ_FILE", "TRACE_FILE", "artifact_folder", "write_run_artifacts"]
 
 RESULT_FILE = "result.json"
 TRACE_FILE = "trace.jsonl"
+MCAP_FILE = "run.mcap"
+PICTURE_FILE = "failure.svg"
+RVIZ_FILE = "fleetsim.rviz"
+RVIZ_CONFIG = Path(__file__).with_name(RVIZ_FILE)  # shipped with the package
 _UNSAFE = re.compile(r"[^A-Za-z0-9._-]+")
 
 
@@ -38,18 +47,36 @@ def artifact_folder(root: Path, suite_path: Path, scenario: str) -> Path:
     return root / _safe(stem) / _safe(scenario)
 
 
-def write_run_artifacts(folder: Path, result: RunResult, extra: Mapping[str, Any] | None = None) -> dict[str, str]:
+def write_run_artifacts(
+    folder: Path,
+    result: RunResult,
+    extra: Mapping[str, Any] | None = None,
+    *,
+    scenario: Scenario | None = None,
+    record_every: int = 1,
+) -> dict[str, str]:
     """Write the run's files into ``folder`` (replacing what was there); their paths by kind.
 
-    ``extra`` adds keys to ``result.json`` (the suite file, the pytest node id, ...).
+    ``extra`` adds keys to ``result.json`` (the suite file, the pytest node id, ...). With the run's
+    ``scenario`` and a kept trace, the recording (every ``record_every``-th step) and, for a failed run,
+    the failure picture are written too.
     """
     if folder.exists():
         shutil.rmtree(folder)
     folder.mkdir(parents=True)
     paths = {"folder": str(folder), "result": str(folder / RESULT_FILE)}
-    if result.trace is not None and result.trace.lines:
+    lines = result.trace.lines if result.trace is not None else []
+    if lines:
         paths["trace"] = str(folder / TRACE_FILE)
-        write_text_atomically(folder / TRACE_FILE, "\n".join(result.trace.lines) + "\n")
+        write_text_atomically(folder / TRACE_FILE, "\n".join(lines) + "\n")
+    if lines and scenario is not None:
+        paths["mcap"] = str(record_mcap(folder / MCAP_FILE, scenario, lines, every=record_every).path)
+        shutil.copyfile(RVIZ_CONFIG, folder / RVIZ_FILE)
+        paths["rviz"] = str(folder / RVIZ_FILE)
+        picture = failure_picture(scenario, result)
+        if picture is not None:
+            write_text_atomically(folder / PICTURE_FILE, picture[1])
+            paths["picture"] = str(folder / PICTURE_FILE)
     document = result.to_dict()
     document["artifacts"] = {**document["artifacts"], **paths}
     document.update(extra or {})

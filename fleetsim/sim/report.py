@@ -102,9 +102,15 @@ def failure_report(result: RunResult, *, heading: str, shown: int = 5) -> str:
             lines.append(f"  ... and {len(failures) - shown} more (all in result.json)")
     if result.artifacts:
         lines.append("")
-        files = [path for kind, path in sorted(result.artifacts.items()) if kind != "folder"]
+        # What a reviewer opens first comes first: the picture, the recording and its RViz layout.
+        rank = {kind: index for index, kind in enumerate(_ARTIFACT_ORDER)}
+        kinds = sorted((kind for kind in result.artifacts if kind != "folder"), key=lambda kind: (rank.get(kind, len(rank)), kind))
+        files = [result.artifacts[kind] for kind in kinds]
         lines += [("artifacts: " if i == 0 else "           ") + path for i, path in enumerate(files)]
     return "\n".join(lines)
+
+
+_ARTIFACT_ORDER = ("picture", "mcap", "rviz", "trace", "result")
 
 
 def failure_lines(result: RunResult, shown: int, more_hint: str) -> list[str]:

@@ -14,12 +14,15 @@ import os
 import re
 import shlex
 import shutil
+import xml.etree.ElementTree as ET
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 from xml.etree import ElementTree
 
 import pytest
+from mcap.reader import make_reader
+from mcap_ros2.decoder import DecoderFactory
 
 from fleetsim.gating.lockfile import HashLock, LockEntry
 from fleetsim.load.scenario import load_scenario
@@ -441,8 +444,10 @@ def test_record_option_decides_which_runs_leave_artifacts_and_where(
     result = project.runpytest_inprocess("--planner", RESERVING, *options)
 
     result.assert_outcomes(passed=1, failed=1)
-    files = {str(p.relative_to(project.path)) for p in project.path.rglob("*") if p.name in ("result.json", "trace.jsonl")}
-    assert files == {f"{folder}/{name}" for folder in expected for name in ("result.json", "trace.jsonl")}
+    names = ("result.json", "trace.jsonl", "run.mcap", "fleetsim.rviz", "failure.svg")
+    files = {str(p.relative_to(project.path)) for p in project.path.rglob("*") if p.name in names}
+    failed = {folder for folder in expected if folder.endswith("corridor-passing-bay")}
+    assert files == {f"{folder}/{name}" for folder in expected for name in names if name != "failure.svg" or folder in failed}
     # Only the failure reports; with CI set, pytest's short summary repeats whole messages.
     reports = result.outlines[: next(i for i, line in enumerate(result.outlines) if "short test summary" in line or "fleetsim ===" in line)]
     listed = [line for line in reports if line.startswith("artifacts: ")]
@@ -450,7 +455,8 @@ def test_record_option_decides_which_runs_leave_artifacts_and_where(
         assert listed == []
     else:
         folder = next(f for f in expected if f.endswith("corridor-passing-bay"))
-        result.stdout.fnmatch_lines([f"artifacts: {folder}/result.json", f"           {folder}/trace.jsonl"])
+        shown = ["failure.svg", "run.mcap", "fleetsim.rviz", "trace.jsonl", "result.json"]
+        result.stdout.fnmatch_lines([("artifacts: " if i == 0 else "           ") + f"{folder}/{name}" for i, name in enumerate(shown)])
         assert len(listed) == 1  # only the failing scenario's report
 
 
@@ -632,3 +638,30 @@ def test_xdist_update_writes_the_lock_once_as_a_serial_update_does(
     assert [line for line in spread.outlines if "hash(es) recorded" in line] == [
         f"{LOCK_FILE}: 2 hash(es) recorded (2 new, 0 changed, 0 unchanged)"
     ]
+
+
+def test_a_failed_runs_artifacts_hold_a_readable_recording_and_picture(
+    project: pytest.Pytester, recorded: dict[str, LockEntry]
+) -> None:
+    write_lock(make_project(project.path), {RESERVING: {"crossing": recorded["crossing"]}})
+
+    result = project.runpytest_inprocess("--planner", RESERVING, "--fleetsim-record-every", "5")
+
+    result.assert_outcomes(passed=1, failed=1)
+    folder = project.path / "fleetsim-results" / "gating" / "corridor-passing-bay"
+    with (folder / "run.mcap").open("rb") as stream:
+        reader = make_reader(stream, decoder_factories=[DecoderFactory()])
+        clock = [message.log_time for _, channel, message, _ in reader.iter_decoded_messages() if channel.topic == "/clock"]
+    assert clock and clock[-1] == round(recorded["corridor-passing-bay"].steps * 0.1 * 1e9)
+    assert len(clock) < recorded["corridor-passing-bay"].steps / 2  # every 5th step, plus changes
+    picture = ET.parse(folder / "failure.svg").getroot()
+    assert "hash-missing" in "".join(picture.itertext())
+
+
+def test_a_record_rate_below_one_step_is_a_usage_error(project: pytest.Pytester) -> None:
+    make_project(project.path)
+
+    result = project.runpytest_inprocess("--planner", RESERVING, "--fleetsim-record-every", "0")
+
+    assert result.ret == pytest.ExitCode.USAGE_ERROR
+    result.stderr.fnmatch_lines(["*--fleetsim-record-every=0 must be a whole number of steps >= 1*"])

@@ -8,11 +8,13 @@ import os
 import re
 import shutil
 import sys
+import xml.etree.ElementTree as ET
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import pytest
+from mcap.reader import make_reader
 
 import fleetsim
 from fleetsim.cli import main
@@ -273,3 +275,38 @@ def test_a_folder_without_suites_exits_2(tmp_path: Path, capsys: pytest.CaptureF
     status, _, err = run(capsys, "run", str(tmp_path), "--planner", RESERVING)
     assert status == 2
     assert "no *.fleetsim.yaml files" in err
+
+
+def test_record_writes_each_runs_artifacts_and_a_picture_for_a_failed_one(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    root = tmp_path / "runs"
+    status, out, _ = run(capsys, "run", str(EXAMPLES), "--planner", "fleetsim.planners:BFSPlanner", "--record", str(root), "--json")
+
+    assert status == 1
+    documents = {document["scenario"]: document for document in json_lines(out)}
+    crossing = root / "examples" / "crossing"
+    assert documents["crossing"]["status"] == "failed"
+    assert documents["crossing"]["artifacts"]["mcap"] == str(crossing / "run.mcap")
+    assert sorted(p.name for p in crossing.iterdir()) == ["failure.svg", "fleetsim.rviz", "result.json", "run.mcap", "trace.jsonl"]
+    with (crossing / "run.mcap").open("rb") as stream:
+        summary = make_reader(stream).get_summary()
+    assert summary is not None and summary.statistics is not None and summary.statistics.message_count > 0
+    caption = "".join(ET.parse(crossing / "failure.svg").getroot().itertext())
+    assert "collision" in caption
+    for name, document in documents.items():
+        folder = root / "examples" / name
+        assert (folder / "run.mcap").is_file() and (folder / "result.json").is_file()
+        assert (folder / "failure.svg").exists() == (document["status"] == "failed")
+
+
+def test_without_record_no_artifacts_are_written(tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(tmp_path)
+    status, out, _ = run(capsys, "run", f"{EXAMPLES}::crossing", "--planner", RESERVING, "--json")
+    assert status == 0 and json_lines(out)[0]["artifacts"] == {}
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_record_rate_below_one_step_is_refused(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as exit_info:
+        main(["run", str(EXAMPLES), "--planner", RESERVING, "--record", "x", "--record-every", "0"])
+    assert exit_info.value.code == 2
+    assert "--record-every: '0' must be a whole number of steps >= 1" in capsys.readouterr().err
