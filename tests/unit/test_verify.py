@@ -110,7 +110,7 @@ def test_the_failure_report_opens_with_one_line_and_lists_broken_expectations_an
     assert first.startswith("collision at t=0.10 s: COLLISION ALERT: Possible collision detected on segment")
     assert second == "fleetsim scenario 'crossing'"
     assert "broken: expect.collisions: none (4 times)" in report and "broken: expect.tasks" in report
-    assert f"artifacts: {paths['result']}" in report
+    assert f"artifacts: {paths['trace']}\n           {paths['result']}" in report  # the trace first, then the result
     document = json.loads(Path(paths["result"]).read_text(encoding="utf-8"))
     assert document["nodeid"] == "x::crossing" and document["trace_hash"] == result.trace_hash
     lines = Path(paths["trace"]).read_text(encoding="utf-8").splitlines()
