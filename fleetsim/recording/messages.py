@@ -193,6 +193,23 @@ def _pose(x: float = 0.0, y: float = 0.0, z: float = 0.0) -> Any:
     )
 
 
+@cache
+def _unused_parts() -> tuple[Any, Any, Any, Any]:
+    """The parts of a marker fleetsim never varies: identity pose, no lifetime, no texture, no mesh.
+
+    Made once and shared by every marker (messages are only ever serialised, never modified).
+    """
+    types = _store().types
+    no_texture = types["sensor_msgs/msg/CompressedImage"](header=_header(stamp(0), ""), format="", data=_no_bytes())
+    no_mesh = types["visualization_msgs/msg/MeshFile"](filename="", data=_no_bytes())
+    return _pose(), types["builtin_interfaces/msg/Duration"](sec=0, nanosec=0), no_texture, no_mesh
+
+
+@cache
+def _colour(rgba: RGBA) -> Any:
+    return colour(rgba)
+
+
 def _marker(
     time: Stamp,
     frame: str,
@@ -209,25 +226,26 @@ def _marker(
     frame_locked: bool = False,
 ) -> Any:
     types = _store().types
+    identity, forever, no_texture, no_mesh = _unused_parts()
     return types["visualization_msgs/msg/Marker"](
         header=_header(time, frame),
         ns=namespace,
         id=marker_id,
         type=kind,
         action=action,
-        pose=pose if pose is not None else _pose(),
+        pose=pose if pose is not None else identity,
         scale=types["geometry_msgs/msg/Vector3"](x=scale[0], y=scale[1], z=scale[2]),
-        color=colour(rgba),
-        lifetime=types["builtin_interfaces/msg/Duration"](sec=0, nanosec=0),
+        color=_colour(rgba),
+        lifetime=forever,
         frame_locked=frame_locked,
         points=list(points),
         colors=[],
         texture_resource="",
-        texture=types["sensor_msgs/msg/CompressedImage"](header=_header(time, ""), format="", data=_no_bytes()),
+        texture=no_texture,
         uv_coordinates=[],
         text=text,
         mesh_resource="",
-        mesh_file=types["visualization_msgs/msg/MeshFile"](filename="", data=_no_bytes()),
+        mesh_file=no_mesh,
         mesh_use_embedded_materials=False,
     )
 

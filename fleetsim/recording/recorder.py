@@ -285,7 +285,8 @@ def _write_frame(bag: _Bag, scene: _Scene, frame: Frame, *, first: bool, alerts_
         bag.write("/fleetsim/map", time_ns, scene.map_markers(time))
         bag.write("/fleetsim/labels", time_ns, scene.labels(time))
     poses = frame.poses
-    bag.write_bytes("/tf", time_ns, scene.transforms.serialise(time_ns, [(p.x, p.y, p.heading) for p in map(poses.__getitem__, scene.ids)]))
+    planar = [poses[vehicle_id][3:6] for vehicle_id in scene.ids]  # Pose fields 3-5: (x, y, heading)
+    bag.write_bytes("/tf", time_ns, scene.transforms.serialise(time_ns, planar))
     if first or frame.plans_changed:
         plans = scene.plans(time, frame.plans)
         if plans is not None:

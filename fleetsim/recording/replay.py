@@ -120,6 +120,7 @@ def replay(scenario: Scenario, lines: Iterable[str]) -> Iterator[Frame]:
     plans = {v.id: initial_plan(v) for v in sorted(scenario.vehicles, key=lambda v: v.id)}
     index = ReservationIndex(ConflictTable(layout))
     alerts = index.alerts(plans)
+    reported = bool(alerts)
     for number, line in enumerate(iterator, start=2):
         try:
             step, vehicles, accepted, events = json.loads(line)
@@ -147,8 +148,11 @@ def replay(scenario: Scenario, lines: Iterable[str]) -> Iterator[Frame]:
             if passed is not plans[vehicle_id]:
                 plans[vehicle_id] = passed
                 trimmed = True
-        # Legs driven past reserve nothing more, so dropping them can end an alert but never raise one.
-        if accepted or (trimmed and alerts):
+        # An alert in force was reported (an "alert" event) when it appeared, so before the first report
+        # there is nothing to compute; and legs driven past reserve nothing more, so dropping them can
+        # end an alert but never raise one.
+        reported = reported or any(event[0] == "alert" for event in events)
+        if reported and (accepted or (trimmed and alerts)):
             alerts = index.alerts(plans)
         changed = bool(accepted) or trimmed
         yield Frame(
