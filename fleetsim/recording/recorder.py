@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import contextlib
 import os
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -89,7 +89,7 @@ class Recording:
 
     path: Path
     messages: int
-    frames: int  # steps recorded
+    frames: int  # steps recorded in full (with every vehicle's transform)
     size: int  # bytes
 
 
@@ -254,28 +254,39 @@ def _log_lines(event: Sequence[Any]) -> tuple[int, str] | None:
     return None
 
 
-def _write_frames(bag: _Bag, scenario: Scenario, frames: Iterable[Frame], every: int) -> int:
-    scene = _Scene(scenario)
-    recorded = 0
-    shown_alerts: tuple[CollisionAlert, ...] | None = None
-    pending: Frame | None = None
-    started = False
+def _with_last(frames: Iterable[Frame]) -> Iterator[tuple[Frame, bool]]:
+    """Each frame, and whether it is the last."""
+    previous: Frame | None = None
     for frame in frames:
-        due = frame.step % every == 0 or frame.plans_changed or bool(frame.events) or frame.alerts != shown_alerts
-        pending = None if due else frame
-        if not due:
-            continue
-        _write_frame(bag, scene, frame, first=not started, alerts_changed=frame.alerts != shown_alerts)
-        started = True
-        shown_alerts = frame.alerts
-        recorded += 1
-    if pending is not None:  # the last step is always shown
-        _write_frame(bag, scene, pending, first=not started, alerts_changed=False)
-        recorded += 1
-    return recorded
+        if previous is not None:
+            yield previous, False
+        previous = frame
+    if previous is not None:
+        yield previous, True
 
 
-def _write_frame(bag: _Bag, scene: _Scene, frame: Frame, *, first: bool, alerts_changed: bool) -> None:
+def _write_frames(bag: _Bag, scenario: Scenario, frames: Iterable[Frame], every: int) -> int:
+    """Write the frames; the number written in full (with ``/tf``).
+
+    Every ``every``-th step, the first and the last are written in full: the clock, every vehicle's
+    transform, the sim time. Steps in between write the clock and what changed (plans, alerts, log
+    lines) and nothing else, so a change is shown when it happened whatever the rate.
+    """
+    scene = _Scene(scenario)
+    full = 0
+    shown_alerts: tuple[CollisionAlert, ...] | None = None
+    for frame, last in _with_last(frames):
+        first = shown_alerts is None
+        tick = first or last or frame.step % every == 0
+        alerts_changed = frame.alerts != shown_alerts
+        if tick or frame.plans_changed or frame.events or alerts_changed:
+            _write_frame(bag, scene, frame, first=first, tick=tick, alerts_changed=alerts_changed)
+            shown_alerts = frame.alerts
+            full += tick
+    return full
+
+
+def _write_frame(bag: _Bag, scene: _Scene, frame: Frame, *, first: bool, tick: bool, alerts_changed: bool) -> None:
     time_ns = round(frame.time * 1e9)
     time = m.stamp(time_ns)
     bag.write("/clock", time_ns, m.clock(time))
@@ -284,16 +295,18 @@ def _write_frame(bag: _Bag, scene: _Scene, frame: Frame, *, first: bool, alerts_
         bag.write("/tf_static", time_ns, m.tf_message([m.transform(time, "map", "fleet", 0.0, 0.0, 0.0)]))
         bag.write("/fleetsim/map", time_ns, scene.map_markers(time))
         bag.write("/fleetsim/labels", time_ns, scene.labels(time))
-    poses = frame.poses
-    planar = [poses[vehicle_id][3:6] for vehicle_id in scene.ids]  # Pose fields 3-5: (x, y, heading)
-    bag.write_bytes("/tf", time_ns, scene.transforms.serialise(time_ns, planar))
+    if tick:
+        poses = frame.poses
+        planar = [poses[vehicle_id][3:6] for vehicle_id in scene.ids]  # Pose fields 3-5: (x, y, heading)
+        bag.write_bytes("/tf", time_ns, scene.transforms.serialise(time_ns, planar))
     if first or frame.plans_changed:
         plans = scene.plans(time, frame.plans)
         if plans is not None:
             bag.write("/fleetsim/plans", time_ns, plans)
     if first or alerts_changed:
         bag.write("/fleetsim/alerts", time_ns, scene.alerts(time, frame.alerts))
-    bag.write("/fleetsim/sim_time", time_ns, scene.sim_time(time, frame.time))
+    if tick:
+        bag.write("/fleetsim/sim_time", time_ns, scene.sim_time(time, frame.time))
     for event in frame.events:
         line = _log_lines(event)
         if line is not None:
@@ -303,7 +316,8 @@ def _write_frame(bag: _Bag, scene: _Scene, frame: Frame, *, first: bool, alerts_
 def record_mcap(path: Path, scenario: Scenario, trace_lines: Sequence[str], *, every: int = 1) -> Recording:
     """Write the run of ``scenario`` whose trace is ``trace_lines`` to ``path`` (``.mcap``).
 
-    ``every``: record every N-th step (steps with new plans, alerts or events, and the last, always).
+    ``every``: record every N-th step in full (the first and the last always); the steps between write
+    only what changed in them (plans, alerts, log lines), so no change is lost at a lower rate.
     """
     if every < 1:
         msg = f"every={every!r} must be a whole number of steps >= 1"
