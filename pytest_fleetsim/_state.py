@@ -88,8 +88,9 @@ class FleetsimState:
         """Read and check every option; a mistake is a :class:`pytest.UsageError` before any test runs."""
         option = config.option
         spec = option.fleetsim_planner or config.getini("fleetsim_planner") or None
+        timeout = float(option.fleetsim_planner_timeout or config.getini("fleetsim_planner_timeout") or 0)
         try:
-            planner = load_planner_factory(spec) if spec else None
+            planner = load_planner_factory(spec, call_timeout=timeout if timeout > 0 else None) if spec else None
         except PlannerSpecError as error:
             details = f"\n{error.details.rstrip()}" if error.details else ""
             raise pytest.UsageError(f"--planner: {error}{details}") from None
@@ -108,7 +109,6 @@ class FleetsimState:
                 baseline = read_metrics(baseline_path)
             except FleetsimError as error:
                 raise pytest.UsageError(f"--fleetsim-compare: {error}") from None
-        timeout = float(option.fleetsim_planner_timeout or config.getini("fleetsim_planner_timeout") or 0)
         if option.fleetsim_record_every < 1:
             raise pytest.UsageError(f"--fleetsim-record-every={option.fleetsim_record_every} must be a whole number of steps >= 1")
         return cls(
@@ -136,7 +136,7 @@ class FleetsimState:
         heading = f"fleetsim scenario {item.spec.name!r} ({_relative(self.config, item.path)}:{item.spec.line})"
         try:
             if item.suite.planner is not None:  # the suite documents this planner, whatever was asked
-                fixture_value = load_planner_factory(item.suite.planner)
+                fixture_value = load_planner_factory(item.suite.planner, call_timeout=self.timeout)
             elif fixture_value is None:
                 # Located at the scenario, not here, so -rs points at the suite file.
                 raise pytest.skip.Exception(NO_PLANNER, _use_item_location=True)

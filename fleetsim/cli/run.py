@@ -76,9 +76,9 @@ def run(args: argparse.Namespace) -> int:
     SUITE is a *.fleetsim.yaml file or a folder holding them; SUITE::NAME selects one scenario of a
     file. Exit status 0 when every scenario passed (an xfail scenario may fail), 1 when any failed.
     """
-    factory = load_planner_factory(args.planner)
-    targets = _targets(args.suites)
     timeout = args.planner_timeout or None  # 0 switches the timeout off
+    factory = load_planner_factory(args.planner, call_timeout=timeout)
+    targets = _targets(args.suites)
     record = (Path(args.record), args.record_every) if args.record else None
     table = sys.stderr if args.json else sys.stdout
     progress = _Progress(sys.stderr, len(targets))
@@ -157,7 +157,7 @@ def _run_target(
     assert target.suite is not None and target.spec is not None
     try:
         if target.suite.planner is not None:  # the suite documents this planner, whatever was asked
-            factory = load_planner_factory(target.suite.planner)
+            factory = load_planner_factory(target.suite.planner, call_timeout=timeout)
         scenario = load_scenario(target.spec, target.suite)
     except (LoadError, PlannerSpecError) as error:
         return _Outcome(target, _load_failure(target.spec.name, factory.spec, error), loaded=False)

@@ -19,6 +19,7 @@ from collections.abc import Callable
 from types import FrameType
 
 from fleetsim.errors import FleetsimError
+from fleetsim.exec.process import PlannerProcessError
 from fleetsim.planning.protocol import RouteError
 
 __all__ = ["PlannerFault", "PlannerGuard"]
@@ -107,7 +108,10 @@ class PlannerGuard:
             raise
         except _Overrun:
             self._account(start)
-            raise self._overrun(method, vehicle_id) from None
+            raise self._overrun(method, vehicle_id, call) from None
+        except PlannerProcessError as exc:  # a planner process failed: its stderr says more than our frames
+            self._account(start)
+            raise PlannerFault(f"{method}() for vehicle {vehicle_id}: {exc}", vehicle_id=vehicle_id, details=exc.details) from None
         except Exception as exc:
             self._account(start)
             msg = f"{method}() for vehicle {vehicle_id} raised {type(exc).__name__}: {exc}"
@@ -117,12 +121,15 @@ class PlannerGuard:
         self.calls += 1
         self.wall_time += elapsed
         if self.timeout is not None and elapsed > self.timeout:
-            raise self._overrun(method, vehicle_id)  # it caught the timer's exception and returned late
+            raise self._overrun(method, vehicle_id, call)  # it caught the timer's exception and returned late
         return response
 
-    def _overrun(self, method: str, vehicle_id: int) -> PlannerFault:
+    def _overrun(self, method: str, vehicle_id: int, call: Callable[..., object]) -> PlannerFault:
         msg = f"{method}() for vehicle {vehicle_id} did not return within the per-call timeout of {self.timeout:g} s"
-        return PlannerFault(msg, vehicle_id=vehicle_id)
+        # A planner may say more about itself (a planner process: the tail of its stderr).
+        diagnostics = getattr(getattr(call, "__self__", None), "diagnostics", None)
+        details = diagnostics() if callable(diagnostics) else ""
+        return PlannerFault(msg, vehicle_id=vehicle_id, details=details if isinstance(details, str) else "")
 
     def _account(self, start: float) -> None:
         self._call_started = None

@@ -167,9 +167,17 @@ def run_scenario(
     keep_trace: bool = True,
     on_progress: Callable[[RunProgress], None] | None = None,
 ) -> RunResult:
-    """Simulate ``scenario`` with ``planner`` (a fresh instance) and judge the run against its ``expect``."""
-    with PlannerGuard(planner_timeout) as guard:
-        return _simulate(scenario, planner, guard, planner_name, keep_trace, on_progress)
+    """Simulate ``scenario`` with ``planner`` (a fresh instance) and judge the run against its ``expect``.
+
+    A planner with a ``close()`` method (a planner process, say) is closed when the run ends, however it ends.
+    """
+    try:
+        with PlannerGuard(planner_timeout) as guard:
+            return _simulate(scenario, planner, guard, planner_name, keep_trace, on_progress)
+    finally:
+        close = getattr(planner, "close", None)
+        if callable(close):
+            close()
 
 
 def _simulate(

@@ -9,9 +9,12 @@ construction errors are shown as their message and location, not as a harness tr
 
 from __future__ import annotations
 
+import functools
 import importlib
 import inspect
 import os
+import shlex
+import shutil
 import sys
 import traceback
 from collections.abc import Callable
@@ -20,12 +23,14 @@ from types import ModuleType
 from typing import cast
 
 from fleetsim.errors import FleetsimError
+from fleetsim.exec.process import SubprocessPlanner
 from fleetsim.load.scenario_files import did_you_mean
 from fleetsim.planning.protocol import Planner
 
 __all__ = ["PlannerFactory", "PlannerSpecError", "load_planner_factory"]
 
 EXAMPLE = "fleetsim.planners:ReservingPlanner"
+EXEC_PREFIX = "exec:"
 METHODS = ("plan_routes", "fix_legs")
 _SHOWN_NAMES = 8  # public names listed when an attribute is missing
 
@@ -66,13 +71,34 @@ class PlannerFactory:
         return cast(Planner, planner)
 
 
-def load_planner_factory(spec: str) -> PlannerFactory:
-    """The factory that ``spec`` (``module:attr``, attr possibly dotted) names; see the module docstring."""
+def load_planner_factory(spec: str, *, call_timeout: float | None = 10.0) -> PlannerFactory:
+    """The factory that ``spec`` names: ``module:attr`` (attr possibly dotted; see the module docstring),
+    or ``exec:COMMAND``, a planner process per run speaking the JSON-lines protocol (whose per-call
+    timeout is ``call_timeout``)."""
+    if spec.startswith(EXEC_PREFIX):
+        return _exec_factory(spec, call_timeout)
     module_name, attr_path = _split(spec)
     module = _import(spec, module_name)
     target = _resolve(spec, module, attr_path)
     _check_target(spec, target)
     return PlannerFactory(spec, cast(Callable[[], object], target))
+
+
+def _exec_factory(spec: str, call_timeout: float | None) -> PlannerFactory:
+    try:
+        command = shlex.split(spec[len(EXEC_PREFIX) :])
+    except ValueError as error:
+        msg = f"planner={spec!r}: the command cannot be split into words ({error})"
+        raise PlannerSpecError(msg, spec) from None
+    if not command:
+        msg = f"planner={spec!r} names no command; write exec:COMMAND, e.g. 'exec:node planner.js'"
+        raise PlannerSpecError(msg, spec)
+    program = command[0]
+    if shutil.which(program) is None:
+        where = "is not a file" if os.sep in program else "is not on PATH"
+        msg = f"planner={spec!r}: the program {program!r} {where}"
+        raise PlannerSpecError(msg, spec)
+    return PlannerFactory(spec, functools.partial(SubprocessPlanner, command, timeout=call_timeout))
 
 
 # -- parsing --------------------------------------------------------------------------------------

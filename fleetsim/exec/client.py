@@ -1,0 +1,148 @@
+"""The planner side of the JSON-lines protocol, for planners written in Python.
+
+:func:`serve` runs any in-process planner (an object with ``plan_routes`` and ``fix_legs``) as a planner
+process: it reads the init message, rebuilds the layout and the scenario's types and tasks, and answers
+each request by calling the planner with the same objects an in-process run would pass (``Task``,
+``FleetSnapshot``, ``Layout``). Floats travel as JSON's shortest round-trip form, so a planner served
+this way makes the same decisions, and the run the same trace hash, as in process. From a shell::
+
+    python -m fleetsim.exec mypackage.planner:MyPlanner        # a planner class or factory
+    fleetsim run SUITE --planner "exec:python -m fleetsim.exec mypackage.planner:MyPlanner"
+
+A planner that raises a ``RouteError`` answers with a route error; any other exception is printed to
+stderr with its traceback and ends the process with status 1 (the run then fails with a
+``planner-error`` showing that stderr).
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import traceback
+from collections.abc import Mapping
+from types import MappingProxyType
+from typing import IO, Any
+
+from fleetsim.enums import ConflictModel, Direction, Progress, Shape, Traverse, TurnCapability
+from fleetsim.exec.protocol import PROTOCOL, decode_plan, encode_plan
+from fleetsim.layout.layout import Layout, build_layout
+from fleetsim.layout.segment import Segment
+from fleetsim.planning.protocol import FleetPlan, Planner, RouteError
+from fleetsim.planning.snapshot import FleetSnapshot, VehicleState
+from fleetsim.scenario import Task, VehicleType
+
+__all__ = ["ProtocolError", "serve"]
+
+
+class ProtocolError(Exception):
+    """fleetsim sent something this client does not understand (a version mismatch, most likely)."""
+
+
+def _layout(data: Mapping[str, Any]) -> Layout:
+    segments = [
+        Segment(s["id"], Shape(s["shape"]), Direction(s["direction"]), tuple((x, y) for x, y in s["waypoints"]))
+        for s in data["segments"]
+    ]
+    settings = data["settings"]
+    layout = build_layout(
+        segments,
+        vehicle_radius=settings["vehicle_radius"],
+        connection_tolerance=settings["connection_tolerance"],
+        joint_angle_tolerance=settings["joint_angle_tolerance"],
+        safety_margin=settings["safety_margin"],
+        conflict_model=ConflictModel(settings["conflict_model"]),
+    )
+    # The layout is rebuilt from the same segments and settings; it must come out the same.
+    connections = [[[c.from_segment, c.from_traverse.value], [c.to_segment, c.to_traverse.value], c.joint.value] for c in layout.connections]
+    if connections != [[c["from"], c["to"], c["joint"]] for c in data["connections"]]:
+        msg = "the rebuilt layout's connections differ from fleetsim's (different fleetsim versions?)"
+        raise ProtocolError(msg)
+    return layout
+
+
+def _task(data: Mapping[str, Any]) -> Task:
+    progress = data["goal_progress"]
+    return Task(data["id"], data["vehicle_id"], data["goal_segment"], Progress(progress) if progress else None)
+
+
+class _Session:
+    """What the init message said, and the fleet the requests refer to."""
+
+    def __init__(self, init: Mapping[str, Any]) -> None:
+        if init.get("type") != "init" or init.get("protocol") != PROTOCOL:
+            msg = f"expected the init message of {PROTOCOL}, got type={init.get('type')!r} protocol={init.get('protocol')!r}"
+            raise ProtocolError(msg)
+        self.layout = _layout(init["layout"])
+        scenario = init["scenario"]
+        self.types = {
+            t["name"]: VehicleType(
+                t["name"], t["length"], t["width"], t["height"], t["max_speed"], t["acceleration"],
+                TurnCapability(t["turn_capability"]), t["turn_rate"],
+            )
+            for t in scenario["vehicle_types"]
+        }  # fmt: skip
+        self.tasks = {task.id: task for task in map(_task, scenario["tasks"])}
+        self.fleet: FleetSnapshot | None = None
+
+    def snapshot(self, data: Mapping[str, Any]) -> FleetSnapshot:
+        vehicles = {
+            v["id"]: VehicleState(
+                v["id"], v["segment"], Traverse(v["traverse"]), Progress(v["progress"]), v["distance"], v["speed"],
+                v["x"], v["y"], v["heading"], self.types[v["type"]],
+            )
+            for v in data["vehicles"]
+        }  # fmt: skip
+        plans = {plan.vehicle_id: plan for plan in map(decode_plan, data["plans"])}
+        queues = {vehicle_id: tuple(self.tasks[task_id] for task_id in ids) for vehicle_id, ids in data["tasks"]}
+        return FleetSnapshot(
+            time=data["time"],
+            vehicles=MappingProxyType(vehicles),
+            plans=MappingProxyType(plans),
+            tasks=MappingProxyType(queues),
+            routed=frozenset(data["routed"]),
+        )
+
+    def answer(self, planner: Planner, request: Mapping[str, Any]) -> dict[str, Any]:
+        if "fleet" in request:
+            self.fleet = self.snapshot(request["fleet"])
+        if self.fleet is None:
+            msg = f"request {request.get('id')!r} has no fleet and none came before"
+            raise ProtocolError(msg)
+        method = request["type"]
+        if method not in ("plan_routes", "fix_legs"):
+            msg = f"request type={method!r} must be plan_routes or fix_legs"
+            raise ProtocolError(msg)
+        call = planner.plan_routes if method == "plan_routes" else planner.fix_legs
+        try:
+            items = call(self.tasks.get(request["task"]["id"]) or _task(request["task"]), self.fleet, self.layout)
+        except RouteError as error:
+            return {"id": request["id"], "route_error": error.message}
+        plans = [encode_plan(item) for item in items if isinstance(item, FleetPlan)]
+        errors = [{"vehicle_id": item.vehicle_id, "message": item.message} for item in items if isinstance(item, RouteError)]
+        return {"id": request["id"], "plans": plans, "route_errors": errors}
+
+
+def serve(planner: Planner, stdin: IO[str] | None = None, stdout: IO[str] | None = None) -> int:
+    """Answer fleetsim's messages on ``stdin`` (default: the process's) until it closes; the exit status."""
+    source = stdin if stdin is not None else sys.stdin
+    sink = stdout if stdout is not None else sys.stdout
+    session: _Session | None = None
+    for line in source:
+        if not line.strip():
+            continue
+        try:
+            message = json.loads(line)
+            if session is None:
+                session = _Session(message)
+                answer: dict[str, Any] = {"type": "ready"}
+            else:
+                answer = session.answer(planner, message)
+        except ProtocolError as error:
+            print(f"fleetsim.exec: {error}", file=sys.stderr)
+            return 1
+        except Exception:  # the planner's own error: its traceback goes to fleetsim's report via stderr
+            traceback.print_exc(file=sys.stderr)
+            return 1
+        sink.write(json.dumps(answer, separators=(",", ":")) + "\n")
+        sink.flush()
+    return 0

@@ -1,0 +1,251 @@
+"""A planner in another process, in any language: the JSON-lines protocol over its stdin and stdout.
+
+:class:`SubprocessPlanner` is an ordinary planner to the simulation. Its first call starts the process
+(so a process that cannot start fails the run like any planner error, not the harness), sends the init
+message and waits for ``ready``; each call then sends one request and reads one answer, which must be
+valid JSON matching ``schemas/planner-response.schema.json``. Everything the process writes to stderr
+goes to a temporary file whose tail is shown when something goes wrong.
+
+Faults — the process cannot start, exits early or crashes, does not answer within the per-call timeout,
+answers with invalid JSON, an answer that violates the schema (the field and value are named) or an
+answer to another request — raise :class:`PlannerProcessError`, which fails the run with a
+``planner-error`` carrying the stderr tail. :meth:`SubprocessPlanner.close` (called when the run ends,
+and by a finaliser if it never is) closes stdin, waits briefly, then terminates and kills the process
+group, so no planner process outlives its run.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import select
+import shlex
+import signal
+import subprocess
+import tempfile
+import time
+import weakref
+from collections.abc import Sequence
+from functools import cache
+from pathlib import Path
+from typing import IO, Any
+
+import jsonschema
+
+from fleetsim.errors import PlannerError
+from fleetsim.exec.protocol import decode_response, encode_fleet, encode_init, encode_task
+from fleetsim.layout.layout import Layout
+from fleetsim.planning.protocol import Response
+from fleetsim.planning.snapshot import FleetSnapshot
+from fleetsim.scenario import Task
+
+__all__ = ["SCHEMAS", "PlannerProcessError", "SubprocessPlanner", "load_schema"]
+
+SCHEMAS = Path(__file__).resolve().parents[1] / "schemas"
+_STDERR_TAIL = 4000  # characters of stderr shown with an error
+_GRACE = 1.0  # seconds a process gets to exit after stdin closes, and again after SIGTERM
+
+
+class PlannerProcessError(PlannerError):
+    """The planner process failed: ``details`` is the tail of what it wrote to stderr."""
+
+    def __init__(self, message: str, details: str = "") -> None:
+        self.details = details
+        super().__init__(message)
+
+
+@cache
+def load_schema(name: str) -> jsonschema.protocols.Validator:
+    """The compiled validator of ``schemas/planner-<name>.schema.json``."""
+    schema = json.loads((SCHEMAS / f"planner-{name}.schema.json").read_text(encoding="utf-8"))
+    validator_class = jsonschema.validators.validator_for(schema)
+    validator_class.check_schema(schema)
+    return validator_class(schema)
+
+
+def _violation(validator: jsonschema.protocols.Validator, document: Any) -> str | None:
+    """``None`` for a valid document, else the first violation: where, and the offending value."""
+    error = jsonschema.exceptions.best_match(validator.iter_errors(document))
+    if error is None:
+        return None
+    where = "".join(f"[{part!r}]" if isinstance(part, int) else f".{part}" for part in error.absolute_path)
+    return f"{where.lstrip('.') or 'the answer'}: {error.message}"
+
+
+def _kill_group(process: subprocess.Popen[bytes]) -> None:
+    """Terminate, then kill, the process and everything it started (its own session)."""
+    for sig, wait in ((signal.SIGTERM, _GRACE), (signal.SIGKILL, None)):
+        if process.poll() is not None:
+            return
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.killpg(process.pid, sig)
+        with contextlib.suppress(subprocess.TimeoutExpired):
+            process.wait(wait)
+
+
+class SubprocessPlanner:
+    """A planner that runs ``command`` and speaks the JSON-lines protocol with it (one process per run)."""
+
+    def __init__(
+        self,
+        command: str | Sequence[str],
+        *,
+        timeout: float | None = 10.0,
+        startup_timeout: float = 30.0,
+        cwd: str | os.PathLike[str] | None = None,
+    ) -> None:
+        self.command = shlex.split(command) if isinstance(command, str) else list(command)
+        if not self.command:
+            msg = f"command={command!r} must name a program to run"
+            raise ValueError(msg)
+        self.timeout = timeout
+        self.startup_timeout = startup_timeout
+        self.cwd = cwd
+        self.requests = 0
+        self._process: subprocess.Popen[bytes] | None = None
+        self._stderr: IO[bytes] | None = None
+        self._buffer = b""
+        self._fleet: FleetSnapshot | None = None  # the fleet the process last saw
+        self._finalizer: weakref.finalize | None = None
+
+    def __repr__(self) -> str:
+        return f"SubprocessPlanner({shlex.join(self.command)!r})"
+
+    # -- the planner protocol ----------------------------------------------------------------------
+
+    def plan_routes(self, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
+        return self._call("plan_routes", task, fleet, layout)
+
+    def fix_legs(self, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
+        return self._call("fix_legs", task, fleet, layout)
+
+    def diagnostics(self) -> str:
+        """The tail of what the process wrote to stderr (shown with any planner error)."""
+        if self._stderr is None:
+            return ""
+        with contextlib.suppress(OSError, ValueError):
+            self._stderr.flush()
+            size = self._stderr.seek(0, os.SEEK_END)
+            self._stderr.seek(max(0, size - _STDERR_TAIL))
+            text = self._stderr.read().decode("utf-8", errors="replace")
+            return f"stderr of {shlex.join(self.command)} (last {_STDERR_TAIL} characters):\n{text}" if text else ""
+        return ""
+
+    def close(self) -> None:
+        """End the process: close its stdin, give it a moment, then terminate and kill its group."""
+        process, self._process = self._process, None
+        if process is None:
+            return
+        with contextlib.suppress(OSError, ValueError):
+            if process.stdin is not None:
+                process.stdin.close()
+        with contextlib.suppress(subprocess.TimeoutExpired):
+            process.wait(_GRACE)
+        _kill_group(process)
+        if process.stdout is not None:
+            process.stdout.close()
+        if self._finalizer is not None:
+            self._finalizer.detach()
+
+    # -- the conversation --------------------------------------------------------------------------
+
+    def _fail(self, message: str) -> PlannerProcessError:
+        return PlannerProcessError(f"planner process {shlex.join(self.command)}: {message}", self.diagnostics())
+
+    def _start(self, layout: Layout, fleet: FleetSnapshot) -> None:
+        if self._stderr is None:
+            self._stderr = tempfile.TemporaryFile()  # noqa: SIM115 -- kept for diagnostics, closed by GC
+        try:
+            process = subprocess.Popen(
+                self.command, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=self._stderr,
+                cwd=self.cwd, start_new_session=True,
+            )  # fmt: skip
+        except OSError as error:
+            raise self._fail(f"cannot start: {error.strerror or error}") from None
+        self._process = process
+        self._finalizer = weakref.finalize(self, _kill_group, process)
+        self._send(encode_init(layout, fleet), "the init message")
+        answer = self._receive(self.startup_timeout, "the init message")
+        problem = _violation(load_schema("ready"), answer)
+        if problem is not None:
+            raise self._fail(f"answered the init message with {_short(answer)}, not {{\"type\": \"ready\"}} ({problem})")
+        self._fleet = None
+
+    def _call(self, method: str, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
+        if self._process is None:
+            if self.requests:
+                raise self._fail("was closed")
+            self._start(layout, fleet)
+        self.requests += 1
+        number = self.requests
+        request: dict[str, Any] = {"type": method, "id": number, "vehicle": task.vehicle_id, "task": encode_task(task)}
+        if fleet is not self._fleet:
+            request["fleet"] = encode_fleet(fleet)
+            self._fleet = fleet
+        what = f"request {number} ({method} for vehicle {task.vehicle_id})"
+        self._send(request, what)
+        answer = self._receive(self.timeout, what)
+        problem = _violation(load_schema("response"), answer)
+        if problem is not None:
+            raise self._fail(f"answered {what} with an invalid response: {problem}")
+        if answer["id"] != number:
+            raise self._fail(f"answered {what} with the answer to request {answer['id']!r}")
+        return decode_response(answer)
+
+    def _send(self, message: dict[str, Any], what: str) -> None:
+        assert self._process is not None and self._process.stdin is not None
+        line = json.dumps(message, separators=(",", ":")).encode("utf-8") + b"\n"
+        try:
+            self._process.stdin.write(line)
+            self._process.stdin.flush()
+        except (BrokenPipeError, ConnectionResetError, ValueError):
+            raise self._fail(f"{self._ended()} before reading {what}") from None
+
+    def _receive(self, timeout: float | None, what: str) -> Any:
+        line = self._read_line(timeout, what)
+        try:
+            return json.loads(line)
+        except (json.JSONDecodeError, UnicodeDecodeError) as error:
+            raise self._fail(f"answered {what} with invalid JSON ({getattr(error, 'msg', error)}): {_clip(line)}") from None
+
+    def _read_line(self, timeout: float | None, what: str) -> bytes:
+        process = self._process
+        assert process is not None and process.stdout is not None
+        deadline = None if timeout is None else time.monotonic() + timeout
+        descriptor = process.stdout.fileno()
+        while b"\n" not in self._buffer:
+            left = None if deadline is None else deadline - time.monotonic()
+            if left is not None and left <= 0:
+                raise self._fail(f"did not answer {what} within the per-call timeout of {timeout:g} s")
+            ready, _, _ = select.select([descriptor], [], [], left)
+            if not ready:
+                continue
+            chunk = os.read(descriptor, 1 << 16)
+            if not chunk:
+                raise self._fail(f"{self._ended()} before answering {what}")
+            self._buffer += chunk
+        line, _, self._buffer = self._buffer.partition(b"\n")
+        return line
+
+    def _ended(self) -> str:
+        assert self._process is not None
+        with contextlib.suppress(subprocess.TimeoutExpired):
+            self._process.wait(_GRACE)
+        code = self._process.returncode
+        if code is None:
+            return "closed its stdout"
+        if code < 0:
+            with contextlib.suppress(ValueError):
+                return f"was killed by {signal.Signals(-code).name}"
+        return f"exited with status {code}"
+
+
+def _clip(line: bytes, limit: int = 200) -> str:
+    text = line.decode("utf-8", errors="replace")
+    return repr(text if len(text) <= limit else text[:limit] + "...")
+
+
+def _short(value: Any, limit: int = 200) -> str:
+    text = json.dumps(value)
+    return text if len(text) <= limit else text[:limit] + "..."

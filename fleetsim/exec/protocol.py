@@ -1,0 +1,184 @@
+"""The JSON-lines planner protocol (``--planner exec:COMMAND``): message encoding and decoding.
+
+fleetsim starts the planner process once per run and writes one JSON object per line to its stdin; the
+planner answers each message with one JSON object per line on its stdout (anything it writes to stderr
+is kept for error reports). Enum values are the words of the suite files (``forward``/``backward``,
+``forward``/``reverse``, ``same``/``opposite``/``turn_in_place``...). The JSON Schemas of every message
+are in ``schemas/planner-*.schema.json``.
+
+1. ``{"type": "init", "protocol": "fleetsim-planner/1", "layout": {...}, "scenario": {...}}``
+   - ``layout``: ``segments`` (``id, shape, direction, length, waypoints`` in metres), ``connections``
+     (``from: [segment, traverse], to: [segment, traverse], joint``; the successors of a state are its
+     connections in this order), ``conflicts`` (``{segment, conflicts}``, each list sorted) and
+     ``settings`` (``vehicle_radius, safety_margin, conflict_model, connection_tolerance,
+     joint_angle_tolerance``).
+   - ``scenario``: ``vehicle_types`` (``name, length, width, height, max_speed, acceleration,
+     turn_capability, turn_rate``), ``vehicles`` (``id, type``) and ``tasks`` (``id, vehicle_id,
+     goal_segment, goal_progress``).
+
+   Answer: ``{"type": "ready"}``.
+2. ``{"type": "plan_routes" | "fix_legs", "id": N, "vehicle": V, "task": TASK, "fleet": FLEET}``, one
+   per planner call, ``id`` counting from 1. ``fleet`` is the snapshot: ``time``, ``vehicles`` (each
+   ``id, segment, traverse, progress, distance, speed, x, y, heading, type``), ``plans`` (each
+   ``vehicle_id, legs``; a leg is ``segment, traverse, progress, fixed, goal_for_task``), ``tasks``
+   (``[vehicle_id, [task ids, head first]]`` pairs) and ``routed`` (task ids). It is sent only when it
+   changed since the last request; a request without ``fleet`` means "the same fleet as before".
+
+   Answer: ``{"id": N, "plans": [PLAN...], "route_errors": [{"vehicle_id": V|null, "message": S}...]}``
+   (both lists may be empty: nothing to change), or ``{"id": N, "route_error": "message"}`` when the
+   whole request cannot be routed (a raised ``RouteError``).
+3. When the run ends fleetsim closes the planner's stdin; the process should exit.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+from fleetsim.enums import Progress, Traverse
+from fleetsim.layout.layout import Layout
+from fleetsim.planning.protocol import FleetLeg, FleetPlan, RouteError
+from fleetsim.planning.snapshot import FleetSnapshot, VehicleState
+from fleetsim.scenario import Task, VehicleType
+
+__all__ = [
+    "PROTOCOL",
+    "decode_response",
+    "encode_fleet",
+    "encode_init",
+    "encode_layout",
+    "encode_plan",
+    "encode_task",
+    "decode_plan",
+]
+
+PROTOCOL = "fleetsim-planner/1"
+
+
+def encode_layout(layout: Layout) -> dict[str, Any]:
+    segments = [layout.segments[sid] for sid in sorted(layout.segments)]
+    return {
+        "segments": [
+            {
+                "id": s.id,
+                "shape": s.shape.value,
+                "direction": s.direction.value,
+                "length": s.length,
+                "waypoints": [[x, y] for x, y in s.waypoints],
+            }
+            for s in segments
+        ],
+        "connections": [
+            {
+                "from": [c.from_segment, c.from_traverse.value],
+                "to": [c.to_segment, c.to_traverse.value],
+                "joint": c.joint.value,
+            }
+            for c in layout.connections
+        ],
+        "conflicts": [{"segment": s.id, "conflicts": sorted(layout.conflicts(s.id))} for s in segments],
+        "settings": {
+            "vehicle_radius": layout.vehicle_radius,
+            "safety_margin": layout.safety_margin,
+            "conflict_model": layout.conflict_model.value,
+            "connection_tolerance": layout.connection_tolerance,
+            "joint_angle_tolerance": layout.joint_angle_tolerance,
+        },
+    }
+
+
+def _vehicle_type(kind: VehicleType) -> dict[str, Any]:
+    return {
+        "name": kind.name,
+        "length": kind.length,
+        "width": kind.width,
+        "height": kind.height,
+        "max_speed": kind.max_speed,
+        "acceleration": kind.acceleration,
+        "turn_capability": kind.turn_capability.value,
+        "turn_rate": kind.turn_rate,
+    }
+
+
+def encode_task(task: Task) -> dict[str, Any]:
+    progress = task.goal_progress.value if task.goal_progress is not None else None
+    return {"id": task.id, "vehicle_id": task.vehicle_id, "goal_segment": task.goal_segment, "goal_progress": progress}
+
+
+def encode_init(layout: Layout, fleet: FleetSnapshot) -> dict[str, Any]:
+    """The init message, from what the first planner call knows: the layout and the fleet."""
+    types = {state.type.name: state.type for state in fleet.vehicles.values()}
+    tasks = sorted((task for queue in fleet.tasks.values() for task in queue), key=lambda task: task.id)
+    return {
+        "type": "init",
+        "protocol": PROTOCOL,
+        "layout": encode_layout(layout),
+        "scenario": {
+            "vehicle_types": [_vehicle_type(types[name]) for name in sorted(types)],
+            "vehicles": [{"id": vid, "type": fleet.vehicles[vid].type.name} for vid in sorted(fleet.vehicles)],
+            "tasks": [encode_task(task) for task in tasks],
+        },
+    }
+
+
+def _leg(leg: FleetLeg) -> dict[str, Any]:
+    return {
+        "segment": leg.segment,
+        "traverse": leg.traverse.value,
+        "progress": leg.progress.value,
+        "fixed": leg.fixed,
+        "goal_for_task": leg.goal_for_task,
+    }
+
+
+def encode_plan(plan: FleetPlan) -> dict[str, Any]:
+    return {"vehicle_id": plan.vehicle_id, "legs": [_leg(leg) for leg in plan.legs]}
+
+
+def _state(state: VehicleState) -> dict[str, Any]:
+    return {
+        "id": state.id,
+        "segment": state.segment,
+        "traverse": state.traverse.value,
+        "progress": state.progress.value,
+        "distance": state.distance,
+        "speed": state.speed,
+        "x": state.x,
+        "y": state.y,
+        "heading": state.heading,
+        "type": state.type.name,
+    }
+
+
+def encode_fleet(fleet: FleetSnapshot) -> dict[str, Any]:
+    return {
+        "time": fleet.time,
+        "vehicles": [_state(fleet.vehicles[vid]) for vid in sorted(fleet.vehicles)],
+        "plans": [encode_plan(fleet.plans[vid]) for vid in sorted(fleet.plans)],
+        "tasks": [[vid, [task.id for task in fleet.tasks[vid]]] for vid in sorted(fleet.tasks)],
+        "routed": sorted(fleet.routed),
+    }
+
+
+def decode_plan(data: Mapping[str, Any]) -> FleetPlan:
+    """A plan from a schema-valid response (the schema has checked names, types and enum words)."""
+    legs = tuple(
+        FleetLeg(
+            leg["segment"],
+            Traverse(leg["traverse"]),
+            Progress(leg["progress"]),
+            leg["fixed"],
+            leg.get("goal_for_task"),
+        )
+        for leg in data["legs"]
+    )
+    return FleetPlan(data["vehicle_id"], legs)
+
+
+def decode_response(data: Mapping[str, Any]) -> list[FleetPlan | RouteError]:
+    """The response items of a schema-valid answer; a whole-request route error is raised."""
+    if "route_error" in data:
+        raise RouteError(None, str(data["route_error"]))
+    items: list[FleetPlan | RouteError] = [decode_plan(plan) for plan in data["plans"]]
+    items += [RouteError(error.get("vehicle_id"), error["message"]) for error in data["route_errors"]]
+    return items
