@@ -11,6 +11,7 @@ from pathlib import Path
 import pytest
 
 from fleetsim.errors import FleetsimError
+from fleetsim.exec import SubprocessPlanner
 from fleetsim.planners import BFSPlanner, ReservingPlanner
 from fleetsim.sim.planner_spec import PlannerFactory, PlannerSpecError, load_planner_factory
 
@@ -119,9 +120,26 @@ def test_a_spec_without_a_colon_is_rejected_with_an_example() -> None:
     )
 
 
-def test_exec_specs_are_rejected_as_not_supported_yet() -> None:
-    message = spec_error("exec:./my_planner --stdio")
-    assert "not supported yet" in message and "module:attribute" in message
+def test_an_exec_spec_makes_a_fresh_planner_process_per_run_with_the_call_timeout() -> None:
+    factory = load_planner_factory(f"exec:{sys.executable} -m fleetsim.exec fleetsim.planners:BFSPlanner", call_timeout=2.5)
+    first, second = factory(), factory()
+    assert isinstance(first, SubprocessPlanner) and first is not second
+    assert first.command == [sys.executable, "-m", "fleetsim.exec", "fleetsim.planners:BFSPlanner"]
+    assert first.timeout == 2.5
+
+
+@pytest.mark.parametrize(
+    ("spec", "expected"),
+    [
+        ("exec:", "names no command; write exec:COMMAND"),
+        ("exec:   ", "names no command"),
+        ("exec:no-such-program-xyz --stdio", "the program 'no-such-program-xyz' is not on PATH"),
+        ("exec:./missing/planner.sh", "the program './missing/planner.sh' is not a file"),
+        ("exec:node 'unclosed", "cannot be split into words"),
+    ],
+)
+def test_a_bad_exec_spec_says_what_is_wrong(spec: str, expected: str) -> None:
+    assert expected in spec_error(spec)
 
 
 def test_a_file_path_instead_of_a_module_name_is_rejected_with_the_module_name_to_use() -> None:

@@ -1,0 +1,196 @@
+#!/usr/bin/env node
+// An example fleetsim planner process in plain Node.js (no dependencies): the in-process BFSPlanner
+// (fleetsim/planners/bfs.py) ported to the JSON-lines planner protocol "fleetsim-planner/1".
+//
+//   fleetsim run scenario_suites/examples.fleetsim.yaml --planner "exec:node examples/planners/node/bfs_planner.js"
+//
+// The protocol (specified in fleetsim/exec/protocol.py; JSON Schemas in schemas/planner-*.schema.json):
+//   * fleetsim starts this process once per run and writes one JSON object per line to our stdin;
+//     we answer every message with exactly one JSON object on one line of stdout. stdout carries
+//     answers only: diagnostics go to stderr (fleetsim keeps it for its error reports).
+//   * 1st message, {"type": "init", "protocol": "fleetsim-planner/1", "layout": {...}, "scenario": {...}}
+//     -> answer {"type": "ready"}.
+//   * then one request per planner call:
+//       {"type": "plan_routes" | "fix_legs", "id": N, "vehicle": V, "task": TASK, "fleet": FLEET}
+//     -> answer {"id": N, "plans": [PLAN...], "route_errors": [{"vehicle_id": V, "message": S}...]}
+//        or {"id": N, "route_error": "..."} when the whole request cannot be routed.
+//     "fleet" is left out when the fleet has not changed since the previous request: keep the last one.
+//   * at the end of the run fleetsim closes stdin: we exit with status 0.
+// A message we cannot understand is a protocol violation: we say why on stderr and exit with status 1.
+"use strict";
+
+const readline = require("readline");
+
+const PROTOCOL = "fleetsim-planner/1";
+const FIX_HORIZON = 3; // fix_legs commits (at most) the first three legs of a plan, like BFSPlanner
+
+// What the init message tells us, and the fleet of the last request that carried one.
+let successors = null; // "segment|traverse" -> [{segment, traverse, joint}], in the order of layout.connections
+const turnCapability = new Map(); // vehicle type name -> "curve" | "in_place"
+let fleet = null;
+
+function fail(message) {
+  process.stderr.write(`bfs_planner.js: ${message}\n`);
+  process.exit(1); // stdout/stderr writes to pipes and files are synchronous on Linux: nothing is lost
+}
+
+function send(message) {
+  process.stdout.write(JSON.stringify(message) + "\n");
+}
+
+const isObject = (value) => typeof value === "object" && value !== null && !Array.isArray(value);
+const stateKey = (segment, traverse) => `${segment}|${traverse}`;
+
+// ---- init: index the layout's connections by their "from" state --------------------------------------
+
+function init(message) {
+  if (message.protocol !== PROTOCOL) fail(`unsupported protocol ${JSON.stringify(message.protocol)}, expected ${PROTOCOL}`);
+  const { layout, scenario } = message;
+  if (!isObject(layout) || !Array.isArray(layout.connections)) fail("init: layout.connections missing");
+  if (!isObject(scenario) || !Array.isArray(scenario.vehicle_types)) fail("init: scenario.vehicle_types missing");
+  successors = new Map();
+  // A connection {"from": [segment, traverse], "to": [segment, traverse], "joint": kind} lets a vehicle
+  // leaving `from` drive on to `to`. Only traverses a segment's direction allows appear. The successors
+  // of a state are its connections in the order given: keeping it makes the search below pick the same
+  // route as the Python planner when several routes are equally short.
+  for (const c of layout.connections) {
+    if (!Array.isArray(c.from) || !Array.isArray(c.to)) fail(`init: malformed connection ${JSON.stringify(c)}`);
+    const key = stateKey(c.from[0], c.from[1]);
+    if (!successors.has(key)) successors.set(key, []);
+    successors.get(key).push({ segment: c.to[0], traverse: c.to[1], joint: c.joint });
+  }
+  // "curve": follows curves only; "in_place": can also turn on the spot.
+  for (const kind of scenario.vehicle_types) turnCapability.set(kind.name, kind.turn_capability);
+}
+
+// ---- the route search (fleetsim/planners/routing.py) -----------------------------------------------
+
+// A state is [segment, traverse, progress]: progress is "forward" (nose first) or "reverse" (backing).
+function* nextStates(capability, [segment, traverse, progress]) {
+  for (const step of successors.get(stateKey(segment, traverse)) || []) {
+    if (capability === "in_place" || step.joint === "same") {
+      yield [step.segment, step.traverse, progress]; // smooth joint, or the vehicle turns on the spot
+    } else if (step.joint === "opposite") {
+      // a cusp: a curve-only vehicle must change between driving nose first and backing
+      yield [step.segment, step.traverse, progress === "forward" ? "reverse" : "forward"];
+    }
+    // a "turn_in_place" corner is no way on for a vehicle that only follows curves
+  }
+}
+
+// Fewest legs from `start` to any state on segment `goal` (`start` itself excluded), or null.
+function breadthFirstRoute(capability, start, goal) {
+  const key = (state) => state.join("|");
+  const cameFrom = new Map(); // state key -> the state it was reached from
+  const seen = new Set([key(start)]);
+  const frontier = [start];
+  for (let head = 0; head < frontier.length; head++) {
+    const state = frontier[head];
+    for (const following of nextStates(capability, state)) {
+      const k = key(following);
+      if (seen.has(k)) continue;
+      seen.add(k);
+      cameFrom.set(k, state);
+      if (following[0] === goal) {
+        const path = [following]; // walk back to the start, then drop it
+        while (cameFrom.has(key(path[path.length - 1]))) path.push(cameFrom.get(key(path[path.length - 1])));
+        return path.reverse().slice(1);
+      }
+      frontier.push(following);
+    }
+  }
+  return null;
+}
+
+// ---- the two planner calls (fleetsim/planners/bfs.py) -------------------------------------------
+
+// A plan is {"vehicle_id", "legs"}; a leg is {"segment", "traverse", "progress", "fixed", "goal_for_task"}.
+// The fixed legs are the committed prefix: the leading legs with fixed = true.
+function fixedLegs(plan) {
+  let count = 0;
+  while (count < plan.legs.length && plan.legs[count].fixed === true) count++;
+  return plan.legs.slice(0, count);
+}
+
+function planOf(vehicleId) {
+  const plan = fleet.plans.find((p) => p.vehicle_id === vehicleId);
+  if (!plan || !Array.isArray(plan.legs)) fail(`the fleet has no plan for vehicle ${vehicleId}`);
+  return plan;
+}
+
+// The head task of the vehicle is not routed yet: a plan that marks its goal leg.
+function planRoutes(task) {
+  const vehicleId = task.vehicle_id;
+  const fixed = fixedLegs(planOf(vehicleId));
+  if (fixed.length === 0) fail(`the plan of vehicle ${vehicleId} has no fixed leg to start from`);
+  // If a committed leg already reaches the goal segment (and is nobody's goal yet), mark it.
+  const reached = fixed.findIndex((leg) => leg.segment === task.goal_segment && leg.goal_for_task == null);
+  if (reached >= 0) {
+    const legs = fixed.map((leg, i) => (i === reached ? { ...leg, goal_for_task: task.id } : leg));
+    return { plans: [{ vehicle_id: vehicleId, legs }], route_errors: [] };
+  }
+  // Else: the fewest legs from the last committed leg to the goal segment, blind to other vehicles
+  // and to the task's goal progress (BFSPlanner is meant to collide: it shows a caught planner bug).
+  const last = fixed[fixed.length - 1];
+  const vehicle = fleet.vehicles.find((v) => v.id === vehicleId);
+  if (!vehicle) fail(`the fleet has no vehicle ${vehicleId}`);
+  const capability = turnCapability.get(vehicle.type);
+  if (capability === undefined) fail(`vehicle ${vehicleId} has type ${JSON.stringify(vehicle.type)}, not in the init message`);
+  const path = breadthFirstRoute(capability, [last.segment, last.traverse, last.progress], task.goal_segment);
+  if (path === null) {
+    const message = `no route from segment ${last.segment} to segment ${task.goal_segment}`;
+    return { plans: [], route_errors: [{ vehicle_id: vehicleId, message }] };
+  }
+  const planned = path.map(([segment, traverse, progress], i) => ({
+    segment, traverse, progress, fixed: false, goal_for_task: i === path.length - 1 ? task.id : null,
+  }));
+  return { plans: [{ vehicle_id: vehicleId, legs: [...fixed, ...planned] }], route_errors: [] };
+}
+
+// The task is routed: commit the first FIX_HORIZON legs of the vehicle's plan.
+function fixLegs(task) {
+  const plan = planOf(task.vehicle_id);
+  const legs = plan.legs.map((leg, i) => (i < FIX_HORIZON ? { ...leg, fixed: true } : leg));
+  return { plans: [{ vehicle_id: plan.vehicle_id, legs }], route_errors: [] };
+}
+
+// ---- the message loop -------------------------------------------------------------------------------
+
+function handle(line) {
+  let message;
+  try {
+    message = JSON.parse(line);
+  } catch (error) {
+    fail(`not JSON: ${error.message}: ${line.slice(0, 200)}`);
+  }
+  if (!isObject(message)) fail(`not a JSON object: ${line.slice(0, 200)}`);
+  if (message.type === "init") {
+    if (successors !== null) fail("a second init message");
+    init(message);
+    send({ type: "ready" });
+    return;
+  }
+  if (message.type !== "plan_routes" && message.type !== "fix_legs") fail(`unknown message type ${JSON.stringify(message.type)}`);
+  if (successors === null) fail(`a ${message.type} request before the init message`);
+  if (!Number.isInteger(message.id) || message.id < 1) fail(`request without a valid "id": ${line.slice(0, 200)}`);
+  const { task } = message;
+  if (!isObject(task) || !Number.isInteger(task.vehicle_id) || !Number.isInteger(task.goal_segment)) {
+    fail(`request ${message.id}: malformed "task"`);
+  }
+  if ("fleet" in message) {
+    if (!isObject(message.fleet) || !Array.isArray(message.fleet.plans) || !Array.isArray(message.fleet.vehicles)) {
+      fail(`request ${message.id}: malformed "fleet"`);
+    }
+    fleet = message.fleet; // a new snapshot; a request without "fleet" reuses this one
+  } else if (fleet === null) {
+    fail(`request ${message.id} has no "fleet" and no earlier request had one`);
+  }
+  const answer = message.type === "plan_routes" ? planRoutes(task) : fixLegs(task);
+  send({ id: message.id, ...answer });
+}
+
+const input = readline.createInterface({ input: process.stdin, crlfDelay: Infinity, terminal: false });
+input.on("line", (line) => {
+  if (line.trim() !== "") handle(line); // blank lines carry no message
+});
+input.on("close", () => process.exit(0)); // stdin closed: the run is over
