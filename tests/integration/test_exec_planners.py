@@ -1,0 +1,204 @@
+"""Planners in other processes (``exec:``): same outcomes as in process, and every fault contained."""
+
+from __future__ import annotations
+
+import os
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import pytest
+
+from fleetsim import load_scenario, load_suite
+from fleetsim.cli import main
+from fleetsim.exec import SubprocessPlanner
+from fleetsim.planners import BFSPlanner, ReservingPlanner
+from fleetsim.scenario import Scenario
+from fleetsim.sim.loop import run_scenario
+
+ROOT = Path(__file__).resolve().parents[2]
+EXAMPLES = ROOT / "scenario_suites" / "examples.fleetsim.yaml"
+NAMES = [spec.name for spec in load_suite(EXAMPLES).scenarios]
+SERVE = [sys.executable, "-m", "fleetsim.exec"]
+
+
+def example(name: str) -> Scenario:
+    suite = load_suite(EXAMPLES)
+    return load_scenario(next(spec for spec in suite.scenarios if spec.name == name), suite)
+
+
+@pytest.mark.parametrize("name", NAMES)
+@pytest.mark.parametrize("planner", [ReservingPlanner, BFSPlanner])
+def test_a_python_planner_served_over_the_protocol_gives_the_in_process_run(name: str, planner: type) -> None:
+    scenario = example(name)
+    direct = run_scenario(scenario, planner())
+    served = run_scenario(scenario, SubprocessPlanner([*SERVE, f"fleetsim.planners:{planner.__name__}"]))
+    assert (served.status, served.ended, served.trace_hash) == (direct.status, direct.ended, direct.trace_hash)
+    assert served.metrics.planner_calls == direct.metrics.planner_calls
+
+
+def test_fleetsim_run_takes_an_exec_planner(capsys: pytest.CaptureFixture[str]) -> None:
+    command = f"exec:{sys.executable} -m fleetsim.exec fleetsim.planners:ReservingPlanner"
+    status = main(["run", str(EXAMPLES), "--planner", command])
+    out = capsys.readouterr().out
+    assert status == 0 and "4 passed" in out
+
+
+# -- faults ---------------------------------------------------------------------------------------
+
+# A minimal planner process that changes nothing, with one fault chosen by its first argument.
+FAULTY = '''
+import json, os, sys, time
+fault, at = sys.argv[1], int(sys.argv[2]) if len(sys.argv) > 2 else 1
+print("faulty planner starting", file=sys.stderr, flush=True)
+if fault == "no-start":
+    print("cannot load my model file", file=sys.stderr)
+    sys.exit(2)
+for line in sys.stdin:
+    message = json.loads(line)
+    if message["type"] == "init":
+        print(json.dumps({"type": "ready"}), flush=True)
+        continue
+    n = message["id"]
+    answer = {"id": n, "plans": [], "route_errors": []}
+    if n == at:
+        print(f"planner: going wrong on request {n}", file=sys.stderr, flush=True)
+        if fault == "crash":
+            raise RuntimeError("segfault-ish")
+        if fault == "exit":
+            sys.exit(0)
+        if fault == "hang":
+            time.sleep(600)
+        if fault == "json":
+            print("{not json", flush=True)
+            continue
+        if fault == "schema":
+            answer["plans"] = [{"vehicle_id": message["vehicle"], "legs": [{"segment": "seven", "traverse": "forward", "progress": "forward", "fixed": True}]}]
+        if fault == "id":
+            answer["id"] = n + 41
+    print(json.dumps(answer), flush=True)
+if fault == "ignore-close":
+    print(os.getpid(), file=sys.stderr, flush=True)
+    time.sleep(600)  # never exits on its own after stdin closes
+'''
+
+
+@pytest.fixture
+def faulty(tmp_path: Path) -> Path:
+    script = tmp_path / "faulty_planner.py"
+    script.write_text(textwrap.dedent(FAULTY), encoding="utf-8")
+    return script
+
+
+def _gone(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return True
+    return _zombie(pid)
+
+
+def _zombie(pid: int) -> bool:
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().split()[2] == "Z"
+    except OSError:
+        return True
+
+
+def _run_faulty(faulty: Path, *args: str, timeout: float = 10.0) -> tuple[object, SubprocessPlanner]:
+    planner = SubprocessPlanner([sys.executable, str(faulty), *args], timeout=timeout)
+    result = run_scenario(example("crossing"), planner, planner_timeout=timeout)
+    return result, planner
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (("no-start",), "exited with status 2 before answering the init message"),
+        (("crash", "3"), "exited with status 1 before answering request 3 (plan_routes for vehicle 1)"),
+        (("exit", "2"), "exited with status 0 before answering request 2"),
+        (("json", "1"), "answered request 1 (plan_routes for vehicle 1) with invalid JSON"),
+        (("schema", "1"), "with an invalid response: plans[0].legs[0].segment: 'seven' is not of type 'integer'"),
+        (("id", "2"), "answered request 2 (plan_routes for vehicle 2) with the answer to request 43"),
+    ],
+)
+def test_each_fault_fails_the_run_with_a_planner_error_and_the_stderr_tail(faulty: Path, args: tuple[str, ...], message: str) -> None:
+    result, planner = _run_faulty(faulty, *args)
+
+    assert result.ended == "planner-error"
+    [failure] = [f for f in result.failures if f.kind == "planner-error"]
+    assert message in failure.message, failure.message
+    assert "faulty planner starting" in failure.details.get("traceback", "")
+    assert planner._process is None  # closed
+
+
+def test_a_hanging_planner_is_stopped_at_the_call_timeout_and_killed(faulty: Path) -> None:
+    started = time.monotonic()
+    result, planner = _run_faulty(faulty, "hang", "1", timeout=1.0)
+
+    assert time.monotonic() - started < 8.0
+    [failure] = result.failures
+    assert failure.kind == "planner-error"
+    assert "within the per-call timeout of 1 s" in failure.message
+    assert "planner: going wrong on request 1" in failure.details.get("traceback", "")
+
+
+def test_a_process_that_ignores_the_end_of_its_input_is_killed_with_its_children(faulty: Path, tmp_path: Path) -> None:
+    # Run through a shell so the planner is a child of the started process: the whole group must go.
+    wrapper = tmp_path / "wrapper.sh"
+    wrapper.write_text(f'#!/bin/sh\n"{sys.executable}" "{faulty}" ignore-close 999\n', encoding="utf-8")
+    wrapper.chmod(0o755)
+    planner = SubprocessPlanner([str(wrapper)], timeout=10.0)
+    started = time.monotonic()
+    result = run_scenario(example("crossing"), planner, planner_timeout=10.0)
+    assert result.ended != "planner-error"
+    assert time.monotonic() - started < 30.0
+    stderr = planner.diagnostics()
+    pids = [int(word) for word in stderr.split() if word.isdigit()]
+    assert pids, stderr
+    deadline = time.monotonic() + 5.0
+    while not _gone(pids[-1]) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert _gone(pids[-1]), "the planner process outlived its run"
+
+
+def test_after_a_faulty_planner_the_next_run_is_normal(faulty: Path) -> None:
+    result, _ = _run_faulty(faulty, "crash", "1")
+    assert result.ended == "planner-error"
+    again = run_scenario(example("crossing"), SubprocessPlanner([*SERVE, "fleetsim.planners:ReservingPlanner"]))
+    assert again.passed and again.trace_hash == run_scenario(example("crossing"), ReservingPlanner()).trace_hash
+
+
+def test_a_program_that_cannot_start_fails_the_run_not_the_harness(tmp_path: Path) -> None:
+    not_executable = tmp_path / "planner.sh"
+    not_executable.write_text("#!/bin/sh\n", encoding="utf-8")  # no execute permission
+    result = run_scenario(example("crossing"), SubprocessPlanner([str(not_executable)]))
+    [failure] = result.failures
+    assert failure.kind == "planner-error" and "cannot start: Permission denied" in failure.message
+
+
+def test_close_ends_a_started_process_and_is_idempotent() -> None:
+    planner = SubprocessPlanner([*SERVE, "fleetsim.planners:BFSPlanner"])
+    scenario = example("crossing")
+    run_scenario(scenario, planner)  # closes it
+    planner.close()
+    with pytest.raises(Exception, match="was closed"):
+        planner.fix_legs(scenario.tasks[0], None, scenario.layout)  # type: ignore[arg-type]
+
+
+def test_the_planner_runs_in_its_own_process_group() -> None:
+    # So that closing it can end everything it started, and a Ctrl-C at the terminal reaches fleetsim
+    # (which then closes the planner) rather than the planner directly.
+    planner = SubprocessPlanner([*SERVE, "fleetsim.planners:BFSPlanner"])
+    scenario = example("crossing")
+    planner.plan_routes(scenario.tasks[0], _first_snapshot(scenario), scenario.layout)
+    assert planner._process is not None
+    assert os.getpgid(planner._process.pid) != os.getpgid(0)
+    planner.close()
+
+
+def _first_snapshot(scenario: Scenario) -> object:
+    from fleetsim.planning.controller import FleetController
+
+    return FleetController(scenario).snapshot(0.0)
