@@ -83,22 +83,26 @@ class _Session:
         }  # fmt: skip
         self.tasks = {task.id: task for task in map(_task, scenario["tasks"])}
         self.fleet: FleetSnapshot | None = None
+        self.vehicles: dict[int, VehicleState] = {}
+        self.plans: dict[int, FleetPlan] = {}
+        self.queues: dict[int, tuple[Task, ...]] = {}
 
     def snapshot(self, data: Mapping[str, Any]) -> FleetSnapshot:
-        vehicles = {
-            v["id"]: VehicleState(
+        """The fleet after ``data`` (complete the first time, then the entries that changed)."""
+        for v in data["vehicles"]:
+            self.vehicles[v["id"]] = VehicleState(
                 v["id"], v["segment"], Traverse(v["traverse"]), Progress(v["progress"]), v["distance"], v["speed"],
                 v["x"], v["y"], v["heading"], self.types[v["type"]],
-            )
-            for v in data["vehicles"]
-        }  # fmt: skip
-        plans = {plan.vehicle_id: plan for plan in map(decode_plan, data["plans"])}
-        queues = {vehicle_id: tuple(self.tasks[task_id] for task_id in ids) for vehicle_id, ids in data["tasks"]}
+            )  # fmt: skip
+        for plan in map(decode_plan, data["plans"]):
+            self.plans[plan.vehicle_id] = plan  # an unchanged plan stays the same object, as in process
+        for vehicle_id, ids in data["tasks"]:
+            self.queues[vehicle_id] = tuple(self.tasks[task_id] for task_id in ids)
         return FleetSnapshot(
             time=data["time"],
-            vehicles=MappingProxyType(vehicles),
-            plans=MappingProxyType(plans),
-            tasks=MappingProxyType(queues),
+            vehicles=MappingProxyType(dict(self.vehicles)),
+            plans=MappingProxyType(dict(self.plans)),
+            tasks=MappingProxyType(dict(self.queues)),
             routed=frozenset(data["routed"]),
         )
 

@@ -22,12 +22,22 @@ are in ``schemas/planner-*.schema.json``.
    ``id, segment, traverse, progress, distance, speed, x, y, heading, type``), ``plans`` (each
    ``vehicle_id, legs``; a leg is ``segment, traverse, progress, fixed, goal_for_task``), ``tasks``
    (``[vehicle_id, [task ids, head first]]`` pairs) and ``routed`` (task ids). It is sent only when it
-   changed since the last request; a request without ``fleet`` means "the same fleet as before".
+   changed since the last request; a request without ``fleet`` means "the same fleet as before". The
+   first ``fleet`` of a run is complete; later ones hold ``time``, ``routed`` and only the vehicles,
+   plans and queues that changed, each replacing the entry with the same vehicle id (vehicles never
+   leave a run), so a client keeps the fleet by vehicle id and updates it.
 
-   Answer: ``{"id": N, "plans": [PLAN...], "route_errors": [{"vehicle_id": V|null, "message": S}...]}``
-   (both lists may be empty: nothing to change), or ``{"id": N, "route_error": "message"}`` when the
-   whole request cannot be routed (a raised ``RouteError``).
-3. When the run ends fleetsim closes the planner's stdin; the process should exit.
+   ``vehicle`` is the task's vehicle. Answer: ``{"id": N, "plans": [PLAN...], "route_errors":
+   [{"vehicle_id": V|null, "message": S}...]}`` (both lists may be empty: nothing to change; plans are
+   checked and applied in their order, route errors are reported), or ``{"id": N, "route_error":
+   "message"}`` when the whole request cannot be routed (a raised ``RouteError``).
+3. When the run ends fleetsim closes the planner's stdin; the process should exit (status 0). A process
+   still running a second later is terminated, with everything it started.
+
+Blank lines are ignored on both sides. Numbers are plain JSON (never NaN or infinite). Enum words:
+traverse ``forward|backward``, progress ``forward|reverse``, joint ``same|opposite|turn_in_place``,
+shape ``straight|curve|s_curve``, direction ``both|forward|backward``, turn capability
+``curve|in_place``, conflict model ``swept|bbox``.
 """
 
 from __future__ import annotations
@@ -150,12 +160,23 @@ def _state(state: VehicleState) -> dict[str, Any]:
     }
 
 
-def encode_fleet(fleet: FleetSnapshot) -> dict[str, Any]:
+def encode_fleet(fleet: FleetSnapshot, previous: FleetSnapshot | None = None) -> dict[str, Any]:
+    """The snapshot, or with ``previous`` (the fleet the planner last saw) only what differs from it:
+    the vehicles whose state, the plans and the queues that changed (``time`` and ``routed`` always)."""
+    def changed(mapping: Mapping[int, Any], before: Mapping[int, Any] | None) -> list[int]:
+        if before is None:
+            return sorted(mapping)
+        # Unchanged states and plans are the same objects from one snapshot to the next.
+        return sorted(vid for vid, value in mapping.items() if before.get(vid) is not value and before.get(vid) != value)
+
+    vehicles = changed(fleet.vehicles, None if previous is None else previous.vehicles)
+    plans = changed(fleet.plans, None if previous is None else previous.plans)
+    queues = changed(fleet.tasks, None if previous is None else previous.tasks)
     return {
         "time": fleet.time,
-        "vehicles": [_state(fleet.vehicles[vid]) for vid in sorted(fleet.vehicles)],
-        "plans": [encode_plan(fleet.plans[vid]) for vid in sorted(fleet.plans)],
-        "tasks": [[vid, [task.id for task in fleet.tasks[vid]]] for vid in sorted(fleet.tasks)],
+        "vehicles": [_state(fleet.vehicles[vid]) for vid in vehicles],
+        "plans": [encode_plan(fleet.plans[vid]) for vid in plans],
+        "tasks": [[vid, [task.id for task in fleet.tasks[vid]]] for vid in queues],
         "routed": sorted(fleet.routed),
     }
 

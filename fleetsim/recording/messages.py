@@ -61,13 +61,14 @@ def _type(name: str) -> Any:
 
 def serialise(message: Any) -> bytes:
     """CDR bytes of ``message`` (little endian, as rosbag2 writes)."""
-    return bytes(_store().serialize_cdr(message, message.__msgtype__))
+    data: memoryview = _store().serialize_cdr(message, message.__msgtype__)
+    return bytes(data)
 
 
 @cache
 def schema_text(typename: str) -> bytes:
     """The ``ros2msg`` schema of ``typename`` with its dependencies, as MCAP's ros2 profile wants it."""
-    text, _ = _store().generate_msgdef(typename, ros_version=2)
+    text: str = _store().generate_msgdef(typename, ros_version=2)[0]
     return text.encode("utf-8")
 
 

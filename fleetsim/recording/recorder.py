@@ -328,7 +328,7 @@ def record_mcap(path: Path, scenario: Scenario, trace_lines: Sequence[str], *, e
         with partial.open("wb") as stream:
             bag = _Bag(stream)
             frames = _write_frames(bag, scenario, replay(scenario, trace_lines), every)
-            bag.writer.finish()
+            bag.writer.finish()  # type: ignore[no-untyped-call]  # mcap's Writer.finish has no annotations
         os.replace(partial, path)
     finally:
         with contextlib.suppress(FileNotFoundError):

@@ -63,3 +63,16 @@ def tiled(tmp_path_factory: pytest.TempPathFactory) -> TiledCli:
     config_home = tmp_path_factory.mktemp("tiled-config")
     config_home.chmod(0o700)  # Qt refuses an XDG_RUNTIME_DIR others can read
     return TiledCli(executable, config_home)
+
+
+@pytest.fixture(scope="module")
+def node() -> str:
+    """The ``node`` executable; skipped when missing, unless FLEETSIM_REQUIRE_TOOLS=1 (as for tiled)."""
+    executable = shutil.which("node")
+    if executable is None:
+        reason = "Node.js 'node' is not on PATH (Debian/Ubuntu: apt install nodejs)"
+        # CI must not pass by skipping: there a missing tool is a failure.
+        if os.environ.get("FLEETSIM_REQUIRE_TOOLS") == "1":
+            pytest.fail(reason + "; FLEETSIM_REQUIRE_TOOLS=1 requires it")
+        pytest.skip(reason)
+    return executable

@@ -202,3 +202,17 @@ def _first_snapshot(scenario: Scenario) -> object:
     from fleetsim.planning.controller import FleetController
 
     return FleetController(scenario).snapshot(0.0)
+
+
+# -- the Node.js example ------------------------------------------------------------------------------
+
+NODE_PLANNER = ROOT / "examples" / "planners" / "node" / "bfs_planner.js"
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_the_node_example_planner_gives_the_bfs_planners_runs(name: str, node: str) -> None:
+    scenario = example(name)
+    direct = run_scenario(scenario, BFSPlanner())
+    served = run_scenario(scenario, SubprocessPlanner([node, str(NODE_PLANNER)]))
+    assert (served.status, served.ended, served.trace_hash) == (direct.status, direct.ended, direct.trace_hash)
+    assert [(f.kind, f.message) for f in served.failures] == [(f.kind, f.message) for f in direct.failures]

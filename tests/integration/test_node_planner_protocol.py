@@ -13,7 +13,6 @@ import functools
 import json
 import os
 import select
-import shutil
 import subprocess
 import time
 from collections.abc import Sequence
@@ -38,19 +37,6 @@ SUITE = ROOT / "scenario_suites" / "examples.fleetsim.yaml"
 PLANNER_JS = ROOT / "examples" / "planners" / "node" / "bfs_planner.js"
 EXAMPLES = [spec.name for spec in load_suite(SUITE).scenarios]
 ANSWER_TIMEOUT = 10.0  # seconds for one answer (node starts in well under a second)
-
-
-@pytest.fixture(scope="module")
-def node() -> str:
-    """The ``node`` executable; skipped when missing, unless FLEETSIM_REQUIRE_TOOLS=1 (as in conftest.py)."""
-    executable = shutil.which("node")
-    if executable is None:
-        reason = "Node.js 'node' is not on PATH (Debian/Ubuntu: apt install nodejs)"
-        # CI must not pass by skipping: there a missing tool is a failure.
-        if os.environ.get("FLEETSIM_REQUIRE_TOOLS") == "1":
-            pytest.fail(reason + "; FLEETSIM_REQUIRE_TOOLS=1 requires it")
-        pytest.skip(reason)
-    return executable
 
 
 @functools.cache

@@ -15,6 +15,7 @@
 //     -> answer {"id": N, "plans": [PLAN...], "route_errors": [{"vehicle_id": V, "message": S}...]}
 //        or {"id": N, "route_error": "..."} when the whole request cannot be routed.
 //     "fleet" is left out when the fleet has not changed since the previous request: keep the last one.
+//     The first "fleet" is complete; later ones hold only the vehicles, plans and queues that changed.
 //   * at the end of the run fleetsim closes stdin: we exit with status 0.
 // A message we cannot understand is a protocol violation: we say why on stderr and exit with status 1.
 "use strict";
@@ -113,7 +114,7 @@ function fixedLegs(plan) {
 }
 
 function planOf(vehicleId) {
-  const plan = fleet.plans.find((p) => p.vehicle_id === vehicleId);
+  const plan = fleet.plans.get(vehicleId);
   if (!plan || !Array.isArray(plan.legs)) fail(`the fleet has no plan for vehicle ${vehicleId}`);
   return plan;
 }
@@ -132,7 +133,7 @@ function planRoutes(task) {
   // Else: the fewest legs from the last committed leg to the goal segment, blind to other vehicles
   // and to the task's goal progress (BFSPlanner is meant to collide: it shows a caught planner bug).
   const last = fixed[fixed.length - 1];
-  const vehicle = fleet.vehicles.find((v) => v.id === vehicleId);
+  const vehicle = fleet.vehicles.get(vehicleId);
   if (!vehicle) fail(`the fleet has no vehicle ${vehicleId}`);
   const capability = turnCapability.get(vehicle.type);
   if (capability === undefined) fail(`vehicle ${vehicleId} has type ${JSON.stringify(vehicle.type)}, not in the init message`);
@@ -181,7 +182,11 @@ function handle(line) {
     if (!isObject(message.fleet) || !Array.isArray(message.fleet.plans) || !Array.isArray(message.fleet.vehicles)) {
       fail(`request ${message.id}: malformed "fleet"`);
     }
-    fleet = message.fleet; // a new snapshot; a request without "fleet" reuses this one
+    // The first fleet is complete; later ones carry only the vehicles, plans and queues that changed,
+    // each replacing the entry of the same vehicle id. A request without "fleet" reuses the last one.
+    if (fleet === null) fleet = { vehicles: new Map(), plans: new Map() };
+    for (const vehicle of message.fleet.vehicles) fleet.vehicles.set(vehicle.id, vehicle);
+    for (const plan of message.fleet.plans) fleet.plans.set(plan.vehicle_id, plan);
   } else if (fleet === null) {
     fail(`request ${message.id} has no "fleet" and no earlier request had one`);
   }
