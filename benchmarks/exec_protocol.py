@@ -2,9 +2,10 @@
 
     python benchmarks/exec_protocol.py [--vehicles 100] [--seconds 20] [--repeat 3] [--seed 1]
 
-Runs a generated warehouse fleet with ReservingPlanner twice: in process, and served over the protocol
-(``exec:python -m fleetsim.exec fleetsim.planners:ReservingPlanner``), checking that both runs give the
-same trace hash. The protocol's overhead per call is the difference of the time spent inside planner
+Runs a generated warehouse fleet with ReservingPlanner in process and served over the protocol
+(``exec:python -m fleetsim.exec fleetsim.planners:ReservingPlanner``), and with BFSPlanner in process
+and as the Node.js example (``exec:node examples/planners/node/bfs_planner.js``, when node is on PATH),
+checking that each pair gives the same trace hash. The protocol's overhead per call is the difference of the time spent inside planner
 calls (the guard's measure: for the process, writing the request, the planner's work in the child,
 reading and validating the answer) divided by the number of calls. Each figure is the best of
 ``--repeat`` runs. The first call of each step carries the fleet snapshot (every vehicle moved); the
@@ -14,6 +15,7 @@ others refer to it.
 from __future__ import annotations
 
 import argparse
+import shutil
 import sys
 import tempfile
 from pathlib import Path
@@ -24,9 +26,11 @@ from warehouse import write_fleet_scenario  # noqa: E402
 
 from fleetsim.exec import SubprocessPlanner  # noqa: E402
 from fleetsim.load.scenario import load_scenario_dir  # noqa: E402
-from fleetsim.planners import ReservingPlanner  # noqa: E402
+from fleetsim.planners import BFSPlanner, ReservingPlanner  # noqa: E402
 from fleetsim.scenario import ScenarioSettings  # noqa: E402
 from fleetsim.sim.loop import run_scenario  # noqa: E402
+
+NODE_PLANNER = Path(__file__).resolve().parents[1] / "examples" / "planners" / "node" / "bfs_planner.js"
 
 
 def main() -> int:
@@ -39,20 +43,23 @@ def main() -> int:
     with tempfile.TemporaryDirectory() as tmp:
         write_fleet_scenario(Path(tmp), args.vehicles, seed=args.seed)
         scenario = load_scenario_dir(Path(tmp), settings=ScenarioSettings(time_limit=args.seconds, stop_on=()))
-    command = [sys.executable, "-m", "fleetsim.exec", "fleetsim.planners:ReservingPlanner"]
-    direct = [run_scenario(scenario, ReservingPlanner(), keep_trace=False) for _ in range(args.repeat)]
-    served = [run_scenario(scenario, SubprocessPlanner(command), keep_trace=False) for _ in range(args.repeat)]
-    if {r.trace_hash for r in direct} != {r.trace_hash for r in served}:
-        print("the served planner's runs differ from the in-process runs", file=sys.stderr)
-        return 1
-    calls = direct[0].metrics.planner_calls
-    inside = min(r.metrics.planner_wall_time for r in direct)
-    outside = min(r.metrics.planner_wall_time for r in served)
-    per_call = (outside - inside) / calls
-    print(f"{args.vehicles} vehicles, ReservingPlanner, {direct[0].sim_time:.0f} s simulated, {calls} calls, best of {args.repeat}")
-    print(f"  in process        planner time {inside:7.3f} s  ({inside / calls * 1e6:6.1f} us per call), run {min(r.metrics.wall_time for r in direct):.3f} s")
-    print(f"  planner process   planner time {outside:7.3f} s  ({outside / calls * 1e6:6.1f} us per call), run {min(r.metrics.wall_time for r in served):.3f} s")
-    print(f"  protocol overhead {per_call * 1e6:7.1f} us per call (same trace hash: {direct[0].trace_hash[:12]})")
+    node = shutil.which("node")
+    cases = [("ReservingPlanner", ReservingPlanner, [sys.executable, "-m", "fleetsim.exec", "fleetsim.planners:ReservingPlanner"])]
+    if node is not None:
+        cases.append(("BFSPlanner", BFSPlanner, [node, str(NODE_PLANNER)]))
+    print(f"{args.vehicles} vehicles, {args.seconds:.0f} s simulated, best of {args.repeat}")
+    for name, planner, command in cases:
+        direct = [run_scenario(scenario, planner(), keep_trace=False) for _ in range(args.repeat)]
+        served = [run_scenario(scenario, SubprocessPlanner(command), keep_trace=False) for _ in range(args.repeat)]
+        if {r.trace_hash for r in direct} != {r.trace_hash for r in served}:
+            print(f"{name}: the planner process's runs differ from the in-process runs", file=sys.stderr)
+            return 1
+        calls = direct[0].metrics.planner_calls
+        inside = min(r.metrics.planner_wall_time for r in direct)
+        outside = min(r.metrics.planner_wall_time for r in served)
+        print(f"  {name} in process: {inside / calls * 1e6:6.1f} us per call ({calls} calls)")
+        print(f"  {name} as `{' '.join(Path(part).name for part in command)}`: {outside / calls * 1e6:6.1f} us per call")
+        print(f"    protocol overhead {(outside - inside) / calls * 1e6:6.1f} us per call; same trace hash {direct[0].trace_hash[:12]}")
     return 0
 
 
