@@ -1,0 +1,92 @@
+"""The planner protocol's messages: shipped schemas, encoders that match them, fleet updates."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import jsonschema
+import pytest
+
+from fleetsim import load_scenario, load_suite
+from fleetsim.exec.client import _Session
+from fleetsim.exec.protocol import decode_response, encode_fleet, encode_init, encode_task
+from fleetsim.planners import ReservingPlanner
+from fleetsim.planning.controller import FleetController
+from fleetsim.planning.protocol import FleetPlan, RouteError
+
+ROOT = Path(__file__).resolve().parents[2]
+NAMES = ("init", "ready", "request", "response")
+
+
+def schema(name: str) -> dict:
+    return json.loads((ROOT / "schemas" / f"planner-{name}.schema.json").read_text(encoding="utf-8"))
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_the_shipped_schema_is_the_packaged_one_and_valid(name: str) -> None:
+    packaged = ROOT / "fleetsim" / "schemas" / f"planner-{name}.schema.json"
+    assert json.loads(packaged.read_text(encoding="utf-8")) == schema(name)
+    jsonschema.Draft202012Validator.check_schema(schema(name))
+
+
+def crossing():  # type: ignore[no-untyped-def]
+    suite = load_suite(ROOT / "scenario_suites" / "examples.fleetsim.yaml")
+    return load_scenario(next(spec for spec in suite.scenarios if spec.name == "crossing"), suite)
+
+
+def test_init_and_requests_match_their_schemas_and_updates_carry_only_changes() -> None:
+    scenario = crossing()
+    controller = FleetController(scenario)
+    first = controller.snapshot(0.0)
+    jsonschema.validate(encode_init(scenario.layout, first), schema("init"))
+    full = encode_fleet(first)
+    task = scenario.tasks[0]
+    jsonschema.validate({"type": "plan_routes", "id": 1, "vehicle": task.vehicle_id, "task": encode_task(task), "fleet": full}, schema("request"))
+    assert [v["id"] for v in full["vehicles"]] == sorted(v.id for v in scenario.vehicles)
+
+    moved = controller.states[task.vehicle_id]._replace(x=123.0)
+    controller.set_state(moved)
+    second = controller.snapshot(0.1)
+    update = encode_fleet(second, first)
+    jsonschema.validate({"type": "fix_legs", "id": 2, "vehicle": task.vehicle_id, "task": encode_task(task), "fleet": update}, schema("request"))
+    assert [v["id"] for v in update["vehicles"]] == [task.vehicle_id]
+    assert update["plans"] == [] and update["tasks"] == [] and update["time"] == 0.1
+
+
+def test_the_python_client_keeps_the_fleet_by_vehicle_id_across_updates() -> None:
+    scenario = crossing()
+    controller = FleetController(scenario)
+    first = controller.snapshot(0.0)
+    session = _Session(json.loads(json.dumps(encode_init(scenario.layout, first))))
+    rebuilt = session.snapshot(json.loads(json.dumps(encode_fleet(first))))
+    assert dict(rebuilt.vehicles) == dict(first.vehicles) and dict(rebuilt.plans) == dict(first.plans)
+    kept_plans = dict(rebuilt.plans)
+    moved = controller.states[1]._replace(x=-4.5, speed=1.25)
+    controller.set_state(moved)
+    second = controller.snapshot(0.1)
+    updated = session.snapshot(json.loads(json.dumps(encode_fleet(second, first))))
+    assert dict(updated.vehicles) == dict(second.vehicles)
+    assert all(updated.plans[vid] is kept_plans[vid] for vid in kept_plans), "unchanged plans stay the same objects"
+    assert session.layout.connections == scenario.layout.connections
+
+
+def test_an_answer_decodes_to_plans_then_route_errors_and_a_request_error_is_raised() -> None:
+    plan = {"vehicle_id": 1, "legs": [{"segment": 1, "traverse": "forward", "progress": "reverse", "fixed": True, "goal_for_task": None}]}
+    items = decode_response({"id": 1, "plans": [plan], "route_errors": [{"vehicle_id": 2, "message": "blocked"}]})
+    assert isinstance(items[0], FleetPlan) and items[0].legs[0].progress.value == "reverse"
+    assert items[1] == RouteError(2, "blocked")
+    with pytest.raises(RouteError, match="no way through"):
+        decode_response({"id": 1, "route_error": "no way through"})
+
+
+def test_a_served_planner_answers_like_the_planner_itself() -> None:
+    scenario = crossing()
+    controller = FleetController(scenario)
+    fleet = controller.snapshot(0.0)
+    session = _Session(json.loads(json.dumps(encode_init(scenario.layout, fleet))))
+    task = scenario.tasks[0]
+    request = {"type": "plan_routes", "id": 1, "vehicle": task.vehicle_id, "task": encode_task(task), "fleet": encode_fleet(fleet)}
+    answer = session.answer(ReservingPlanner(), json.loads(json.dumps(request)))
+    jsonschema.validate(answer, schema("response"))
+    assert decode_response(answer) == list(ReservingPlanner().plan_routes(task, fleet, scenario.layout))
