@@ -14,6 +14,7 @@ import os
 import re
 import shlex
 import shutil
+import sys
 import xml.etree.ElementTree as ET
 from collections.abc import Iterable, Mapping
 from pathlib import Path
@@ -24,7 +25,7 @@ import pytest
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 
-from fleetsim.gating.lockfile import HashLock, LockEntry
+from fleetsim.gating.lockfile import HashLock, LockEntry, lock_path_for
 from fleetsim.load.scenario import load_scenario
 from fleetsim.load.suite import load_suite
 from fleetsim.planners import ReservingPlanner
@@ -665,3 +666,18 @@ def test_a_record_rate_below_one_step_is_a_usage_error(project: pytest.Pytester)
 
     assert result.ret == pytest.ExitCode.USAGE_ERROR
     result.stderr.fnmatch_lines(["*--fleetsim-record-every=0 must be a whole number of steps >= 1*"])
+
+
+def test_an_exec_planner_is_gated_like_any_other_and_records_the_in_process_hashes(
+    project: pytest.Pytester, recorded: dict[str, LockEntry]
+) -> None:
+    suite = make_project(project.path)
+    spec = f"exec:{sys.executable} -m fleetsim.exec {RESERVING}"
+
+    result = project.runpytest_inprocess("--planner", spec, "--fleetsim-update-hashes", "-n", "2")
+
+    result.assert_outcomes(passed=2)
+    lock = HashLock.load(lock_path_for(suite))
+    assert {name: lock.get(spec, name) for name in TWO} == {name: recorded[name] for name in TWO}
+    again = project.runpytest_inprocess("--planner", spec)
+    again.assert_outcomes(passed=2)
