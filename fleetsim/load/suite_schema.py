@@ -141,7 +141,7 @@ def _describe(error: ValidationError) -> tuple[str, Hashable | None]:
     if kind == "required":
         missing = next(key for key in rule if key not in value)
         if "then" in error.relative_schema_path:
-            return f"give 'dir', or all of 'map', 'vehicles' and 'tasks' ({missing!r} is missing)", None
+            return f"give 'dir', all of 'map', 'vehicles' and 'tasks', or 'generate' ({missing!r} is missing)", None
         return f"missing required key {missing!r}", None
     if kind == "additionalProperties":
         known = list(schema.get("properties", {}))
@@ -165,6 +165,9 @@ def _describe(error: ValidationError) -> tuple[str, Hashable | None]:
         return f"lists {_show(repeated)} more than once", None
     if kind == "pattern":
         return f"{_show(value)} is not {title or f'matching {rule!r}'}", None
+    if kind == "not" and "dependentSchemas" in error.relative_schema_path:
+        given = [key for key in ("dir", "map", "vehicles", "tasks") if key in value]
+        return f"'generate' makes the scenario, so it cannot also name files ({', '.join(map(repr, given))})", None
     if kind == "not":
         return f"{_show(value)} must not be {rule.get('title', 'this value')}", None
     return error.message, None
