@@ -27,6 +27,7 @@ from fleetsim.gating.baseline import (
     write_metrics,
 )
 from fleetsim.gating.lockfile import HashLock, LockEntry, LockFileError, lock_path_for
+from fleetsim.gating.generated import counterexample_entry, hunt, save_counterexample
 from fleetsim.gating.verify import run_checked
 from fleetsim.load.scenario import load_scenario
 from fleetsim.load.suite import load_suite
@@ -144,6 +145,9 @@ class FleetsimState:
         except PlannerSpecError as error:
             raise ScenarioFailed(_story(str(error), heading)) from None
         heading += f" with planner {source.identity}"
+        if item.spec.generate is not None:
+            self._hunt(item, source.make, source.identity, heading)
+            return
         try:
             scenario = load_scenario(item.spec, item.suite)
             lock = self._lock(item.suite.path)
@@ -173,6 +177,29 @@ class FleetsimState:
         self._describe(item, result, checked.record, source.identity)
         if not result.passed:
             raise ScenarioFailed(failure_report(result, heading=heading))
+
+    def _hunt(self, item: ScenarioItem, make: Any, identity: str, heading: str) -> None:
+        """A generated entry: Hypothesis hunts for a failing scenario; a shrunk one is saved and reported."""
+        try:
+            found = hunt(item.spec, item.suite, make, identity=identity, planner_timeout=self.timeout)
+        except PlannerSpecError as error:
+            raise ScenarioFailed(_story(f"planner-error: {error}", heading, error.details)) from None
+        item.user_properties.append(("fleetsim_generated_examples", str(found.tried)))
+        if found.counterexample is None or found.result is None:
+            return
+        folder = artifact_folder(self.artifacts, item.path, item.spec.name)
+        extra = {"suite": str(item.path), "nodeid": item.nodeid, "line": item.spec.line, "generated": found.tried}
+        paths = write_run_artifacts(folder, found.result, extra, scenario=found.counterexample, record_every=self.record_every)
+        saved = save_counterexample(found, folder)
+        shown = {kind: _relative(self.config, Path(path)) for kind, path in paths.items()}
+        result = replace(found.result, artifacts={**found.result.artifacts, **shown, "scenario": _relative(self.config, saved)})
+        self._describe(item, result, None, identity)
+        entry = counterexample_entry(item.spec, saved, item.path)
+        story = (
+            f"\n\nHypothesis tried {found.tried} generated scenario(s) and shrank the first failing one; it is saved as "
+            f"{_relative(self.config, saved)}/. To keep it as a regression scenario, add to {_relative(self.config, item.path)}:\n\n{entry}"
+        )
+        raise ScenarioFailed(failure_report(result, heading=heading) + story)
 
     def _lock(self, suite: Path) -> HashLock:
         path = lock_path_for(suite)

@@ -42,6 +42,14 @@ def validate(args: argparse.Namespace) -> int:
             continue
         print(f"{path}: suite {suite.name!r}, {len(suite.scenarios)} scenario(s)")
         for spec in suite.scenarios:
+            if spec.generate is not None:
+                g = spec.generate
+                loaded += 1
+                print(
+                    f"  ok   {spec.name}: generated ({g.layout} layouts of size {g.size[0]}-{g.size[1]}, "
+                    f"{g.vehicles[0]}-{g.vehicles[1]} vehicles, {g.tasks[0]}-{g.tasks[1]} tasks each, {g.examples} examples)"
+                )
+                continue
             try:
                 scenario = load_scenario(spec, suite)
             except LoadError as error:

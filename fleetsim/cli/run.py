@@ -16,17 +16,18 @@ import sys
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any, TextIO
+from typing import Any, Literal, TextIO
 
 from fleetsim.errors import FleetsimError, LoadError
 from fleetsim.load.scenario import load_scenario
 from fleetsim.load.scenario_files import did_you_mean
 from fleetsim.load.suite import SUITE_SUFFIX, ScenarioSpec, Suite, discover_suites, load_suite
+from fleetsim.gating.generated import counterexample_entry, hunt, save_counterexample
 from fleetsim.recording.artifacts import artifact_folder, write_run_artifacts
 from fleetsim.sim.loop import RunProgress, run_scenario
 from fleetsim.sim.planner_spec import PlannerFactory, PlannerSpecError, load_planner_factory
 from fleetsim.sim.report import failure_lines, format_table, summary_cells
-from fleetsim.sim.result import Failure, Metrics, RunResult
+from fleetsim.sim.result import Ending, Failure, Metrics, RunResult
 
 __all__ = ["UsageError", "run"]
 
@@ -158,6 +159,8 @@ def _run_target(
     try:
         if target.suite.planner is not None:  # the suite documents this planner, whatever was asked
             factory = load_planner_factory(target.suite.planner, call_timeout=timeout)
+        if target.spec.generate is not None:
+            return _hunt_target(target, factory, timeout, record)
         scenario = load_scenario(target.spec, target.suite)
     except (LoadError, PlannerSpecError) as error:
         return _Outcome(target, _load_failure(target.spec.name, factory.spec, error), loaded=False)
@@ -174,16 +177,44 @@ def _run_target(
     return _Outcome(target, result, loaded=True)
 
 
+def _hunt_target(target: _Target, factory: PlannerFactory, timeout: float | None, record: tuple[Path, int] | None) -> _Outcome:
+    """A generated entry: hunt for a failing scenario; report and save a shrunk counterexample."""
+    assert target.suite is not None and target.spec is not None
+    found = hunt(target.spec, target.suite, factory, identity=factory.spec, planner_timeout=timeout)
+    if found.result is None:
+        return _Outcome(target, _unrun(target.spec.name, factory.spec, "passed", "no-counterexample", ()), loaded=True)
+    result = found.result
+    if record is not None:
+        root, every = record
+        folder = artifact_folder(root, target.suite_path, target.spec.name)
+        extra = {"suite": str(target.suite_path), "line": target.spec.line, "generated": found.tried}
+        paths = write_run_artifacts(folder, result, extra, scenario=found.counterexample, record_every=every)
+        saved = save_counterexample(found, folder)
+        result = replace(result, artifacts={**result.artifacts, **paths, "scenario": str(saved)})
+        entry = counterexample_entry(target.spec, saved, target.suite_path)
+        print(
+            f"{target.label}: Hypothesis tried {found.tried} generated scenario(s); the shrunk counterexample is saved "
+            f"as {saved}/. To keep it as a regression scenario, add to {target.suite_path}:\n\n{entry}",
+            file=sys.stderr,
+        )
+    return _Outcome(target, result, loaded=True)
+
+
 def _load_failure(name: str, planner: str, error: LoadError | PlannerSpecError) -> RunResult:
     """A result for a scenario that never ran, shaped like any other (its JSON has the same keys)."""
     location = getattr(error, "location", None)
     details = {"location": str(location)} if location is not None else {}
+    return _unrun(name, planner, "failed", "load-error", (Failure("load-error", 0.0, str(error), details),))
+
+
+def _unrun(name: str, planner: str, status: Literal["passed", "failed"], ended: Ending, failures: tuple[Failure, ...]) -> RunResult:
+    """A result without a run of its own (a load error, or a hunt that found nothing)."""
     metrics = Metrics(None, {}, {}, planner_calls=0, planner_wall_time=0.0, wall_time=0.0, sim_time=0.0)
     return RunResult(
         scenario=name,
         planner=planner,
-        status="failed",
-        failures=(Failure("load-error", 0.0, str(error), details),),
+        status=status,
+        failures=failures,
         trace_hash="",
         sim_time=0.0,
         steps=0,
@@ -193,7 +224,7 @@ def _load_failure(name: str, planner: str, error: LoadError | PlannerSpecError) 
         rejections=(),
         collisions=(),
         route_errors=(),
-        ended="load-error",
+        ended=ended,
         deadlock=None,
         metrics=metrics,
     )

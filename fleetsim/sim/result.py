@@ -20,7 +20,10 @@ from fleetsim.sim.trace import Trace
 
 __all__ = ["AlertEvent", "DeadlockReport", "Failure", "Metrics", "RejectionEvent", "RunResult", "judge"]
 
-Ending = Literal["completed", "time-limit", "deadlock", "rejection", "collision", "planner-error", "load-error"]
+# "no-counterexample": a generated suite entry whose hunt found no scenario the planner fails.
+Ending = Literal[
+    "completed", "time-limit", "deadlock", "rejection", "collision", "planner-error", "load-error", "no-counterexample"
+]
 
 
 @dataclass(frozen=True, slots=True)

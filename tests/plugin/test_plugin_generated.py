@@ -1,0 +1,52 @@
+"""Generated suite entries under pytest: a hunt per entry, a shrunk counterexample saved and reported."""
+
+from __future__ import annotations
+
+import pytest
+
+SUITE = """\
+fleetsim: 1
+name: hunting
+vehicle_types:
+  agv: {length: 1.0, width: 0.6, height: 0.4, max_speed: 1.0, acceleration: 0.5, turn_capability: in_place}
+defaults:
+  time_limit: 120
+scenarios:
+  - name: random-loops
+    generate: {layout: loop, size: [1, 2], vehicles: [1, 3], tasks: [1, 2], examples: 30}
+"""
+
+
+@pytest.fixture
+def hunting(pytester: pytest.Pytester, monkeypatch: pytest.MonkeyPatch) -> pytest.Pytester:
+    monkeypatch.setenv("CI", "1")  # derandomised: the same counterexample on every run
+    monkeypatch.setenv("COLUMNS", "300")
+    pytester.makefile(".fleetsim.yaml", hunting=SUITE)
+    return pytester
+
+
+def test_a_caught_planner_fails_with_the_counterexample_saved_and_a_suite_entry_to_paste(hunting: pytest.Pytester) -> None:
+    result = hunting.runpytest_inprocess("--planner", "fleetsim.planners:BFSPlanner")
+
+    result.assert_outcomes(failed=1)
+    result.stdout.fnmatch_lines([
+        "*Hypothesis tried * generated scenario(s) and shrank the first failing one; it is saved as fleetsim-results/hunting/random-loops/counterexample/*",
+        "  - name: random-loops-counterexample",
+        "    dir: fleetsim-results/hunting/random-loops/counterexample/",
+    ])
+    folder = hunting.path / "fleetsim-results" / "hunting" / "random-loops"
+    assert sorted(p.name for p in (folder / "counterexample").iterdir()) == ["map.json", "tasks.csv", "vehicles.csv"]
+    assert (folder / "failure.svg").is_file() and (folder / "run.mcap").is_file()
+    first = (folder / "counterexample" / "map.json").read_bytes()
+
+    again = hunting.runpytest_inprocess("--planner", "fleetsim.planners:BFSPlanner")
+    again.assert_outcomes(failed=1)
+    assert (folder / "counterexample" / "map.json").read_bytes() == first, "CI runs find the same counterexample"
+    assert not (hunting.path / "hunting.fleetsim.lock.json").exists(), "generated runs are not hash-gated"
+
+
+def test_a_sound_planner_passes_a_generated_entry(hunting: pytest.Pytester) -> None:
+    result = hunting.runpytest_inprocess("--planner", "fleetsim.planners:ReservingPlanner", "--fleetsim-update-hashes")
+
+    result.assert_outcomes(passed=1)
+    assert not (hunting.path / "fleetsim-results").exists()
