@@ -10,6 +10,7 @@ from typing import Any
 from fleetsim.cli.run import UsageError
 from fleetsim.enums import ConflictModel
 from fleetsim.errors import LoadError
+from fleetsim.exec.protocol import encode_layout
 from fleetsim.layout.layout import Layout, build_layout
 from fleetsim.load.scenario import load_scenario
 from fleetsim.load.scenario_files import did_you_mean
@@ -89,32 +90,7 @@ def layout_document(tiled_map: TiledMap, layout: Layout) -> dict[str, Any]:
     return {
         "map": str(tiled_map.path),
         "meters_per_pixel": tiled_map.meters_per_pixel,
-        "settings": {
-            "vehicle_radius": layout.vehicle_radius,
-            "safety_margin": layout.safety_margin,
-            "conflict_model": layout.conflict_model.value,
-            "connection_tolerance": layout.connection_tolerance,
-            "joint_angle_tolerance": layout.joint_angle_tolerance,
-        },
-        "segments": [
-            {
-                "id": seg.id,
-                "shape": seg.shape.value,
-                "direction": seg.direction.value,
-                "length": seg.length,
-                "waypoints": [list(p) for p in seg.waypoints],
-            }
-            for seg in layout.segments.values()
-        ],
-        "connections": [
-            {
-                "from": [c.from_segment, c.from_traverse.value],
-                "to": [c.to_segment, c.to_traverse.value],
-                "joint": c.joint.value,
-            }
-            for c in layout.connections
-        ],
-        "conflicts": [{"segment": sid, "conflicts": sorted(layout.conflicts(sid))} for sid in layout.segments],
+        **encode_layout(layout),  # the layout part of a planner process's init message, too
         "lint": [
             {"code": f.code, "severity": f.severity, "segments": list(f.segments), "message": f.message}
             for f in layout.lint()

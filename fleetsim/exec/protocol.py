@@ -7,7 +7,8 @@ is kept for error reports). Enum values are the words of the suite files (``forw
 are in ``schemas/planner-*.schema.json``.
 
 1. ``{"type": "init", "protocol": "fleetsim-planner/1", "layout": {...}, "scenario": {...}}``
-   - ``layout``: ``segments`` (``id, shape, direction, length, waypoints`` in metres), ``connections``
+   - ``layout`` (the same document as ``fleetsim inspect --json`` gives, without lint):
+     ``segments`` (``id, shape, direction, length, waypoints`` in metres), ``connections``
      (``from: [segment, traverse], to: [segment, traverse], joint``; the successors of a state are its
      connections in this order), ``conflicts`` (``{segment, conflicts}``, each list sorted) and
      ``settings`` (``vehicle_radius, safety_margin, conflict_model, connection_tolerance,
