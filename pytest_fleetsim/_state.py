@@ -27,7 +27,7 @@ from fleetsim.gating.baseline import (
     write_metrics,
 )
 from fleetsim.gating.lockfile import HashLock, LockEntry, LockFileError, lock_path_for
-from fleetsim.gating.generated import counterexample_entry, hunt, save_counterexample
+from fleetsim.gating.generated import counterexample_entry, counterexample_story, hunt, record_counterexample
 from fleetsim.gating.verify import run_checked
 from fleetsim.load.scenario import load_scenario
 from fleetsim.load.suite import load_suite
@@ -189,16 +189,12 @@ class FleetsimState:
             return
         folder = artifact_folder(self.artifacts, item.path, item.spec.name)
         extra = {"suite": str(item.path), "nodeid": item.nodeid, "line": item.spec.line, "generated": found.tried}
-        paths = write_run_artifacts(folder, found.result, extra, scenario=found.counterexample, record_every=self.record_every)
-        saved = save_counterexample(found, folder)
+        paths = record_counterexample(found, folder, extra, record_every=self.record_every)
         shown = {kind: _relative(self.config, Path(path)) for kind, path in paths.items()}
-        result = replace(found.result, artifacts={**found.result.artifacts, **shown, "scenario": _relative(self.config, saved)})
+        result = replace(found.result, artifacts={**found.result.artifacts, **shown})
         self._describe(item, result, None, identity)
-        entry = counterexample_entry(item.spec, saved, item.path)
-        story = (
-            f"\n\nHypothesis tried {found.tried} generated scenario(s) and shrank the first failing one; it is saved as "
-            f"{_relative(self.config, saved)}/. To keep it as a regression scenario, add to {_relative(self.config, item.path)}:\n\n{entry}"
-        )
+        entry = counterexample_entry(item.spec, Path(paths["scenario"]), item.path)
+        story = "\n\n" + counterexample_story(found, shown["scenario"], _relative(self.config, item.path), entry)
         raise ScenarioFailed(failure_report(result, heading=heading) + story)
 
     def _lock(self, suite: Path) -> HashLock:

@@ -22,7 +22,7 @@ from fleetsim.errors import FleetsimError, LoadError
 from fleetsim.load.scenario import load_scenario
 from fleetsim.load.scenario_files import did_you_mean
 from fleetsim.load.suite import SUITE_SUFFIX, ScenarioSpec, Suite, discover_suites, load_suite
-from fleetsim.gating.generated import counterexample_entry, hunt, save_counterexample
+from fleetsim.gating.generated import counterexample_entry, counterexample_story, hunt, record_counterexample
 from fleetsim.recording.artifacts import artifact_folder, write_run_artifacts
 from fleetsim.sim.loop import RunProgress, run_scenario
 from fleetsim.sim.planner_spec import PlannerFactory, PlannerSpecError, load_planner_factory
@@ -188,15 +188,10 @@ def _hunt_target(target: _Target, factory: PlannerFactory, timeout: float | None
         root, every = record
         folder = artifact_folder(root, target.suite_path, target.spec.name)
         extra = {"suite": str(target.suite_path), "line": target.spec.line, "generated": found.tried}
-        paths = write_run_artifacts(folder, result, extra, scenario=found.counterexample, record_every=every)
-        saved = save_counterexample(found, folder)
-        result = replace(result, artifacts={**result.artifacts, **paths, "scenario": str(saved)})
-        entry = counterexample_entry(target.spec, saved, target.suite_path)
-        print(
-            f"{target.label}: Hypothesis tried {found.tried} generated scenario(s); the shrunk counterexample is saved "
-            f"as {saved}/. To keep it as a regression scenario, add to {target.suite_path}:\n\n{entry}",
-            file=sys.stderr,
-        )
+        paths = record_counterexample(found, folder, extra, record_every=every)
+        result = replace(result, artifacts={**result.artifacts, **paths})
+        entry = counterexample_entry(target.spec, Path(paths["scenario"]), target.suite_path)
+        print(f"{target.label}: {counterexample_story(found, paths['scenario'], str(target.suite_path), entry)}", file=sys.stderr)
     return _Outcome(target, result, loaded=True)
 
 

@@ -12,9 +12,10 @@ with a suite entry to paste in, so the bug stays covered after it is fixed.
 from __future__ import annotations
 
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Any
 
 from hypothesis import HealthCheck, Phase, find, settings
 from hypothesis.errors import NoSuchExample
@@ -22,12 +23,13 @@ from hypothesis.errors import NoSuchExample
 from fleetsim.load.scenario import default_vehicle_type
 from fleetsim.load.suite import ScenarioSpec, Suite
 from fleetsim.planning.protocol import Planner
+from fleetsim.recording.artifacts import write_run_artifacts
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Expectations, Scenario
 from fleetsim.sim.loop import run_scenario
 from fleetsim.sim.result import RunResult
 from fleetsim.strategies import GenerationSpec, save_scenario, scenarios
 
-__all__ = ["COUNTEREXAMPLE_FOLDER", "Hunt", "counterexample_entry", "generation_spec", "hunt", "in_ci", "save_counterexample"]
+__all__ = ["COUNTEREXAMPLE_FOLDER", "Hunt", "counterexample_entry", "generation_spec", "hunt", "counterexample_story", "in_ci", "record_counterexample"]
 
 COUNTEREXAMPLE_FOLDER = "counterexample"
 
@@ -130,7 +132,18 @@ def counterexample_entry(spec: ScenarioSpec, folder: Path, suite_path: Path) -> 
     return "\n".join(lines) + "\n"
 
 
-def save_counterexample(hunt_result: Hunt, folder: Path) -> Path:
-    """The counterexample as a scenario folder (map, vehicles.csv, tasks.csv) under ``folder``."""
-    assert hunt_result.counterexample is not None
-    return save_scenario(hunt_result.counterexample, folder / COUNTEREXAMPLE_FOLDER)
+def record_counterexample(found: Hunt, folder: Path, extra: Mapping[str, Any], *, record_every: int = 1) -> dict[str, str]:
+    """The shrunk counterexample's run artifacts in ``folder`` and the scenario itself as a folder
+    (map, vehicles.csv, tasks.csv) under it; their paths by kind, the scenario folder as ``scenario``."""
+    assert found.counterexample is not None and found.result is not None
+    paths = write_run_artifacts(folder, found.result, extra, scenario=found.counterexample, record_every=record_every)
+    paths["scenario"] = str(save_scenario(found.counterexample, folder / COUNTEREXAMPLE_FOLDER))
+    return paths
+
+
+def counterexample_story(found: Hunt, saved: str, suite: str, entry: str) -> str:
+    """What a report says about a saved counterexample (paths as the reader should see them)."""
+    return (
+        f"Hypothesis tried {found.tried} generated scenario(s) and shrank the first failing one; it is saved as "
+        f"{saved}/. To keep it as a regression scenario, add to {suite}:\n\n{entry}"
+    )

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-__all__ = ["TiledCli"]
+__all__ = ["TiledCli", "required_tool"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -50,16 +50,22 @@ class TiledCli:
         return target
 
 
-@pytest.fixture(scope="session")
-def tiled(tmp_path_factory: pytest.TempPathFactory) -> TiledCli:
-    """The Tiled CLI; tests using it are skipped when Tiled is not installed."""
-    executable = shutil.which("tiled")
+def required_tool(program: str, what: str, install: str) -> str:
+    """The path of ``program``; a test needing it is skipped when it is missing, or fails when
+    FLEETSIM_REQUIRE_TOOLS=1 (CI must not pass by skipping)."""
+    executable = shutil.which(program)
     if executable is None:
-        reason = "the Tiled editor's CLI 'tiled' is not on PATH (Debian/Ubuntu: apt install tiled)"
-        # CI must not pass by skipping: there a missing tool is a failure.
+        reason = f"{what} is not on PATH (Debian/Ubuntu: {install})"
         if os.environ.get("FLEETSIM_REQUIRE_TOOLS") == "1":
             pytest.fail(reason + "; FLEETSIM_REQUIRE_TOOLS=1 requires it")
         pytest.skip(reason)
+    return executable
+
+
+@pytest.fixture(scope="session")
+def tiled(tmp_path_factory: pytest.TempPathFactory) -> TiledCli:
+    """The Tiled CLI; tests using it are skipped when Tiled is not installed."""
+    executable = required_tool("tiled", "the Tiled editor's CLI 'tiled'", "apt install tiled")
     config_home = tmp_path_factory.mktemp("tiled-config")
     config_home.chmod(0o700)  # Qt refuses an XDG_RUNTIME_DIR others can read
     return TiledCli(executable, config_home)
@@ -68,11 +74,4 @@ def tiled(tmp_path_factory: pytest.TempPathFactory) -> TiledCli:
 @pytest.fixture(scope="module")
 def node() -> str:
     """The ``node`` executable; skipped when missing, unless FLEETSIM_REQUIRE_TOOLS=1 (as for tiled)."""
-    executable = shutil.which("node")
-    if executable is None:
-        reason = "Node.js 'node' is not on PATH (Debian/Ubuntu: apt install nodejs)"
-        # CI must not pass by skipping: there a missing tool is a failure.
-        if os.environ.get("FLEETSIM_REQUIRE_TOOLS") == "1":
-            pytest.fail(reason + "; FLEETSIM_REQUIRE_TOOLS=1 requires it")
-        pytest.skip(reason)
-    return executable
+    return required_tool("node", "Node.js 'node'", "apt install nodejs")

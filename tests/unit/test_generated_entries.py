@@ -8,7 +8,7 @@ import pytest
 
 from fleetsim import load_scenario, load_suite
 from fleetsim.cli import main
-from fleetsim.gating.generated import counterexample_entry, hunt, save_counterexample
+from fleetsim.gating.generated import counterexample_entry, hunt, record_counterexample
 from fleetsim.planners import BFSPlanner, ReservingPlanner
 
 SUITE = """\
@@ -52,7 +52,7 @@ def test_the_saved_counterexample_pasted_into_the_suite_runs_as_an_ordinary_scen
     [spec] = suite.scenarios
     found = hunt(spec, suite, BFSPlanner, identity="bfs", derandomize=True)
     assert found.counterexample is not None
-    saved = save_counterexample(found, tmp_path / "results" / "random-loops")
+    saved = Path(record_counterexample(found, tmp_path / "results" / "random-loops", {})["scenario"])
     entry = counterexample_entry(spec, saved, path)
     assert entry.startswith("  - name: random-loops-counterexample\n")
     assert "    dir: results/random-loops/counterexample/\n" in entry
@@ -80,6 +80,6 @@ def test_fleetsim_run_and_validate_take_generated_entries(tmp_path: Path, capsys
     status = main(["run", str(path), "--planner", "fleetsim.planners:BFSPlanner", "--record", str(tmp_path / "runs")])
     err = capsys.readouterr().err
     assert status == 1
-    assert "the shrunk counterexample is saved" in err and "  - name: random-loops-counterexample" in err
+    assert "shrank the first failing one; it is saved as" in err and "  - name: random-loops-counterexample" in err
     assert (tmp_path / "runs" / "hunting" / "random-loops" / "counterexample" / "map.json").is_file()
     assert (tmp_path / "runs" / "hunting" / "random-loops" / "run.mcap").is_file()

@@ -8,7 +8,6 @@ from dataclasses import replace
 from pathlib import Path
 
 from fleetsim import load_scenario, load_suite
-from fleetsim.gating.lockfile import LockEntry
 from fleetsim.gating.verify import run_checked
 from fleetsim.planners import BFSPlanner, ReservingPlanner
 from fleetsim.planning.protocol import FleetPlan
