@@ -16,6 +16,7 @@ __all__ = [
     "Location",
     "MapError",
     "PlannerError",
+    "PlannerProcessError",
     "ScenarioFileError",
     "SuiteError",
 ]
@@ -75,3 +76,11 @@ class LayoutError(FleetsimError, ValueError):
 
 class PlannerError(FleetsimError, TypeError):
     """A planner broke the protocol: it raised, returned something that is not a response, or hung."""
+
+
+class PlannerProcessError(PlannerError):
+    """A planner process failed (see :mod:`fleetsim.exec`): ``details`` is the tail of its stderr."""
+
+    def __init__(self, message: str, details: str = "") -> None:
+        self.details = details
+        super().__init__(message)

@@ -35,7 +35,7 @@ from typing import IO, Any
 import jsonschema
 import jsonschema_rs
 
-from fleetsim.errors import PlannerError
+from fleetsim.errors import PlannerProcessError
 from fleetsim.exec.protocol import decode_response, encode_fleet, encode_init, encode_task
 from fleetsim.layout.layout import Layout
 from fleetsim.planning.protocol import Response
@@ -47,14 +47,6 @@ __all__ = ["SCHEMAS", "PlannerProcessError", "SubprocessPlanner", "load_schema"]
 SCHEMAS = Path(__file__).resolve().parents[1] / "schemas"
 _STDERR_TAIL = 4000  # characters of stderr shown with an error
 _GRACE = 1.0  # seconds a process gets to exit after stdin closes, and again after SIGTERM
-
-
-class PlannerProcessError(PlannerError):
-    """The planner process failed: ``details`` is the tail of what it wrote to stderr."""
-
-    def __init__(self, message: str, details: str = "") -> None:
-        self.details = details
-        super().__init__(message)
 
 
 @dataclass(frozen=True, slots=True)

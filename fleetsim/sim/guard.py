@@ -18,8 +18,7 @@ import traceback
 from collections.abc import Callable
 from types import FrameType
 
-from fleetsim.errors import FleetsimError
-from fleetsim.exec.process import PlannerProcessError
+from fleetsim.errors import FleetsimError, PlannerProcessError
 from fleetsim.planning.protocol import RouteError
 
 __all__ = ["PlannerFault", "PlannerGuard"]
