@@ -130,6 +130,12 @@ class _Run:
         records = []
         for vehicle_id, driver in self.drivers.items():
             plan = plan_of(vehicle_id)
+            cruised = driver.cruise(plan, dt)
+            if cruised is not None:  # the commonest case, in short
+                self.last_activity = end
+                states.append(cruised[0])
+                records.append(vehicle_record(cruised[0]))
+                continue
             new_plan, entered, distance, turned, state = driver.step(plan, dt)
             if new_plan is not plan:
                 controller.drive_past(new_plan)
