@@ -27,6 +27,7 @@ from warehouse import write_fleet_scenario  # noqa: E402
 from fleetsim.exec import SubprocessPlanner  # noqa: E402
 from fleetsim.load.scenario import load_scenario_dir  # noqa: E402
 from fleetsim.planners import BFSPlanner, ReservingPlanner  # noqa: E402
+from fleetsim.planning.protocol import Planner  # noqa: E402
 from fleetsim.scenario import ScenarioSettings  # noqa: E402
 from fleetsim.sim.loop import run_scenario  # noqa: E402
 
@@ -44,7 +45,7 @@ def main() -> int:
         write_fleet_scenario(Path(tmp), args.vehicles, seed=args.seed)
         scenario = load_scenario_dir(Path(tmp), settings=ScenarioSettings(time_limit=args.seconds, stop_on=()))
     node = shutil.which("node")
-    cases = [("ReservingPlanner", ReservingPlanner, [sys.executable, "-m", "fleetsim.exec", "fleetsim.planners:ReservingPlanner"])]
+    cases: list[tuple[str, type[Planner], list[str]]] = [("ReservingPlanner", ReservingPlanner, [sys.executable, "-m", "fleetsim.exec", "fleetsim.planners:ReservingPlanner"])]
     if node is not None:
         cases.append(("BFSPlanner", BFSPlanner, [node, str(NODE_PLANNER)]))
     print(f"{args.vehicles} vehicles, {args.seconds:.0f} s simulated, best of {args.repeat}")

@@ -27,7 +27,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 from warehouse import warehouse_with_at_least  # noqa: E402
 
 from fleetsim.enums import ConflictModel  # noqa: E402
-from fleetsim.layout import build_layout  # noqa: E402
+from fleetsim.layout import Segment, build_layout  # noqa: E402
 from fleetsim.layout.conflicts import SubSegments, all_pairs_conflicts, conflict_sets, polyline_distances  # noqa: E402
 from fleetsim.layout.geometry import ragged_arange  # noqa: E402
 from fleetsim.load.tiled import load_map  # noqa: E402
@@ -52,7 +52,7 @@ def show(label: str, times: list[float]) -> None:
     print(f"  {label:<44} best {min(times):7.3f} s   median {statistics.median(times):7.3f} s")
 
 
-def sampled_all_pairs_seconds(segments: tuple, threshold: float, rows: int = 40) -> float:
+def sampled_all_pairs_seconds(segments: tuple[Segment, ...], threshold: float, rows: int = 40) -> float:
     subs = SubSegments.of(segments)
     n = len(segments)
     picked = np.linspace(0, n - 2, rows).astype(np.int64)

@@ -12,6 +12,7 @@ import copy
 import inspect
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import cast
 
 from fleetsim.planning.protocol import Planner
 from fleetsim.sim.planner_spec import METHODS, PlannerFactory, PlannerSpecError
@@ -42,7 +43,7 @@ def planner_source(value: object) -> PlannerSource:
         return PlannerSource(value.spec, value, from_option=True)
     if _is_planner(value):
         try:
-            pristine = copy.deepcopy(value)
+            pristine = cast(Planner, copy.deepcopy(value))  # _is_planner: it has both planner methods
         except Exception as exc:  # a planner holding a socket, a lock, ...
             msg = (
                 f"the fleetsim_planner fixture returned a planner instance that cannot be copied "

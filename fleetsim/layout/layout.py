@@ -23,7 +23,7 @@ from fleetsim.enums import ConflictModel, JointKind, Traverse
 from fleetsim.errors import LayoutError
 from fleetsim.layout.conflicts import conflict_sets
 from fleetsim.layout.connections import Connection, find_connections
-from fleetsim.layout.lint import LintFinding, lint_layout
+from fleetsim.layout.lint import LintFinding, StateGraph, lint_layout
 from fleetsim.layout.segment import Segment
 
 __all__ = ["Connection", "Layout", "Step", "build_layout"]
@@ -47,10 +47,10 @@ class Layout:
     _successors: StepIndex
     _predecessors: StepIndex
     _conflicts: Mapping[int, frozenset[int]]
-    _graph_cache: list[nx.DiGraph]  # empty until `graph` is first asked for
+    _graph_cache: list[StateGraph]  # empty until `graph` is first asked for
 
     @property
-    def graph(self) -> nx.DiGraph:
+    def graph(self) -> StateGraph:
         """The frozen networkx graph over ``(segment, traverse)`` states; edges carry ``joint``.
 
         Built on first use: on large maps it costs more than everything else in :func:`build_layout`,
@@ -133,14 +133,15 @@ def _sorted_segments(segments: Iterable[Segment], source: Path | None) -> dict[i
     return {sid: by_id[sid] for sid in sorted(by_id)}
 
 
-def _state_graph(segments: Mapping[int, Segment], connections: tuple[Connection, ...]) -> nx.DiGraph:
-    graph = nx.DiGraph()
+def _state_graph(segments: Mapping[int, Segment], connections: tuple[Connection, ...]) -> StateGraph:
+    graph: StateGraph = nx.DiGraph()
     graph.add_nodes_from((sid, t) for sid, segment in segments.items() for t in Traverse if segment.allows(t))
     graph.add_edges_from(
         ((c.from_segment, c.from_traverse), (c.to_segment, c.to_traverse), {"joint": c.joint})
         for c in connections
     )
-    return nx.freeze(graph)
+    frozen: StateGraph = nx.freeze(graph)
+    return frozen
 
 
 def _step_index(connections: tuple[Connection, ...]) -> tuple[StepIndex, StepIndex]:

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Literal, TypeAlias
 
 import networkx as nx
 
@@ -37,6 +37,7 @@ __all__ = ["LintFinding", "Severity", "lint_layout"]
 Severity = Literal["warning", "error"]
 
 State = tuple[int, Traverse]
+StateGraph: TypeAlias = "nx.DiGraph[State]"  # networkx graphs are generic to type checkers only
 
 # Ends this many connection tolerances apart (or closer) are reported as near misses.
 _NEAR_MISS_FACTOR = 10.0
@@ -115,7 +116,7 @@ def _state_key(state: State) -> tuple[int, int]:
     return (state[0], traverse_rank(state[1]))
 
 
-def _main_component(graph: nx.DiGraph) -> list[State] | None:
+def _main_component(graph: StateGraph) -> list[State] | None:
     """The strongly connected component covering the most segments, as sorted states.
 
     Ties go to the smallest segment id, then to the smallest states, so the choice never depends on

@@ -11,7 +11,7 @@ import importlib.resources
 import json
 import math
 from collections.abc import Hashable, Iterable, Sequence
-from typing import Any
+from typing import Any, cast
 
 from jsonschema import Draft202012Validator
 from jsonschema.exceptions import ValidationError, best_match
@@ -78,11 +78,11 @@ def _most_relevant(errors: Iterable[ValidationError], locate: Locate) -> Validat
     top = max(in_file_order, key=lambda e: (-len(e.path), e.validator not in _ALTERNATIVES), default=None)
     if top is None:
         return None
-    error: ValidationError = best_match([top])  # descends into oneOf/anyOf to the branch that fits best
+    error = cast(ValidationError, best_match([top]))  # descends into oneOf/anyOf to the branch that fits best
     # When that branch's error is about the same value, "is not one of A, B or C" (every alternative)
     # says more than why branch B failed.
     while error.parent is not None and error.parent.validator in _ALTERNATIVES and not error.relative_path:
-        error = error.parent
+        error = cast(ValidationError, error.parent)
     return error
 
 
@@ -135,7 +135,10 @@ def _alternatives(schemas: Sequence[dict[str, Any]]) -> str:
 
 def _describe(error: ValidationError) -> tuple[str, Hashable | None]:
     """(problem text, the key of ``error.instance`` it is about, if it is about a key)."""
-    value, rule, schema = error.instance, error.validator_value, error.schema
+    # Plain JSON values here (the stubs allow jsonschema's "unset" marker, which a reported error never has).
+    value: Any = error.instance
+    rule: Any = error.validator_value
+    schema: Any = error.schema
     title = schema.get("title") if isinstance(schema, dict) else None
     kind = error.validator
     if kind == "required":

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import replace
+from typing import Any
 
 from fleetsim.enums import JointKind, Traverse
 from fleetsim.layout.layout import Layout
@@ -30,7 +31,11 @@ from fleetsim.scenario import Task
 __all__ = ["ReservingPlanner"]
 
 
-def _add(counts: dict[object, int], key: object, amount: int) -> None:
+# Counts by key (a segment, or a (segment, traverse) drive); a key whose count falls to 0 is removed.
+Counts = dict[Any, int]
+
+
+def _add(counts: Counts, key: object, amount: int) -> None:
     total = counts.get(key, 0) + amount
     if total:
         counts[key] = total
@@ -51,7 +56,7 @@ class _FleetIndex:
         self._layout = layout
         self._plans: object = None  # the mapping last refreshed from
         self._seen: dict[int, FleetPlan] = {}
-        self._mine: dict[int, tuple[dict[int, int], dict[int, int], dict[tuple[int, Traverse], int]]] = {}
+        self._mine: dict[int, tuple[Counts, Counts, Counts]] = {}  # each vehicle's (fixed near, route near, drives)
         self.fixed_near: dict[int, int] = {}
         self.route_near: dict[int, int] = {}
         self.drives: dict[tuple[int, Traverse], int] = {}
@@ -65,11 +70,12 @@ class _FleetIndex:
                 self._replace(vehicle_id, plan)
 
     def _replace(self, vehicle_id: int, plan: FleetPlan) -> None:
+        totals: tuple[Counts, Counts, Counts] = (self.fixed_near, self.route_near, self.drives)
         old = self._mine.get(vehicle_id)
         if old is not None:
-            for counts, mine in zip((self.fixed_near, self.route_near, self.drives), old):
+            for counts, mine in zip(totals, old):
                 for key, amount in mine.items():
-                    _add(counts, key, -amount)  # type: ignore[arg-type]
+                    _add(counts, key, -amount)
         fixed: dict[int, int] = {}
         route: dict[int, int] = {}
         drives: dict[tuple[int, Traverse], int] = {}
@@ -80,11 +86,12 @@ class _FleetIndex:
                 route[near] = route.get(near, 0) + 1
                 if index < fixed_count:
                     fixed[near] = fixed.get(near, 0) + 1
-        for counts, mine in zip((self.fixed_near, self.route_near, self.drives), (fixed, route, drives)):
+        new: tuple[Counts, Counts, Counts] = (fixed, route, drives)
+        for counts, mine in zip(totals, new):
             for key, amount in mine.items():
-                _add(counts, key, amount)  # type: ignore[arg-type]
+                _add(counts, key, amount)
         self._seen[vehicle_id] = plan
-        self._mine[vehicle_id] = (fixed, route, drives)
+        self._mine[vehicle_id] = new
 
     def mine(self, vehicle_id: int) -> tuple[dict[int, int], dict[int, int], dict[tuple[int, Traverse], int]]:
         """The vehicle's own (fixed near, route near, drives) counts."""

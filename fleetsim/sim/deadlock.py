@@ -18,13 +18,13 @@ from fleetsim.planning.reservations import fixed_segments
 __all__ = ["wait_for_cycle", "wait_for_graph"]
 
 
-def wait_for_graph(layout: Layout, plans: Mapping[int, FleetPlan], waiting: tuple[int, ...]) -> nx.DiGraph:
+def wait_for_graph(layout: Layout, plans: Mapping[int, FleetPlan], waiting: tuple[int, ...]) -> nx.DiGraph[int]:
     """Edges ``a -> b``: vehicle ``a`` (waiting) needs a segment that vehicle ``b``'s fixed legs block."""
     holders: dict[int, set[int]] = {}
     for vehicle_id in sorted(plans):
         for segment in fixed_segments(plans[vehicle_id]):
             holders.setdefault(segment, set()).add(vehicle_id)
-    graph = nx.DiGraph()
+    graph: nx.DiGraph[int] = nx.DiGraph()
     graph.add_nodes_from(waiting)
     for vehicle_id in waiting:
         plan = plans[vehicle_id]
@@ -38,7 +38,7 @@ def wait_for_graph(layout: Layout, plans: Mapping[int, FleetPlan], waiting: tupl
     return graph
 
 
-def wait_for_cycle(graph: nx.DiGraph) -> tuple[int, ...]:
+def wait_for_cycle(graph: nx.DiGraph[int]) -> tuple[int, ...]:
     """A cycle of the wait-for graph, starting at its smallest vehicle id; empty when there is none."""
     for start in sorted(graph.nodes):
         try:

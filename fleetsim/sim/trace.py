@@ -98,7 +98,8 @@ class Trace:
 
     @property
     def digest(self) -> str:
-        return self._hash.hexdigest()
+        digest: str = self._hash.hexdigest()
+        return digest
 
 
 @dataclass(frozen=True, slots=True)
