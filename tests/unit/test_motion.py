@@ -196,3 +196,55 @@ def test_tasks_complete_in_queue_order(tmp_path: Path) -> None:
     lines = result.trace.lines if result.trace else []
     completions = [event[1] for line in lines[1:] for event in __import__("json").loads(line)[3] if event[0] == "complete"]
     assert completions == [1, 2, 3]  # task 2 (segment 4) before task 3 (segment 3): queue order, not distance
+
+
+def _driven_with_cruise_first(driver: Driver, route: FleetPlan, steps: int) -> list[tuple[object, ...]]:
+    """Each step as the loop does it: the plain cruise when there is one, else the general step."""
+    seen = []
+    cruises = 0
+    for _ in range(steps):
+        cruised = driver.cruise(route, DT)
+        if cruised is not None:
+            cruises += 1
+            seen.append((route, cruised[0], driver.odometer))
+            continue
+        motion = driver.step(route, DT)
+        route = motion.plan
+        seen.append((route, driver.state(route) if route.legs else None, driver.odometer))
+    assert cruises > steps // 3  # the short path was taken, and often
+    return seen
+
+
+def _driven_with_step_only(driver: Driver, route: FleetPlan, steps: int) -> list[tuple[object, ...]]:
+    seen = []
+    for _ in range(steps):
+        motion = driver.step(route, DT)
+        route = motion.plan
+        seen.append((route, motion.state or (driver.state(route) if route.legs else None), driver.odometer))
+    return seen
+
+
+@pytest.mark.parametrize("vehicle_type", [AGV, TUGGER])
+def test_the_plain_cruise_gives_exactly_what_the_general_step_gives(vehicle_type: VehicleType) -> None:
+    """The loop's short path (``Driver.cruise``) leaves every state, plan and odometer reading equal to
+    driving by ``step`` alone: through acceleration, cruising, smooth joints, a cusp and the stop."""
+    segments = (*_cusp(), straight(3, (0.5, 1.5), (-6.0, 1.5 + 6.5 * 3.0 / 7.0)))
+    legs = ((1, F, FWD), (2, F, REV), (3, F, REV))
+    by_cruise = _driven_with_cruise_first(driver_on(segments, vehicle_type), plan(*legs), 250)
+    by_step = _driven_with_step_only(driver_on(segments, vehicle_type), plan(*legs), 250)
+    assert by_cruise == by_step
+
+
+def test_cruise_declines_without_changing_anything_when_the_step_is_not_a_plain_cruise() -> None:
+    segments = (straight(1, (0.0, 0.0), (4.0, 0.0)), straight(2, (4.0, 0.0), (8.0, 0.0)))
+    driver = driver_on(segments)
+    route = plan((1, F, FWD))
+    assert driver.cruise(route, DT) is None  # at rest: no speed profile yet
+    assert (driver.distance, driver.speed, driver.odometer) == (0.0, 0.0, 0.0)
+    for _ in range(3):
+        route = driver.step(route, DT).plan
+    assert driver.cruise(route, DT) is not None  # the same plan, mid-leg: a plain cruise
+    longer = plan((1, F, FWD), (2, F, FWD))  # a new fixed leg from outside: the general step re-plans
+    before = (driver.distance, driver.speed, driver.odometer, driver.x, driver.y, driver.heading)
+    assert driver.cruise(longer, DT) is None
+    assert (driver.distance, driver.speed, driver.odometer, driver.x, driver.y, driver.heading) == before
