@@ -130,26 +130,25 @@ class _Run:
         records = []
         for vehicle_id, driver in self.drivers.items():
             plan = plan_of(vehicle_id)
-            cruised = driver.cruise(plan, dt)
-            if cruised is not None:  # the commonest case, in short
-                self.last_activity = end
-                states.append(cruised[0])
-                records.append(vehicle_record(cruised[0]))
-                continue
-            new_plan, entered, distance, turned, state = driver.step(plan, dt)
-            if new_plan is not plan:
-                controller.drive_past(new_plan)
-            for leg in entered:
-                if leg.goal_for_task is not None and not tasks.is_completed(leg.goal_for_task):
-                    tasks.complete(leg.goal_for_task, end)
-                    events.append(["complete", leg.goal_for_task])
-            if distance > 0.0 or turned or entered:
-                self.last_activity = end
-                state = state or driver.moved_state(new_plan)
-                states.append(state)
-                records.append(vehicle_record(state))
-            elif vehicle_id in busy:
-                waiting[vehicle_id] += dt
+            cruised = driver.cruise(plan, dt)  # the commonest step, in short; None for any other
+            if cruised is not None:
+                state = cruised[0]
+            else:
+                new_plan, entered, distance, turned, step_state = driver.step(plan, dt)
+                if new_plan is not plan:
+                    controller.drive_past(new_plan)
+                for leg in entered:
+                    if leg.goal_for_task is not None and not tasks.is_completed(leg.goal_for_task):
+                        tasks.complete(leg.goal_for_task, end)
+                        events.append(["complete", leg.goal_for_task])
+                if not (distance > 0.0 or turned or entered):
+                    if vehicle_id in busy:
+                        waiting[vehicle_id] += dt
+                    continue
+                state = step_state or driver.moved_state(new_plan)
+            self.last_activity = end
+            states.append(state)
+            records.append(vehicle_record(state))
         controller.set_states(states)
         return records
 
