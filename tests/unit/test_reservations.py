@@ -128,7 +128,7 @@ def test_alert_names_every_vehicle_involved() -> None:
     assert str(alert) == "possible collision on segment 12: primary 5; secondary 3, 9"
 
 
-# -- property: the vectorised check agrees with a plain set-based reference ------------------------------
+# -- property: the incremental check agrees with a plain set-based reference ------------------------------
 
 
 def reference_alerts(plans: Mapping[int, FleetPlan], layout: Layout) -> tuple[CollisionAlert, ...]:
@@ -201,3 +201,39 @@ def test_an_index_kept_across_plan_changes_agrees_with_the_reference_at_every_ch
         leaving = data.draw(st.sets(st.sampled_from(sorted(plans)), max_size=2)) if plans else set()
         plans = {vid: plan for vid, plan in plans.items() if vid not in leaving} | changes
         assert index.alerts(plans) == reference_alerts(plans, layout)
+
+
+@settings(max_examples=100, deadline=None)
+@given(data=st.data())
+def test_an_index_follows_legs_driven_past_newly_fixed_and_replaced(data: st.DataObject) -> None:
+    # The changes a run makes most: a vehicle drives past its first leg, gets its next planned leg fixed,
+    # or is given a new route; each kind moves only some reservations, and the index must move exactly those.
+    layout = data.draw(layouts())
+    index = ReservationIndex(ConflictTable(layout))
+    plans = data.draw(fleets(layout))
+    assert index.alerts(plans) == reference_alerts(plans, layout)
+    for _ in range(data.draw(st.integers(1, 8))):
+        if not plans:
+            break
+        vid = data.draw(st.sampled_from(sorted(plans)))
+        legs = plans[vid].legs
+        fixed = sum(1 for leg in itertools.takewhile(lambda leg: leg.fixed, legs))
+        change = data.draw(st.sampled_from(["drive past", "fix next", "new route"]))
+        if change == "drive past" and len(legs) > 1:
+            legs = legs[1:]
+        elif change == "fix next" and fixed < len(legs):
+            legs = (*legs[:fixed], FleetLeg(legs[fixed].segment, legs[fixed].traverse, legs[fixed].progress, True), *legs[fixed + 1 :])
+        else:
+            legs = data.draw(fleets(layout).filter(bool)).popitem()[1].legs
+        plans = {**plans, vid: FleetPlan(vid, legs)}
+        assert index.alerts(plans) == reference_alerts(plans, layout)
+
+
+def test_an_index_drops_the_alert_of_a_vehicle_that_drove_past_the_shared_segment() -> None:
+    index = ReservationIndex(TABLE)
+    both = {1: _plan(1, fixed=(11, 12)), 2: _plan(2, fixed=(21,), planned=(22,))}
+    assert index.alerts(both) == ()
+    closer = {**both, 2: _plan(2, fixed=(13,))}  # a new route: 13 conflicts with vehicle 1's 12
+    assert index.alerts(closer) == (CollisionAlert(12, (1,), (2,)), CollisionAlert(13, (2,), (1,)))
+    past = {**closer, 1: _plan(1, fixed=(11,))}  # vehicle 1 no longer holds 12; 11 is clear of 13
+    assert index.alerts(past) == ()
