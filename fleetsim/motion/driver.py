@@ -151,9 +151,9 @@ class Driver:
         self._turn_left = 0.0  # seconds of turning in place still to do
         self._turn_target = heading
         self._turn_sign = 1.0  # +1 counter-clockwise, -1 clockwise
-        # The plan this vehicle last found nothing to drive on, and the no-motion result for it: a still
-        # vehicle whose plan has not changed (plans are immutable) stays still without any work.
-        self._idle: StepMotion | None = None
+        # The plan this vehicle last found nothing to drive on: while its plan is this same object (plans
+        # are immutable), a step leaves it where it is, so the loop skips it without asking.
+        self.still_on: FleetPlan | None = None
         # Where the drivable stretch of a plan ends, measured from the start of its first leg.
         self._stretch: tuple[FleetPlan | None, float, bool] = (None, 0.0, False)
         self._travelled = 0.0  # distance_at(elapsed) of the current profile
@@ -199,11 +199,10 @@ class Driver:
     # -- one step ------------------------------------------------------------------------------------
 
     def step(self, plan: FleetPlan, dt: float) -> StepMotion:
-        idle = self._idle
-        if idle is not None:
-            if idle.plan is plan:
-                return idle
-            self._idle = None
+        if self.still_on is not None:
+            if self.still_on is plan:
+                return StepMotion(plan, (), 0.0, False, None)
+            self.still_on = None
         profile = self._profile
         if profile is not None:
             # Only a plan from outside (not the one this driver returned) can bring new fixed legs.
@@ -239,7 +238,7 @@ class Driver:
         new_plan = plan if len(legs) == len(plan.legs) else FleetPlan(plan.vehicle_id, tuple(legs))
         motion = StepMotion(new_plan, tuple(entered), driven, turned, None)
         if not motion.moved and not entered and self._profile is None and self._turn_left == 0.0:
-            self._idle = motion
+            self.still_on = new_plan
         self._last_out = new_plan
         return motion
 
@@ -247,7 +246,8 @@ class Driver:
         """The step when it is a plain cruise (see :meth:`_cruise`): the new state and the distance driven;
         ``None`` when it is not, without changing anything (then :meth:`step` does the step).
 
-        The loop tries this first for every vehicle: most moving vehicles cruise on most steps.
+        The loop tries this first for every vehicle not standing still (:attr:`still_on`): most moving
+        vehicles cruise on most steps.
         """
         profile = self._profile
         if profile is None or self._turn_left != 0.0 or (plan is not self._last_out and not self._till_stop):

@@ -130,6 +130,10 @@ class _Run:
         records = []
         for vehicle_id, driver in self.drivers.items():
             plan = plan_of(vehicle_id)
+            if driver.still_on is plan:  # standing still with nothing new to drive: the step changes nothing
+                if vehicle_id in busy:
+                    waiting[vehicle_id] += dt
+                continue
             cruised = driver.cruise(plan, dt)  # the commonest step, in short; None for any other
             if cruised is not None:
                 state = cruised[0]
