@@ -7,7 +7,7 @@ calls see it), and the reservation check. Motion comes on top of it.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import Literal
 
@@ -69,6 +69,10 @@ class FleetController:
         self._types = {v.id: v.type for v in scenario.vehicles}
         self._plans: dict[int, FleetPlan] = {v.id: initial_plan(v) for v in scenario.vehicles}
         self._states: dict[int, VehicleState] = {v.id: initial_state(v, self.layout) for v in scenario.vehicles}
+        # One vehicle's plan or state in force (no copy of the whole fleet's). The dicts' own lookups:
+        # the loop asks for every vehicle on every step, and a method around them would double the cost.
+        self.plan_of: Callable[[int], FleetPlan] = self._plans.__getitem__
+        self.state_of: Callable[[int], VehicleState] = self._states.__getitem__
         self._reservations = ReservationIndex(ConflictTable(self.layout))
         # The last snapshot handed out; reused until something it shows changes (most calls change nothing).
         self._snapshot: FleetSnapshot | None = None
@@ -85,13 +89,6 @@ class FleetController:
     @property
     def states(self) -> Mapping[int, VehicleState]:
         return read_only(self._states)
-
-    def plan_of(self, vehicle_id: int) -> FleetPlan:
-        """One vehicle's plan in force (no copy of the whole fleet's)."""
-        return self._plans[vehicle_id]
-
-    def state_of(self, vehicle_id: int) -> VehicleState:
-        return self._states[vehicle_id]
 
     def snapshot(self, time: float) -> FleetSnapshot:
         """An immutable view for a planner call: rebuilt when the fleet or the time has changed."""
@@ -131,11 +128,9 @@ class FleetController:
         self._states[state.id] = state
         self._snapshot = None
 
-    def set_states(self, states: Iterable[VehicleState]) -> None:
-        """:meth:`set_state` for many vehicles (a step's motion)."""
-        own = self._states
-        for state in states:
-            own[state.id] = state
+    def set_states(self, states: Mapping[int, VehicleState]) -> None:
+        """:meth:`set_state` for many vehicles (a step's motion), by vehicle id."""
+        self._states.update(states)
         self._snapshot = None
 
     def consult(self, planner: Planner, vehicle_id: int, time: float) -> CallOutcome | None:

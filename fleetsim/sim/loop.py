@@ -22,6 +22,7 @@ from fleetsim.motion.driver import Driver, HeadingTable
 from fleetsim.planning.controller import CallOutcome, FleetController
 from fleetsim.planning.protocol import FleetPlan, Planner
 from fleetsim.planning.reservations import CollisionAlert
+from fleetsim.planning.snapshot import VehicleState
 from fleetsim.scenario import Scenario
 from fleetsim.sim.deadlock import wait_for_cycle, wait_for_graph
 from fleetsim.sim.guard import PlannerFault, PlannerGuard
@@ -126,7 +127,7 @@ class _Run:
         plan_of = controller.plan_of
         busy = self._busy_set(tasks.busy_vehicles())
         waiting = self.waiting_time
-        states = []
+        states: dict[int, VehicleState] = {}
         records = []
         for vehicle_id, driver in self.drivers.items():
             plan = plan_of(vehicle_id)
@@ -151,7 +152,7 @@ class _Run:
                     continue
                 state = step_state or driver.moved_state(new_plan)
             self.last_activity = end
-            states.append(state)
+            states[vehicle_id] = state
             records.append(vehicle_record(state))
         controller.set_states(states)
         return records

@@ -50,12 +50,10 @@ def vehicle_record(state: VehicleState) -> VehicleRecord:
 
 
 def plan_record(plan: FleetPlan) -> list[Any]:
+    """[vehicle id, [[segment, traverse, progress, fixed 0/1, goal task or None], ...]]."""
     return [
         plan.vehicle_id,
-        [
-            [leg.segment, leg.traverse.value[0], leg.progress.value[0], int(leg.fixed), leg.goal_for_task]
-            for leg in plan.legs
-        ],
+        [[leg.segment, _TRAVERSE[leg.traverse], _PROGRESS[leg.progress], int(leg.fixed), leg.goal_for_task] for leg in plan.legs],
     ]
 
 
