@@ -75,7 +75,14 @@ class LayoutError(FleetsimError, ValueError):
 
 
 class PlannerError(FleetsimError, TypeError):
-    """A planner broke the protocol: it raised, returned something that is not a response, or hung."""
+    """A planner broke the protocol: it raised, returned something that is not a response, or hung.
+
+    ``vehicle_id`` is the vehicle whose call it was, where one is known.
+    """
+
+    def __init__(self, message: str, *, vehicle_id: int | None = None) -> None:
+        self.vehicle_id = vehicle_id
+        super().__init__(message)
 
 
 class PlannerProcessError(PlannerError):

@@ -9,7 +9,7 @@ empty queue has no more tasks and is not consulted again.
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from types import MappingProxyType
 
 from fleetsim.planning.protocol import FleetPlan
@@ -28,11 +28,13 @@ class TaskBook:
             self._queues[task.vehicle_id].append(task)
             self._tasks[task.id] = task
         self._routed: set[int] = set()
+        # Whether a task is routed: the set's own lookup (asked on every planner call).
+        self.is_routed: Callable[[int], bool] = self._routed.__contains__
         self._completed: dict[int, float] = {}  # task id -> sim time of completion
         # Read-only views handed out on every planner call, rebuilt only after a change.
         self._queues_view: Mapping[int, tuple[Task, ...]] | None = None
         self._routed_view: frozenset[int] | None = None
-        self._busy: tuple[int, ...] | None = None  # busy_vehicles(), until a queue empties
+        self._heads: Mapping[int, Task] | None = None  # heads(), until a queue changes
         self._undropped = False  # a task completed since the last drop_completed()
 
     # -- queries -------------------------------------------------------------------------------------
@@ -50,9 +52,6 @@ class TaskBook:
         queue = self._queues[vehicle_id]
         return queue[0] if queue else None
 
-    def is_routed(self, task_id: int) -> bool:
-        return task_id in self._routed
-
     @property
     def routed(self) -> frozenset[int]:
         if self._routed_view is None:
@@ -66,11 +65,15 @@ class TaskBook:
         """Completed task ids with their completion times, in completion order."""
         return MappingProxyType(dict(self._completed))
 
+    def heads(self) -> Mapping[int, Task]:
+        """Each vehicle with tasks still queued, ascending, and its head task (shared until a queue changes)."""
+        if self._heads is None:
+            self._heads = MappingProxyType({vid: queue[0] for vid, queue in self._queues.items() if queue})
+        return self._heads
+
     def busy_vehicles(self) -> tuple[int, ...]:
         """Vehicles with tasks still queued, ascending."""
-        if self._busy is None:
-            self._busy = tuple(vid for vid, queue in self._queues.items() if queue)
-        return self._busy
+        return tuple(self.heads())
 
     def pending(self) -> tuple[Task, ...]:
         """Tasks not yet completed, by task id."""
@@ -109,5 +112,5 @@ class TaskBook:
                 dropped.append(queue.popleft())
         if dropped:
             self._queues_view = None
-            self._busy = None
+            self._heads = None
         return tuple(dropped)

@@ -11,6 +11,7 @@ in-process (run such a planner as a subprocess).
 
 from __future__ import annotations
 
+import math
 import signal
 import threading
 import time
@@ -64,6 +65,7 @@ class PlannerGuard:
 
     def __init__(self, timeout: float | None = 10.0) -> None:
         self.timeout = timeout
+        self._limit = timeout if timeout is not None else math.inf  # what a call's time is compared with
         self.calls = 0
         self.wall_time = 0.0
         self._armed = False
@@ -98,10 +100,11 @@ class PlannerGuard:
                 signal.setitimer(signal.ITIMER_REAL, left, interval)
             self._armed = False
 
-    def __call__(self, method: str, call: Callable[..., object], vehicle_id: int, *args: object) -> object:
+    def __call__(self, method: str, call: Callable[..., object], vehicle_id: int, task: object, fleet: object, layout: object) -> object:
+        """``call(task, fleet, layout)``, timed and guarded; ``method`` and ``vehicle_id`` are for messages."""
         start = self._call_started = _clock()
         try:
-            response = call(*args)
+            response = call(task, fleet, layout)
         except RouteError:
             self._account(start)
             raise
@@ -119,7 +122,7 @@ class PlannerGuard:
         self._call_started = None
         self.calls += 1
         self.wall_time += elapsed
-        if self.timeout is not None and elapsed > self.timeout:
+        if elapsed > self._limit:
             raise self._overrun(method, vehicle_id, call)  # it caught the timer's exception and returned late
         return response
 

@@ -64,36 +64,30 @@ class _Run:
         self.waiting_time = {vid: 0.0 for vid in self.drivers}
         self.last_activity = 0.0
         self.planner_error: Failure | None = None
-        self._busy: tuple[tuple[int, ...] | None, frozenset[int]] = (None, frozenset())
 
     # -- the steps -----------------------------------------------------------------------------------
 
     def plan(self, now: float, events: list[list[Any]], plans: list[list[Any]]) -> bool:
         """Step 2; False when the planner failed and the run must end."""
-        consult = self.controller.consultant(self.planner, now)
-        plan_of = self.controller.plan_of
-        for vehicle_id in self.controller.tasks.busy_vehicles():
-            before = plan_of(vehicle_id)
-            try:
-                outcome = consult(vehicle_id)
-            except (PlannerFault, PlannerError) as fault:
-                self._planner_failed(fault, vehicle_id, now, events)
-                return False
-            if outcome is not None:
-                self._note(outcome, before, now, events, plans)
+        try:
+            for outcome in self.controller.consult_all(self.planner, now):
+                self._note(outcome, now, events, plans)
+        except (PlannerFault, PlannerError) as fault:
+            self._planner_failed(fault, now, events)
+            return False
         return True
 
-    def _planner_failed(self, fault: PlannerFault | PlannerError, vehicle_id: int, now: float, events: list[list[Any]]) -> None:
-        details: dict[str, Any] = {"vehicle": vehicle_id}
+    def _planner_failed(self, fault: PlannerFault | PlannerError, now: float, events: list[list[Any]]) -> None:
+        details: dict[str, Any] = {"vehicle": fault.vehicle_id}
         if isinstance(fault, PlannerFault) and fault.details:
             details["traceback"] = fault.details
         self.planner_error = Failure("planner-error", now, str(fault), details)
-        events.append(["planner-error", vehicle_id])
+        events.append(["planner-error", fault.vehicle_id])
 
-    def _note(self, outcome: CallOutcome, before: FleetPlan, now: float, events: list[list[Any]], plans: list[list[Any]]) -> None:
+    def _note(self, outcome: CallOutcome, now: float, events: list[list[Any]], plans: list[list[Any]]) -> None:
         for plan in outcome.accepted:
             plans.append(plan_record(plan))
-            if plan.vehicle_id != outcome.vehicle_id or plan != before:
+            if plan.vehicle_id != outcome.vehicle_id or plan != outcome.previous:
                 self.last_activity = now
         for rejection in outcome.rejections:
             self.rejections.append(RejectionEvent(now, rejection))
@@ -125,7 +119,7 @@ class _Run:
         controller = self.controller
         tasks = controller.tasks
         plan_of = controller.plan_of
-        busy = self._busy_set(tasks.busy_vehicles())
+        busy = tasks.heads()  # the vehicles with tasks
         waiting = self.waiting_time
         states: dict[int, VehicleState] = {}
         records = []
@@ -156,11 +150,6 @@ class _Run:
             records.append(vehicle_record(state))
         controller.set_states(states)
         return records
-
-    def _busy_set(self, busy: tuple[int, ...]) -> frozenset[int]:
-        if busy is not self._busy[0]:
-            self._busy = (busy, frozenset(busy))
-        return self._busy[1]
 
     def deadlock(self, now: float) -> DeadlockReport:
         waiting = tuple(v for v in self.controller.tasks.busy_vehicles() if self.drivers[v].speed == 0.0)

@@ -165,6 +165,7 @@ def test_a_response_that_is_not_a_list_of_plans_and_route_errors_is_a_planner_er
     with pytest.raises(PlannerError) as caught:
         controller.consult(Scripted(plan_routes=lambda task, fleet: response), 1, 0.0)
     assert str(caught.value).startswith(message)
+    assert caught.value.vehicle_id == 1
     assert isinstance(caught.value, FleetsimError) and isinstance(caught.value, TypeError)
     assert controller.plans[1] == _plan(1, _leg(1, fixed=True))  # nothing of a bad response is applied
 

@@ -149,6 +149,7 @@ def test_a_planner_raising_in_fix_legs_is_named_by_that_method() -> None:
 def test_a_planner_returning_something_else_than_a_response_fails_naming_the_value(planner: object, shown: str) -> None:
     failure = run_faulty(planner).failures[0]
     assert failure.message.startswith("plan_routes() for vehicle 1 ")
+    assert failure.details == {"vehicle": 1}
     assert shown in failure.message
     assert "must be a FleetPlan or a RouteError" in failure.message or "list of FleetPlan or RouteError" in failure.message
     assert_next_run_passes()

@@ -50,6 +50,21 @@ def test_busy_vehicles_are_those_with_queued_tasks_in_ascending_id() -> None:
     assert _book().busy_vehicles() == (3, 7)
 
 
+def test_heads_give_each_busy_vehicle_its_head_task_by_id_until_bookkeeping_drops_it() -> None:
+    book = _book()
+    heads = book.heads()
+    assert list(heads.items()) == [(3, TASKS[1]), (7, TASKS[0])]
+    with pytest.raises(TypeError):
+        heads[3] = TASKS[3]  # type: ignore[index]
+    book.complete(1, 1.0)
+    book.complete(2, 1.0)
+    book.complete(4, 1.0)
+    assert book.heads() is heads  # completed, still queued until bookkeeping
+    book.drop_completed()
+    assert list(book.heads().items()) == [(7, TASKS[2])]
+    assert list(heads.items()) == [(3, TASKS[1]), (7, TASKS[0])]  # a view handed out earlier stays as it was
+
+
 def test_a_plan_routes_every_task_it_marks_as_a_goal() -> None:
     book = _book()
     assert book.routed == frozenset()
