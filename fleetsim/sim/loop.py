@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any
@@ -27,7 +27,7 @@ from fleetsim.scenario import Scenario
 from fleetsim.sim.deadlock import wait_for_cycle, wait_for_graph
 from fleetsim.sim.guard import PlannerFault, PlannerGuard
 from fleetsim.sim.result import AlertEvent, DeadlockReport, Ending, Failure, Metrics, RejectionEvent, RunResult, judge
-from fleetsim.sim.trace import Trace, VehicleRecord, plan_record, vehicle_record
+from fleetsim.sim.trace import Trace, plan_record
 
 __all__ = ["RunProgress", "run_scenario"]
 
@@ -110,10 +110,10 @@ class _Run:
             events.append(["alert", alert.segment, list(alert.primary), list(alert.secondary)])
         return len(fresh)
 
-    def move(self, dt: float, end: float, events: list[list[Any]]) -> list[VehicleRecord]:
+    def move(self, dt: float, end: float, events: list[list[Any]]) -> Iterable[VehicleState]:
         """Step 4: every vehicle over the step ending at ``end``; entering a goal leg completes its task.
 
-        Returns the trace records of the vehicles whose state changed, by id. (The per-vehicle path here
+        Returns the new states of the vehicles that moved, by id. (The per-vehicle path here
         runs 10^5 times a simulated minute in a large fleet, so it reads the motion's fields directly.)
         """
         controller = self.controller
@@ -122,7 +122,6 @@ class _Run:
         busy = tasks.heads()  # the vehicles with tasks
         waiting = self.waiting_time
         states: dict[int, VehicleState] = {}
-        records = []
         for vehicle_id, driver in self.drivers.items():
             plan = plan_of(vehicle_id)
             if driver.still_on is plan:  # standing still with nothing new to drive: the step changes nothing
@@ -145,11 +144,11 @@ class _Run:
                         waiting[vehicle_id] += dt
                     continue
                 state = step_state or driver.moved_state(new_plan)
-            self.last_activity = end
             states[vehicle_id] = state
-            records.append(vehicle_record(state))
+        if states:
+            self.last_activity = end
         controller.set_states(states)
-        return records
+        return states.values()
 
     def deadlock(self, now: float) -> DeadlockReport:
         waiting = tuple(v for v in self.controller.tasks.busy_vehicles() if self.drivers[v].speed == 0.0)
@@ -213,10 +212,10 @@ def _simulate(
         rejected = any(e[0] == "reject" for e in events)
         alerted = run.check_reservations(now, events) > 0 if planned_ok else False
         end = (step + 1) * dt  # times are multiples of dt, never sums of them
-        moved = run.move(dt, end, events) if planned_ok else []
+        moved = run.move(dt, end, events) if planned_ok else ()
         # The trace holds what changed; at step 0 that is everyone (the start), later only who moved.
         if step == 0:
-            moved = [vehicle_record(run.controller.state_of(v)) for v in run.drivers]
+            moved = [run.controller.state_of(v) for v in run.drivers]
         run.trace.record(step, moved, plans, events)
         if not planned_ok:
             ended = "planner-error"

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import hashlib
 import json
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -19,7 +19,7 @@ from fleetsim.enums import Progress, Traverse
 from fleetsim.planning.protocol import FleetPlan
 from fleetsim.planning.snapshot import VehicleState
 
-__all__ = ["TRACE_FORMAT", "Divergence", "Trace", "first_divergence", "plan_record", "vehicle_record"]
+__all__ = ["TRACE_FORMAT", "Divergence", "Trace", "first_divergence", "plan_record", "vehicle_record", "vehicle_records"]
 
 TRACE_FORMAT = "fleetsim-trace/1"
 CHECKPOINT_EVERY = 100  # steps between the running digests kept for locating a divergence later
@@ -32,21 +32,30 @@ _PROGRESS = {Progress.FORWARD: "f", Progress.REVERSE: "r"}
 _DEGREES_PER_RADIAN = 180.0 / 3.141592653589793
 
 
-def vehicle_record(state: VehicleState) -> VehicleRecord:
-    """(id, segment, traverse, progress, x mm, y mm, heading centidegrees, speed mm/s).
+def vehicle_records(states: Iterable[VehicleState]) -> list[VehicleRecord]:
+    """Each state as (id, segment, traverse, progress, x mm, y mm, heading centidegrees, speed mm/s).
 
-    ``round`` of a float is an int, rounded half to even, so -0.0 and tiny values become 0.
+    ``round`` of a float is an int, rounded half to even, so -0.0 and tiny values become 0. One call for
+    all of a step's moving vehicles (a function call per vehicle would cost as much as the record).
     """
-    return (
-        state.id,
-        state.segment,
-        _TRAVERSE[state.traverse],
-        _PROGRESS[state.progress],
-        round(state.x * 1000.0),
-        round(state.y * 1000.0),
-        round(state.heading * _DEGREES_PER_RADIAN * 100.0),
-        round(state.speed * 1000.0),
-    )
+    return [
+        (
+            state.id,
+            state.segment,
+            _TRAVERSE[state.traverse],
+            _PROGRESS[state.progress],
+            round(state.x * 1000.0),
+            round(state.y * 1000.0),
+            round(state.heading * _DEGREES_PER_RADIAN * 100.0),
+            round(state.speed * 1000.0),
+        )
+        for state in states
+    ]
+
+
+def vehicle_record(state: VehicleState) -> VehicleRecord:
+    """One state's record (see :func:`vehicle_records`)."""
+    return vehicle_records((state,))[0]
 
 
 def plan_record(plan: FleetPlan) -> list[Any]:
@@ -74,14 +83,17 @@ class Trace:
     def record(
         self,
         step: int,
-        vehicles: Sequence[VehicleRecord],
+        vehicles: Iterable[VehicleState],
         plans: Sequence[list[Any]],
         events: Sequence[list[Any]],
     ) -> None:
+        """One step's line: the records of ``vehicles`` that differ from their last, the plans accepted and
+        the events."""
         changed = []
-        for record in vehicles:
-            if self._last.get(record[0]) != record:
-                self._last[record[0]] = record
+        last = self._last
+        for record in vehicle_records(vehicles):
+            if last.get(record[0]) != record:
+                last[record[0]] = record
                 changed.append(record)
         self._write(json.dumps([step, changed, list(plans), list(events)], separators=(",", ":")))
         self.steps = step + 1
