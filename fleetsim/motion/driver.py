@@ -50,7 +50,7 @@ class Track(NamedTuple):
     """One segment driven one way, laid out for locating a point by distance on every step.
 
     The pieces' headings and :meth:`Segment.pose_at`'s bisection fix-ups are computed once, so
-    :meth:`Driver._cruise` locates a point with the same arithmetic at a fraction of the cost.
+    :meth:`Driver.cruise` locates a point with the same arithmetic at a fraction of the cost.
     """
 
     length: float
@@ -157,7 +157,8 @@ class Driver:
         # Where the drivable stretch of a plan ends, measured from the start of its first leg.
         self._stretch: tuple[FleetPlan | None, float, bool] = (None, 0.0, False)
         self._travelled = 0.0  # distance_at(elapsed) of the current profile
-        self._last_out: FleetPlan | None = None  # the plan the last step returned
+        # The plan whose fixed legs the profile accounts for: the one the last step returned or checked.
+        self._last_out: FleetPlan | None = None
         self._on: tuple[FleetLeg, Track] | None = None  # the current leg and its track
         start = layout.segments[vehicle.start_segment]
         self.x, self.y, _ = start.pose_at(0.0, vehicle.traverse)  # the position, kept with the heading
@@ -203,17 +204,16 @@ class Driver:
             if self.still_on is plan:
                 return StepMotion(plan, (), 0.0, False, None)
             self.still_on = None
-        profile = self._profile
-        if profile is not None:
+        if self._profile is not None:
             # Only a plan from outside (not the one this driver returned) can bring new fixed legs.
             if plan is not self._last_out and not self._till_stop:
                 reach, till_stop = self._reach_in(plan)
                 if reach > self._remaining() + _EPS:  # new fixed legs: re-plan from the current speed
-                    profile = self._start(reach, till_stop)
-            if self._turn_left == 0.0:
-                cruised = self._cruise(profile, plan, dt)
-                if cruised is not None:
-                    return _new(StepMotion, (plan, (), cruised[1], False, cruised[0]))
+                    self._start(reach, till_stop)
+                self._last_out = plan
+            cruised = self.cruise(plan, dt)
+            if cruised is not None:
+                return _new(StepMotion, (plan, (), cruised[1], False, cruised[0]))
         legs = list(plan.legs)
         entered: list[FleetLeg] = []
         driven = 0.0
@@ -243,25 +243,19 @@ class Driver:
         return motion
 
     def cruise(self, plan: FleetPlan, dt: float) -> tuple[VehicleState, float] | None:
-        """The step when it is a plain cruise (see :meth:`_cruise`): the new state and the distance driven;
-        ``None`` when it is not, without changing anything (then :meth:`step` does the step).
+        """The commonest step, done directly: the profile goes on all step long and the leg does not end.
+        The new state and the distance driven; ``None`` when the step is anything else, without changing
+        anything (then :meth:`step` does the step).
 
-        The loop tries this first for every vehicle not standing still (:attr:`still_on`): most moving
-        vehicles cruise on most steps.
+        Exactly what the general step would compute for such a step, without its bookkeeping, and the new
+        state made from what was just computed; the point is located as :meth:`Segment.pose_at` does
+        (same arithmetic) on the leg's precomputed :class:`Track`. The loop tries this first for every
+        vehicle not standing still (:attr:`still_on`); it runs 10^5 times a simulated minute in a large
+        fleet, so it reads fields directly.
         """
         profile = self._profile
         if profile is None or self._turn_left != 0.0 or (plan is not self._last_out and not self._till_stop):
-            return None
-        return self._cruise(profile, plan, dt)
-
-    def _cruise(self, profile: SpeedProfile, plan: FleetPlan, dt: float) -> tuple[VehicleState, float] | None:
-        """The commonest step, done directly: the profile goes on all step long and the leg does not end.
-
-        Exactly what the general loop would compute for such a step, without its bookkeeping, and the
-        new state made from what was just computed; the point is located as :meth:`Segment.pose_at`
-        does (same arithmetic) on the leg's precomputed :class:`Track`. It runs 10^5 times a simulated
-        minute in a large fleet, so it reads fields directly.
-        """
+            return None  # at rest, turning, or a plan from outside that may bring new fixed legs
         t1 = self._elapsed + dt
         if t1 >= profile.stop_time:
             return None
