@@ -30,6 +30,9 @@ VehicleRecord = tuple[int, int, str, str, int, int, int, int]
 _TRAVERSE = {Traverse.FORWARD: "f", Traverse.BACKWARD: "b"}
 _PROGRESS = {Progress.FORWARD: "f", Progress.REVERSE: "r"}
 _DEGREES_PER_RADIAN = 180.0 / 3.141592653589793
+# A step's line: compact JSON, as json.dumps with these separators writes it. One encoder for every line,
+# and no check for circular references (a line holds only fresh lists, tuples, ints and strings).
+_encode_step = json.JSONEncoder(separators=(",", ":"), check_circular=False).encode
 
 
 def vehicle_records(states: Iterable[VehicleState]) -> list[VehicleRecord]:
@@ -95,7 +98,7 @@ class Trace:
             if last.get(record[0]) != record:
                 last[record[0]] = record
                 changed.append(record)
-        self._write(json.dumps([step, changed, list(plans), list(events)], separators=(",", ":")))
+        self._write(_encode_step([step, changed, list(plans), list(events)]))
         self.steps = step + 1
         if self.steps % CHECKPOINT_EVERY == 0:
             self.checkpoints.append((step, self._hash.copy().hexdigest()))
