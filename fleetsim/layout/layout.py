@@ -46,6 +46,7 @@ class Layout:
     source: Path | None
     _successors: StepIndex
     _predecessors: StepIndex
+    _joints: Mapping[tuple[int, Traverse, int, Traverse], JointKind]
     _conflicts: Mapping[int, frozenset[int]]
     _graph_cache: list[StateGraph]  # empty until `graph` is first asked for
 
@@ -80,6 +81,11 @@ class Layout:
             return found
         self._require(segment)
         return self._successors.get((segment, Traverse(traverse)), ())
+
+    def joint(self, segment: int, traverse: Traverse, next_segment: int, next_traverse: Traverse) -> JointKind | None:
+        """The joint from driving ``segment`` with ``traverse`` into ``next_segment`` with ``next_traverse``;
+        ``None`` when the one does not lead to the other (unknown segments included)."""
+        return self._joints.get((segment, traverse, next_segment, next_traverse))
 
     def predecessors(self, segment: int, traverse: Traverse) -> tuple[Step, ...]:
         """The states from which a vehicle may enter ``segment`` driving ``traverse``."""
@@ -160,6 +166,14 @@ def _step_index(connections: tuple[Connection, ...]) -> tuple[StepIndex, StepInd
     )
 
 
+def _joint_index(connections: tuple[Connection, ...]) -> Mapping[tuple[int, Traverse, int, Traverse], JointKind]:
+    """The joint kind per (from state, to state); the first connection between two states counts."""
+    joints: dict[tuple[int, Traverse, int, Traverse], JointKind] = {}
+    for c in connections:
+        joints.setdefault((c.from_segment, c.from_traverse, c.to_segment, c.to_traverse), c.joint)
+    return MappingProxyType(joints)
+
+
 def build_layout(
     segments: Iterable[Segment],
     *,
@@ -195,6 +209,7 @@ def build_layout(
         source=source,
         _successors=successors,
         _predecessors=predecessors,
+        _joints=_joint_index(connections),
         _conflicts=MappingProxyType(conflict_sets(ordered, model, radius, margin, tolerance)),
         _graph_cache=[],
     )

@@ -208,10 +208,7 @@ def wrong_way(plan: FleetPlan, ctx: CheckContext) -> Rejection | None:
 
 
 def _joint(layout: Layout, before: FleetLeg, after: FleetLeg) -> JointKind | None:
-    for segment, traverse, joint in layout.successors(before.segment, before.traverse):
-        if segment == after.segment and traverse is after.traverse:
-            return joint
-    return None
+    return layout.joint(before.segment, before.traverse, after.segment, after.traverse)
 
 
 def not_connected(plan: FleetPlan, ctx: CheckContext) -> Rejection | None:

@@ -79,6 +79,26 @@ def test_joint_kind_for_every_pair_of_shapes(case: str) -> None:
     layout = build_layout([a, b], vehicle_radius=0.3)
     assert onward(layout, 1, Traverse.FORWARD) == ((2, Traverse.FORWARD, expected),)
     assert onward(layout, 2, Traverse.BACKWARD) == ((1, Traverse.BACKWARD, expected),)
+    assert layout.joint(1, Traverse.FORWARD, 2, Traverse.FORWARD) is expected
+
+
+def test_joint_between_two_states_agrees_with_successors_and_is_none_where_they_do_not_connect() -> None:
+    layout = build_layout(
+        [
+            Segment(1, Shape.STRAIGHT, Direction.BOTH, ((0.0, 0.0), (4.0, 0.0))),
+            Segment(2, Shape.STRAIGHT, Direction.BOTH, ((4.0, 0.0), (4.0, 4.0))),
+            Segment(3, Shape.STRAIGHT, Direction.BOTH, ((4.0, 0.0), (8.0, 0.0))),
+        ],
+        vehicle_radius=0.3,
+    )
+    for segment in layout.segments:
+        for traverse in Traverse:
+            for onto, onto_traverse, joint in layout.successors(segment, traverse):
+                assert layout.joint(segment, traverse, onto, onto_traverse) is joint
+    assert layout.joint(1, Traverse.FORWARD, 3, Traverse.FORWARD) is JointKind.SAME
+    assert layout.joint(1, Traverse.FORWARD, 3, Traverse.BACKWARD) is None  # 3 driven backwards ends there
+    assert layout.joint(1, Traverse.BACKWARD, 3, Traverse.FORWARD) is None  # leaving 1 at its other end
+    assert layout.joint(1, Traverse.FORWARD, 99, Traverse.FORWARD) is None
 
 
 @pytest.mark.parametrize(
