@@ -20,7 +20,7 @@ from typing import Any
 from fleetsim.errors import PlannerError
 from fleetsim.motion.driver import Driver, HeadingTable
 from fleetsim.planning.controller import CallOutcome, FleetController
-from fleetsim.planning.protocol import FleetPlan, Planner
+from fleetsim.planning.protocol import Planner
 from fleetsim.planning.reservations import CollisionAlert
 from fleetsim.planning.snapshot import VehicleState
 from fleetsim.scenario import Scenario
