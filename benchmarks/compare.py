@@ -1,0 +1,103 @@
+"""Compare the harness share of this tree with another commit's, in alternating runs on one scenario.
+
+    python benchmarks/compare.py REF [--rounds 4] [--vehicles 100] [--planner ReservingPlanner]
+                                     [--seconds 60] [--seed 1]
+
+A shared machine's speed drifts by tens of per cent within minutes, so two figures taken at different
+times cannot tell a change of a few per cent from the drift. This script checks ``REF`` out into a
+temporary git worktree and runs the same generated warehouse scenario in both trees in turn, ``--rounds``
+times, each round a fresh process per tree keeping the best of three runs. It prints, per tree, the
+planner's time per call, the harness's time per vehicle-step and the harness share of every round and
+their medians, and whether the two trees' trace hashes agree (a pure speed-up leaves behaviour, and so
+the hash, unchanged). The scenario is generated once, by this tree's ``warehouse.py``, and loaded by both.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).parent))
+
+from warehouse import write_fleet_scenario  # noqa: E402
+
+# Run inside each tree: the best of three runs of the scenario, as one JSON line.
+CHILD = """
+import json, sys
+from pathlib import Path
+from fleetsim.load.scenario import load_scenario_dir
+from fleetsim.planners import BFSPlanner, ReservingPlanner
+from fleetsim.scenario import ScenarioSettings
+from fleetsim.sim.loop import run_scenario
+folder, planner, seconds, vehicles = Path(sys.argv[1]), sys.argv[2], float(sys.argv[3]), int(sys.argv[4])
+scenario = load_scenario_dir(folder, settings=ScenarioSettings(time_limit=seconds, stop_on=()))
+runs = [run_scenario(scenario, {"BFSPlanner": BFSPlanner, "ReservingPlanner": ReservingPlanner}[planner](), keep_trace=False)
+        for _ in range(3)]
+best = min(runs, key=lambda run: run.metrics.wall_time - run.metrics.planner_wall_time)
+m = best.metrics
+print(json.dumps({
+    "hash": best.trace_hash,
+    "per_call": m.planner_wall_time / max(m.planner_calls, 1) * 1e6,
+    "per_vehicle_step": (m.wall_time - m.planner_wall_time) / (best.steps * vehicles) * 1e6,
+    "share": 1.0 - m.planner_wall_time / m.wall_time,
+}))
+"""
+
+
+def run_in(tree: Path, folder: Path, args: argparse.Namespace) -> dict[str, float | str]:
+    env = {**os.environ, "PYTHONPATH": str(tree)}
+    command = [sys.executable, "-c", CHILD, str(folder), args.planner, str(args.seconds), str(args.vehicles)]
+    done = subprocess.run(command, cwd=tree, env=env, capture_output=True, text=True, check=False)
+    if done.returncode != 0:
+        raise SystemExit(f"the run in {tree} failed:\n{done.stderr}")
+    result: dict[str, float | str] = json.loads(done.stdout.splitlines()[-1])
+    return result
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("ref", help="the commit to compare with (anything git rev-parse accepts)")
+    parser.add_argument("--rounds", type=int, default=4)
+    parser.add_argument("--vehicles", type=int, default=100)
+    parser.add_argument("--planner", choices=["BFSPlanner", "ReservingPlanner"], default="ReservingPlanner")
+    parser.add_argument("--seconds", type=float, default=60.0)
+    parser.add_argument("--seed", type=int, default=1)
+    args = parser.parse_args()
+    here = Path(__file__).resolve().parent.parent
+    commit = subprocess.run(["git", "rev-parse", "--verify", f"{args.ref}^{{commit}}"], cwd=here, capture_output=True, text=True)
+    if commit.returncode != 0:
+        raise SystemExit(f"ref={args.ref!r} is not a commit of {here}: {commit.stderr.strip()}")
+    with tempfile.TemporaryDirectory() as tmp:
+        worktree, folder = Path(tmp) / "ref", Path(tmp) / "scenario"
+        subprocess.run(["git", "worktree", "add", "--detach", "-q", str(worktree), commit.stdout.strip()], cwd=here, check=True)
+        try:
+            write_fleet_scenario(folder, args.vehicles, seed=args.seed)
+            trees = {f"{args.ref} ({commit.stdout.strip()[:10]})": worktree, "this tree": here}
+            rounds: dict[str, list[dict[str, float | str]]] = {name: [] for name in trees}
+            for _ in range(args.rounds):
+                for name, tree in trees.items():
+                    rounds[name].append(run_in(tree, folder, args))
+        finally:
+            subprocess.run(["git", "worktree", "remove", "--force", str(worktree)], cwd=here, check=False)
+    print(f"{args.vehicles} vehicles, {args.planner}, {args.seconds:g} s simulated; {args.rounds} alternating rounds, best of 3 runs each")
+    for name, results in rounds.items():
+        def column(key: str, form: str) -> str:
+            values = [float(r[key]) for r in results]
+            return " ".join(form.format(v) for v in values) + "  median " + form.format(statistics.median(values))
+        print(f"  {name}")
+        print(f"    planner µs/call        {column('per_call', '{:6.1f}')}")
+        print(f"    harness µs/vs          {column('per_vehicle_step', '{:6.2f}')}")
+        print(f"    harness share          {column('share', '{:6.1%}')}")
+    hashes = {str(r["hash"]) for results in rounds.values() for r in results}
+    print("  trace hashes agree" if len(hashes) == 1 else f"  trace hashes DIFFER: {sorted(h[:12] for h in hashes)}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
