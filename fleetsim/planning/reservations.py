@@ -110,20 +110,10 @@ class ReservationIndex:
     def _reserve(self, vehicle: int, segments: Iterable[int], delta: int, touched: set[int]) -> None:
         """Add (``delta`` = 1) or remove (-1) the vehicle's primary reservations of ``segments`` and the
         secondary reservations that come with them."""
-        rows, holders = self.table.rows, self._holders
+        rows = self.table.rows
         for segment in segments:
-            _count(self._primaries, segment, vehicle, delta)
-            for reserved in rows[segment]:
-                on = holders.get(reserved)  # _count, inline: this runs for every conflict of every change
-                if on is None:
-                    on = holders[reserved] = {}
-                count = on.get(vehicle, 0) + delta
-                if count:
-                    on[vehicle] = count
-                else:
-                    del on[vehicle]
-                    if not on:
-                        del holders[reserved]
+            _count(self._primaries, (segment,), vehicle, delta)
+            _count(self._holders, rows[segment], vehicle, delta)
             touched.update(rows[segment])
 
     def _fold(self, plans: Mapping[int, FleetPlan]) -> None:
@@ -161,18 +151,20 @@ class ReservationIndex:
         return tuple(alerts)
 
 
-def _count(counts: dict[int, dict[int, int]], segment: int, vehicle: int, delta: int) -> None:
-    """Change a vehicle's count on a segment by ``delta``; counts that reach zero go, empty segments too."""
-    on = counts.get(segment)
-    if on is None:
-        on = counts[segment] = {}
-    total = on.get(vehicle, 0) + delta
-    if total:
-        on[vehicle] = total
-        return
-    del on[vehicle]
-    if not on:
-        del counts[segment]
+def _count(counts: dict[int, dict[int, int]], segments: Iterable[int], vehicle: int, delta: int) -> None:
+    """Change a vehicle's count on each of ``segments`` by ``delta``; counts that reach zero go, and so do
+    segments left with none."""
+    for segment in segments:
+        on = counts.get(segment)
+        if on is None:
+            on = counts[segment] = {}
+        total = on.get(vehicle, 0) + delta
+        if total:
+            on[vehicle] = total
+            continue
+        del on[vehicle]
+        if not on:
+            del counts[segment]
 
 
 def find_alerts(plans: Mapping[int, FleetPlan], table: ConflictTable) -> tuple[CollisionAlert, ...]:
