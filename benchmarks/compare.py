@@ -60,6 +60,12 @@ def run_in(tree: Path, folder: Path, args: argparse.Namespace) -> dict[str, floa
     return result
 
 
+def column(results: list[dict[str, float | str]], key: str, form: str) -> str:
+    """One figure of every round, then their median."""
+    values = [float(result[key]) for result in results]
+    return " ".join(form.format(v) for v in values) + "  median " + form.format(statistics.median(values))
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("ref", help="the commit to compare with (anything git rev-parse accepts)")
@@ -87,13 +93,10 @@ def main() -> int:
             subprocess.run(["git", "worktree", "remove", "--force", str(worktree)], cwd=here, check=False)
     print(f"{args.vehicles} vehicles, {args.planner}, {args.seconds:g} s simulated; {args.rounds} alternating rounds, best of 3 runs each")
     for name, results in rounds.items():
-        def column(key: str, form: str) -> str:
-            values = [float(r[key]) for r in results]
-            return " ".join(form.format(v) for v in values) + "  median " + form.format(statistics.median(values))
         print(f"  {name}")
-        print(f"    planner µs/call        {column('per_call', '{:6.1f}')}")
-        print(f"    harness µs/vs          {column('per_vehicle_step', '{:6.2f}')}")
-        print(f"    harness share          {column('share', '{:6.1%}')}")
+        print(f"    planner µs/call        {column(results, 'per_call', '{:6.1f}')}")
+        print(f"    harness µs/vs          {column(results, 'per_vehicle_step', '{:6.2f}')}")
+        print(f"    harness share          {column(results, 'share', '{:6.1%}')}")
     hashes = {str(r["hash"]) for results in rounds.values() for r in results}
     print("  trace hashes agree" if len(hashes) == 1 else f"  trace hashes DIFFER: {sorted(h[:12] for h in hashes)}")
     return 0
