@@ -64,18 +64,10 @@ class ConflictTable:
             segment: tuple(sorted(layout.conflicts(segment))) for segment in sorted(layout.segments)
         }
 
-    def __len__(self) -> int:
-        return len(self.rows)
-
 
 def fixed_segments(plan: FleetPlan) -> list[int]:
     """The segments of the plan's fixed prefix, in driving order."""
-    segments = []
-    for leg in plan.legs:
-        if not leg.fixed:
-            break
-        segments.append(leg.segment)
-    return segments
+    return [leg.segment for leg in plan.fixed_legs]
 
 
 def _difference(old: list[int], new: list[int]) -> tuple[list[int], list[int]]:
