@@ -18,7 +18,7 @@ from fleetsim.load.suite import discover_suites, load_suite
 from fleetsim.load.text import write_text_atomically
 from fleetsim.load.tiled import TiledMap, load_map
 from fleetsim.recording.artifacts import RESULT_FILE, TRACE_FILE
-from fleetsim.recording.picture import failure_caption, failure_step, render_frame_svg
+from fleetsim.recording.picture import failure_caption, failure_step, render_frame_svg, stuck_details
 from fleetsim.recording.replay import Frame, TraceError, frame_at
 from fleetsim.recording.svg import render_layout_svg
 from fleetsim.scenario import Scenario
@@ -202,7 +202,8 @@ def _render_step(args: argparse.Namespace) -> int:
     else:
         caption = f"t = {frame.time:.2f} s \u2014 {scenario.name}, step {step} of {last_step}"
     output = Path(args.output)
-    write_text_atomically(output, render_frame_svg(scenario, frame, caption=caption))
+    stuck = stuck_details(found[1]) if found is not None and found[0] == step else None
+    write_text_atomically(output, render_frame_svg(scenario, frame, caption=caption, stuck=stuck))
     print(f"wrote {output} ({scenario.name}, step {step} of {last_step}, t = {frame.time:.2f} s)")
     return 0
 
@@ -250,7 +251,10 @@ def _read_result(path: Path) -> dict[str, Any]:
 
 def _failures(document: dict[str, Any], path: Path | None) -> list[Failure]:
     try:
-        return [Failure(str(f["kind"]), float(f["time"]), str(f["message"])) for f in document.get("failures", [])]
+        return [
+            Failure(str(f["kind"]), float(f["time"]), str(f["message"]), {k: v for k, v in f.items() if k not in ("kind", "time", "message")})
+            for f in document.get("failures", [])
+        ]
     except (KeyError, TypeError, ValueError):
         msg = f"{path}: failures={document.get('failures')!r} must be a list of {{kind, time, message}} objects"
         raise UsageError(msg) from None

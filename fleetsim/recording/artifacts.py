@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from fleetsim.load.text import write_text_atomically
-from fleetsim.recording.picture import failure_picture
+from fleetsim.recording.picture import failure_picture, stuck_details
 from fleetsim.recording.recorder import record_mcap
 from fleetsim.scenario import Scenario
 from fleetsim.sim.result import RunResult
@@ -47,6 +47,15 @@ def artifact_folder(root: Path, suite_path: Path, scenario: str) -> Path:
     return root / _safe(stem) / _safe(scenario)
 
 
+def _stuck(result: RunResult) -> dict[str, Any] | None:
+    """The details of the run's deadlock or timeout failure with its headline, for the recording."""
+    for failure in result.failures:
+        details = stuck_details(failure)
+        if details is not None:
+            return {**details, "headline": f"{failure.kind}: {failure.message}"}
+    return None
+
+
 def write_run_artifacts(
     folder: Path,
     result: RunResult,
@@ -70,7 +79,7 @@ def write_run_artifacts(
         paths["trace"] = str(folder / TRACE_FILE)
         write_text_atomically(folder / TRACE_FILE, "\n".join(lines) + "\n")
     if lines and scenario is not None:
-        paths["mcap"] = str(record_mcap(folder / MCAP_FILE, scenario, lines, every=record_every).path)
+        paths["mcap"] = str(record_mcap(folder / MCAP_FILE, scenario, lines, every=record_every, stuck=_stuck(result)).path)
         shutil.copyfile(RVIZ_CONFIG, folder / RVIZ_FILE)
         paths["rviz"] = str(folder / RVIZ_FILE)
         picture = failure_picture(scenario, result)

@@ -299,6 +299,19 @@ def text_marker(
     )  # fmt: skip
 
 
+def arrow(time: Stamp, namespace: str, marker_id: int, start: tuple[float, float, float], end: tuple[float, float, float],
+          shaft: float, rgba: RGBA) -> Any:
+    """An ARROW marker in ``map`` from ``start`` to ``end`` (head diameter and length follow the shaft)."""
+    point = _type("geometry_msgs/msg/Point")
+    ends = [point(x=float(start[0]), y=float(start[1]), z=float(start[2])), point(x=float(end[0]), y=float(end[1]), z=float(end[2]))]
+    return _marker(time, "map", namespace, marker_id, 0, scale=(shaft, 2.5 * shaft, 3.0 * shaft), rgba=rgba, points=ends)
+
+
+def disc(time: Stamp, namespace: str, marker_id: int, at: tuple[float, float, float], diameter: float, rgba: RGBA) -> Any:
+    """A flat CYLINDER marker in ``map`` centred at ``at`` (a ring-like mark round a vehicle)."""
+    return _marker(time, "map", namespace, marker_id, 3, pose=_pose(*at), scale=(diameter, diameter, 0.04), rgba=rgba)
+
+
 def delete_all(time: Stamp, namespace: str) -> Any:
     """DELETEALL: the content of an array topic is replaced, not added to."""
     return _marker(time, "map", namespace, 0, 0, action=3)

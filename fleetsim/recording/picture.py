@@ -10,8 +10,9 @@ deterministic (fixed order, fixed number formats), so pictures of the same run a
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import replace
+from typing import Any
 from xml.sax.saxutils import escape
 
 from fleetsim.enums import Traverse
@@ -22,37 +23,61 @@ from fleetsim.recording.svg import _arrow, _document, _Frame, _frame, _label_svg
 from fleetsim.scenario import Scenario, Vehicle
 from fleetsim.sim.result import Failure, RunResult
 
-__all__ = ["failure_caption", "failure_picture", "failure_step", "render_frame_svg"]
+__all__ = ["failure_caption", "failure_picture", "failure_step", "render_frame_svg", "stuck_details"]
 
 _MAP = "#a8a8a8"
 _ALERT = "#ff8c00"
 _INK = "#111111"
 _LEGEND = "thick: fixed legs \u00b7 dashed: planned legs \u00b7 orange: segments with a collision alert"
+_WAITS = "#2c3e50"
+_CYCLE = "#d0021b"
+_CONTESTED = "#8e44ad"
+_STUCK_LEGEND = (
+    "arrow: waits for (red: in a wait-for cycle; dotted: plans to drive near its free next leg) \u00b7 "
+    "red ring: root cause \u00b7 purple: contested segments"
+)
 # Failures stamped with the start of the step they happened in (the loop's ``now``); the others carry
 # the end of a step (deadlock, time limit, expectations).
 _AT_STEP_START = frozenset({"rejection", "collision", "planner-error"})
 
 
-def render_frame_svg(scenario: Scenario, frame: Frame, *, caption: str, pixels_per_metre: float = 40.0) -> str:
-    """Draw ``frame`` of a run of ``scenario`` as an SVG document with ``caption`` on top."""
+def render_frame_svg(
+    scenario: Scenario,
+    frame: Frame,
+    *,
+    caption: str,
+    pixels_per_metre: float = 40.0,
+    stuck: Mapping[str, Any] | None = None,
+) -> str:
+    """Draw ``frame`` of a run of ``scenario`` as an SVG document with ``caption`` on top.
+
+    ``stuck``: the details of a deadlock or timeout failure (``vehicles``, ``cycles``, ``roots``, as in
+    ``result.json``); who waits for whom is drawn over the fleet.
+    """
     font = 0.4 * pixels_per_metre
     caption_line = " ".join(caption.split())  # one line: a newline would run off the picture
-    view = _frame(scenario.layout, margin=1.5, pixels_per_metre=pixels_per_metre, top=3.2 * font)
+    legends = [_LEGEND, _STUCK_LEGEND] if stuck else [_LEGEND]
+    view = _frame(scenario.layout, margin=1.5, pixels_per_metre=pixels_per_metre, top=(2.4 + 1.2 * len(legends)) * font)
     # Wide enough for the caption even on a small map (about 0.6 em per character of sans-serif).
-    needed = 2 * font + 0.6 * font * max(len(caption_line), len(_LEGEND) * 0.7)
+    needed = 2 * font + 0.6 * font * max(len(caption_line), *(len(legend) * 0.7 for legend in legends))
     view = replace(view, width=max(view.width, needed))
     colours = {vid: svg_colour(rgba) for vid, rgba in vehicle_colours(scenario).items()}
     body = [
         *_alerts_svg(scenario, frame, view),
+        *(_contested_svg(scenario, view, stuck) if stuck else []),
         *_map_svg(scenario, view),
         *_plans_svg(scenario, frame, view, colours),
         *_labels_svg(scenario, view),
         *_vehicles_svg(scenario, frame, view, colours, font * 0.8),
+        *(_waits_svg(scenario, frame, view, stuck) if stuck else []),
         '<g class="caption" font-family="sans-serif">',
         f'<text class="caption-text" x="{font:.1f}" y="{1.4 * font:.1f}" font-size="{font:.1f}" fill="{_INK}">'
         f"{escape(caption_line)}</text>",
-        f'<text class="legend" x="{font:.1f}" y="{2.6 * font:.1f}" font-size="{0.7 * font:.1f}" fill="#555555">'
-        f"{escape(_LEGEND)}</text>",
+        *(
+            f'<text class="legend" x="{font:.1f}" y="{(2.6 + 1.0 * row) * font:.1f}" font-size="{0.7 * font:.1f}" fill="#555555">'
+            f"{escape(legend)}</text>"
+            for row, legend in enumerate(legends)
+        ),
         "</g>",
     ]
     return _document(view, f"{scenario.name}: step {frame.step}", body)
@@ -69,6 +94,73 @@ def _alerts_svg(scenario: Scenario, frame: Frame, view: _Frame) -> list[str]:
         )
     parts.append("</g>")
     return parts
+
+
+def _contested_svg(scenario: Scenario, view: _Frame, stuck: Mapping[str, Any]) -> list[str]:
+    """Purple bands under the map for the segments waiting vehicles need and others hold."""
+    contested = sorted({int(s) for finding in stuck.get("vehicles", ()) for s in finding.get("contested", ())})
+    parts = ['<g class="contested">']
+    for sid in contested:
+        if sid in scenario.layout.segments:
+            parts.append(
+                f'<polyline class="contested-segment" data-segment="{sid}" points="{view.points(scenario.layout.segments[sid].waypoints)}" '
+                f'fill="none" stroke="{_CONTESTED}" stroke-opacity="0.45" stroke-width="{0.55 * view.scale:.2f}" '
+                'stroke-linecap="round" stroke-linejoin="round"/>'
+            )
+    parts.append("</g>")
+    return parts
+
+
+def _waits_svg(scenario: Scenario, frame: Frame, view: _Frame, stuck: Mapping[str, Any]) -> list[str]:
+    """An arrow from each waiting vehicle to each vehicle it waits for, red in a cycle; rings round root causes."""
+    in_cycle = {(int(c[i]), int(c[(i + 1) % len(c)])) for c in stuck.get("cycles", ()) for i in range(len(c))}
+    radius = {v.id: v.type.swept_radius for v in scenario.vehicles}
+    parts = ['<g class="wait-for">']
+    for finding in stuck.get("vehicles", ()):
+        source = int(finding["vehicle"])
+        relations = [(int(b), "wait-for") for b in finding.get("blocked_by", ())]
+        relations += [(int(b), "planned-near") for b in finding.get("planned_near", ())]
+        for target, kind in relations:
+            if source not in frame.poses or target not in frame.poses:
+                continue
+            cycle = (source, target) in in_cycle
+            colour = _CYCLE if cycle else _WAITS
+            parts.append(_relation_arrow(view, frame.poses[source], frame.poses[target], radius[source], radius[target], colour, kind, cycle, source, target))
+    for root in stuck.get("roots", ()):
+        for vid in root.get("vehicles", ()):
+            pose = frame.poses.get(int(vid))
+            if pose is None:
+                continue
+            x, y = view.point((pose.x, pose.y))
+            parts.append(
+                f'<circle class="root-cause" data-vehicle="{int(vid)}" data-kind="{escape(str(root.get("kind", "")))}" cx="{x:.2f}" cy="{y:.2f}" '
+                f'r="{(radius[int(vid)] + 0.25) * view.scale:.2f}" fill="none" stroke="{_CYCLE}" stroke-width="{0.1 * view.scale:.2f}"/>'
+            )
+    parts.append("</g>")
+    return parts
+
+
+def _relation_arrow(
+    view: _Frame, a: Pose, b: Pose, from_radius: float, to_radius: float, colour: str, kind: str, cycle: bool, source: int, target: int
+) -> str:
+    """A line from vehicle ``a``'s edge to vehicle ``b``'s edge with a head at ``b``."""
+    dx, dy = b.x - a.x, b.y - a.y
+    length = math.hypot(dx, dy)
+    if length <= from_radius + to_radius:
+        ux, uy, start, end = 1.0, 0.0, (a.x, a.y), (b.x, b.y)
+    else:
+        ux, uy = dx / length, dy / length
+        start = (a.x + ux * from_radius, a.y + uy * from_radius)
+        end = (b.x - ux * to_radius, b.y - uy * to_radius)
+    width = (0.08 if kind == "wait-for" else 0.05) * view.scale
+    dash = "" if kind == "wait-for" else f' stroke-dasharray="{width:.2f} {2 * width:.2f}"'
+    head = _arrow(view, end, math.atan2(uy, ux), 0.45, colour, f'class="{kind}-head"')
+    (x1, y1), (x2, y2) = view.point(start), view.point(end)
+    return (
+        f'<g class="{kind}{" cycle" if cycle else ""}" data-from="{source}" data-to="{target}">'
+        f'<line x1="{x1:.2f}" y1="{y1:.2f}" x2="{x2:.2f}" y2="{y2:.2f}" stroke="{colour}" stroke-width="{width:.2f}"{dash}/>'
+        f"{head}</g>"
+    )
 
 
 def _map_svg(scenario: Scenario, view: _Frame) -> list[str]:
@@ -195,4 +287,9 @@ def failure_picture(scenario: Scenario, result: RunResult) -> tuple[int, str] | 
         return None
     step, failure = found
     frame = frame_at(scenario, lines, step)
-    return step, render_frame_svg(scenario, frame, caption=failure_caption(failure))
+    return step, render_frame_svg(scenario, frame, caption=failure_caption(failure), stuck=stuck_details(failure))
+
+
+def stuck_details(failure: Failure) -> Mapping[str, Any] | None:
+    """Who waits for whom, when ``failure`` is a deadlock or timeout that explains it; else None."""
+    return failure.details if failure.kind in ("deadlock", "timeout") and "vehicles" in failure.details else None

@@ -17,6 +17,10 @@ Topics:
 - ``/fleetsim/plans``: each vehicle's plan in its colour, fixed legs thick, planned legs thin.
 - ``/fleetsim/alerts``: segments of the collision alerts in force, orange, with the alert text.
 - ``/fleetsim/sim_time``: a text marker with the simulated time.
+- ``/fleetsim/stuck``: at the end of a run that deadlocked or ran out of time with tasks pending, who waits
+  for whom (namespace ``wait_for``, arrows; ``wait_for_cycle`` red; ``planned_near`` thin), the root-cause
+  vehicles (``root_cause``, red discs), the contested segments (``contested``, purple) and the headline
+  (``stuck_text``).
 - ``/rosout``: rejections, route errors and alerts (warnings), planner errors (errors), completed tasks.
 
 The file is written under a temporary name and renamed when complete, so an interrupted recording never
@@ -73,12 +77,17 @@ TOPICS: dict[str, tuple[str, bool]] = {
     "/fleetsim/plans": (_ARRAY, False),
     "/fleetsim/alerts": (_ARRAY, False),
     "/fleetsim/sim_time": (_ARRAY, False),
+    "/fleetsim/stuck": (_ARRAY, False),
     "/rosout": ("rcl_interfaces/msg/Log", False),
 }
 
 _MAP_GREY = (0.55, 0.58, 0.65, 1.0)
 _ORANGE = (1.0, 0.55, 0.0, 1.0)
 _WHITE = (1.0, 1.0, 1.0, 1.0)
+_WAITS = (0.17, 0.24, 0.31, 1.0)
+_CYCLE_RED = (0.82, 0.0, 0.11, 1.0)
+_ROOT_RED = (0.82, 0.0, 0.11, 0.45)
+_PURPLE = (0.56, 0.27, 0.68, 0.8)
 _FIXED_WIDTH, _PLANNED_WIDTH, _MAP_WIDTH, _ALERT_WIDTH = 0.18, 0.06, 0.05, 0.35
 _INFO, _WARN, _ERROR = 20, 30, 40
 
@@ -233,6 +242,37 @@ class _Scene:
             markers.append(m.text_marker(time, "map", "alert_text", number, f"COLLISION ALERT: {alert}", (x, y, 1.0), self.letter, _ORANGE))
         return m.marker_array(markers)
 
+    def stuck(self, time: m.Stamp, poses: Mapping[int, Any], stuck: Mapping[str, Any]) -> Any:
+        """Who waits for whom at the end of a stuck run (the failure's details, as in result.json)."""
+        markers = [m.delete_all(time, "")]
+        contested = sorted({int(s) for f in stuck.get("vehicles", ()) for s in f.get("contested", ())} & set(self.scenario.layout.segments))
+        if contested:
+            markers.append(m.line_list(time, "contested", 0, self.points(contested, 0.04), 0.4, _PURPLE))
+        in_cycle = {(int(c[i]), int(c[(i + 1) % len(c)])) for c in stuck.get("cycles", ()) for i in range(len(c))}
+        numbers: dict[str, int] = {}
+        for finding in stuck.get("vehicles", ()):
+            source = int(finding["vehicle"])
+            relations = [(int(b), True) for b in finding.get("blocked_by", ())] + [(int(b), False) for b in finding.get("planned_near", ())]
+            for target, waits in relations:
+                if source not in poses or target not in poses:
+                    continue
+                cycle = (source, target) in in_cycle
+                namespace = ("wait_for_cycle" if cycle else "wait_for") if waits else "planned_near"
+                numbers[namespace] = numbers.get(namespace, -1) + 1
+                a, b = poses[source], poses[target]
+                start, end = (a.x, a.y, 0.6), (b.x, b.y, 0.6)
+                colour = _CYCLE_RED if cycle else _WAITS
+                markers.append(m.arrow(time, namespace, numbers[namespace], start, end, 0.12 if waits else 0.05, colour))
+        radius = {v.id: v.type.swept_radius for v in self.scenario.vehicles}
+        roots = sorted({int(v) for root in stuck.get("roots", ()) for v in root.get("vehicles", ())} & set(poses))
+        for number, vid in enumerate(roots):
+            markers.append(m.disc(time, "root_cause", number, (poses[vid].x, poses[vid].y, 0.02), 2 * radius[vid] + 0.5, _ROOT_RED))
+        x, y = self.top_left
+        headline = str(stuck.get("headline", ""))
+        if headline:
+            markers.append(m.text_marker(time, "map", "stuck_text", 0, headline, (x, y + 1.5 * self.letter, 0.0), self.letter, _CYCLE_RED))
+        return m.marker_array(markers)
+
     def sim_time(self, time: m.Stamp, seconds: float) -> Any:
         x, y = self.top_left
         return m.marker_array([m.text_marker(time, "map", "sim_time", 0, f"t = {seconds:.2f} s", (x, y, 0.0), self.letter, _WHITE)])
@@ -265,7 +305,7 @@ def _with_last(frames: Iterable[Frame]) -> Iterator[tuple[Frame, bool]]:
         yield previous, True
 
 
-def _write_frames(bag: _Bag, scenario: Scenario, frames: Iterable[Frame], every: int) -> int:
+def _write_frames(bag: _Bag, scenario: Scenario, frames: Iterable[Frame], every: int, stuck: Mapping[str, Any] | None = None) -> int:
     """Write the frames; the number written in full (with ``/tf``).
 
     Every ``every``-th step, the first and the last are written in full: the clock, every vehicle's
@@ -283,6 +323,12 @@ def _write_frames(bag: _Bag, scenario: Scenario, frames: Iterable[Frame], every:
             _write_frame(bag, scene, frame, first=first, tick=tick, alerts_changed=alerts_changed)
             shown_alerts = frame.alerts
             full += tick
+        if last and stuck:
+            time_ns = round(frame.time * 1e9)
+            time = m.stamp(time_ns)
+            bag.write("/fleetsim/stuck", time_ns, scene.stuck(time, frame.poses, stuck))
+            if stuck.get("headline"):
+                bag.write("/rosout", time_ns, m.log(time, _ERROR, str(stuck["headline"])))
     return full
 
 
@@ -313,11 +359,15 @@ def _write_frame(bag: _Bag, scene: _Scene, frame: Frame, *, first: bool, tick: b
             bag.write("/rosout", time_ns, m.log(time, line[0], line[1]))
 
 
-def record_mcap(path: Path, scenario: Scenario, trace_lines: Sequence[str], *, every: int = 1) -> Recording:
+def record_mcap(
+    path: Path, scenario: Scenario, trace_lines: Sequence[str], *, every: int = 1, stuck: Mapping[str, Any] | None = None
+) -> Recording:
     """Write the run of ``scenario`` whose trace is ``trace_lines`` to ``path`` (``.mcap``).
 
     ``every``: record every N-th step in full (the first and the last always); the steps between write
     only what changed in them (plans, alerts, log lines), so no change is lost at a lower rate.
+    ``stuck``: the details of the run's deadlock or timeout failure (as in ``result.json``, with its
+    ``headline``); who waits for whom is drawn on ``/fleetsim/stuck`` at the last step.
     """
     if every < 1:
         msg = f"every={every!r} must be a whole number of steps >= 1"
@@ -327,7 +377,7 @@ def record_mcap(path: Path, scenario: Scenario, trace_lines: Sequence[str], *, e
     try:
         with partial.open("wb") as stream:
             bag = _Bag(stream)
-            frames = _write_frames(bag, scenario, replay(scenario, trace_lines), every)
+            frames = _write_frames(bag, scenario, replay(scenario, trace_lines), every, stuck)
             bag.writer.finish()  # type: ignore[no-untyped-call]  # mcap's Writer.finish has no annotations
         os.replace(partial, path)
     finally:

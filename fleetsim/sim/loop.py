@@ -15,7 +15,7 @@ import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from types import MappingProxyType
-from typing import Any
+from typing import Any, Literal
 
 from fleetsim.errors import PlannerError
 from fleetsim.motion.driver import Driver, HeadingTable
@@ -24,7 +24,7 @@ from fleetsim.planning.protocol import Planner
 from fleetsim.planning.reservations import CollisionAlert
 from fleetsim.planning.snapshot import VehicleState
 from fleetsim.scenario import Scenario
-from fleetsim.sim.deadlock import wait_for_cycle, wait_for_graph
+from fleetsim.sim.diagnosis import Diagnosis, StuckFacts, diagnose
 from fleetsim.sim.guard import PlannerFault, PlannerGuard
 from fleetsim.sim.result import AlertEvent, DeadlockReport, Ending, Failure, Metrics, RejectionEvent, RunResult, judge
 from fleetsim.sim.trace import Trace, plan_record
@@ -63,6 +63,11 @@ class _Run:
         self.active_alerts: set[CollisionAlert] = set()
         self.waiting_time = {vid: 0.0 for vid in self.drivers}
         self.last_activity = 0.0
+        # For explaining a stuck fleet at the end (never hashed): when each vehicle last moved, when the
+        # planner last changed its plan, and how many changed plans were accepted in all.
+        self.last_moved: dict[int, float] = {}
+        self.plan_changed: dict[int, float] = {}
+        self.accepted_plans = 0
         self.planner_error: Failure | None = None
 
     # -- the steps -----------------------------------------------------------------------------------
@@ -89,6 +94,8 @@ class _Run:
             plans.append(plan_record(plan))
             if plan.vehicle_id != outcome.vehicle_id or plan != outcome.previous:
                 self.last_activity = now
+                self.plan_changed[plan.vehicle_id] = now
+                self.accepted_plans += 1
         for rejection in outcome.rejections:
             self.rejections.append(RejectionEvent(now, rejection))
             events.append(["reject", rejection.code.value, rejection.vehicle_id, rejection.leg_index])
@@ -147,13 +154,26 @@ class _Run:
             states[vehicle_id] = state
         if states:
             self.last_activity = end
+            self.last_moved.update(dict.fromkeys(states, end))
         controller.set_states(states)
         return states.values()
 
-    def deadlock(self, now: float) -> DeadlockReport:
-        waiting = tuple(v for v in self.controller.tasks.busy_vehicles() if self.drivers[v].speed == 0.0)
-        graph = wait_for_graph(self.scenario.layout, self.controller.plans, waiting)
-        return DeadlockReport(now, waiting, wait_for_cycle(graph))
+    def diagnose(self, kind: Literal["deadlock", "timeout"], now: float) -> Diagnosis:
+        """Why the vehicles with pending tasks have not finished them (at the run's end)."""
+        controller = self.controller
+        facts = StuckFacts(
+            kind=kind,
+            time=now,
+            layout=self.scenario.layout,
+            plans=controller.plans,
+            states=controller.states,
+            heads=controller.tasks.heads(),
+            last_moved=self.last_moved,
+            plan_changed=self.plan_changed,
+            route_errors=self.route_errors,
+            accepted_plans=self.accepted_plans,
+        )
+        return diagnose(facts)
 
 
 def run_scenario(
@@ -227,7 +247,7 @@ def _simulate(
             ended = "collision"
         elif end - run.last_activity >= settings.deadlock_after - 1e-9:
             ended = "deadlock"
-            deadlock = run.deadlock(end)
+            deadlock = DeadlockReport(end, run.diagnose("deadlock", end))
         else:
             if on_progress is not None and step % 50 == 0:
                 on_progress(RunProgress(end, step + 1, len(run.controller.tasks.completed()), run.controller.tasks.total))
@@ -236,6 +256,9 @@ def _simulate(
     steps = step + 1
     sim_time = steps * dt
     completed = run.controller.tasks.completed()
+    diagnosis = deadlock.diagnosis if deadlock is not None else None
+    if ended == "time-limit" and not run.controller.tasks.all_done():
+        diagnosis = run.diagnose("timeout", sim_time)
     makespan = max(completed.values()) if completed and run.controller.tasks.all_done() else None
     failures = judge(
         scenario.expect,
@@ -249,6 +272,7 @@ def _simulate(
         collisions=tuple(run.collisions),
         deadlock=deadlock,
         planner_error=run.planner_error,
+        diagnosis=diagnosis,
     )
     metrics = Metrics(
         makespan=makespan,
@@ -276,6 +300,7 @@ def _simulate(
         ended=ended,
         deadlock=deadlock,
         metrics=metrics,
+        diagnosis=diagnosis,
         checkpoints=tuple(run.trace.checkpoints),
         trace=run.trace if keep_trace else None,
     )

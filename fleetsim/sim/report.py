@@ -7,10 +7,20 @@ terminal, in a pytest report and in CI logs.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 from fleetsim.sim.result import Failure, RunResult
 
-__all__ = ["SUMMARY_COLUMNS", "broken_expectation", "failure_lines", "failure_report", "failure_text", "format_table", "summary_cells"]
+__all__ = [
+    "SUMMARY_COLUMNS",
+    "broken_expectation",
+    "failure_lines",
+    "failure_report",
+    "failure_text",
+    "format_table",
+    "route_error_lines",
+    "summary_cells",
+]
 
 # What each failure kind breaks, in the words of the suite file (SPEC §13 ``expect``) or the harness.
 _BROKEN = {
@@ -25,13 +35,13 @@ _BROKEN = {
     "load-error": "loading the scenario",
 }
 
-SUMMARY_COLUMNS = ("scenario", "outcome", "tasks", "makespan", "alerts", "rejections", "hash", "realtime")
+SUMMARY_COLUMNS = ("scenario", "outcome", "tasks", "makespan", "alerts", "rejections", "route errors", "hash", "realtime")
 
 
 def summary_cells(label: str, outcome: str, result: RunResult | None) -> tuple[str, ...]:
     """One row of the summary table; ``result`` is ``None`` for a scenario that never ran."""
     if result is None or not result.trace_hash:
-        return (label, outcome, "-", "-", "-", "-", "-", "-")
+        return (label, outcome, "-", "-", "-", "-", "-", "-", "-")
     makespan = result.metrics.makespan
     factor = result.metrics.realtime_factor
     return (
@@ -41,6 +51,7 @@ def summary_cells(label: str, outcome: str, result: RunResult | None) -> tuple[s
         "-" if makespan is None else f"{makespan:.1f} s",
         str(len(result.collisions)),
         str(len(result.rejections)),
+        str(len(result.route_errors)),
         result.trace_hash[:12],
         "-" if factor is None else f"{factor:.0f}x",
     )
@@ -60,6 +71,8 @@ def failure_text(result: RunResult, failure: Failure) -> str:
         for event in result.collisions:
             if event.time == failure.time and event.alert.segment == failure.details.get("segment"):
                 return event.alert.text()
+    if failure.kind in ("deadlock", "timeout") and result.diagnosis is not None:
+        return "\n".join([failure.message, *result.diagnosis.lines()])
     if failure.kind == "planner-error" and failure.details.get("traceback"):
         return f"{failure.message}\n{str(failure.details['traceback']).rstrip()}"
     return failure.message
@@ -81,8 +94,7 @@ def failure_report(result: RunResult, *, heading: str, shown: int = 5) -> str:
     lines = []
     if result.failures:  # first, since pytest's short summary shows a report's first line
         first = result.failures[0]
-        more = f" (and {len(result.failures) - 1} more)" if len(result.failures) > 1 else ""
-        lines.append(f"{first.kind} at t={first.time:.2f} s: {failure_text(result, first).splitlines()[0]}{more}")
+        lines.append(f"{first.kind} at t={first.time:.2f} s: {failure_text(result, first).splitlines()[0]}{_others(result.failures)}")
     lines.append(heading)
     if result.trace_hash:
         lines.append(
@@ -100,6 +112,8 @@ def failure_report(result: RunResult, *, heading: str, shown: int = 5) -> str:
             lines += ["    " + line for line in failure_text(result, failure).splitlines()]
         if len(failures) > shown:
             lines.append(f"  ... and {len(failures) - shown} more (all in result.json)")
+    if result.route_errors:
+        lines += ["", *route_error_lines(result)]
     if result.artifacts:
         lines.append("")
         # What a reviewer opens first comes first: the picture, the recording and its RViz layout.
@@ -108,6 +122,41 @@ def failure_report(result: RunResult, *, heading: str, shown: int = 5) -> str:
         files = [result.artifacts[kind] for kind in kinds]
         lines += [("artifacts: " if i == 0 else "           ") + path for i, path in enumerate(files)]
     return "\n".join(lines)
+
+
+# What one failure of a kind is called when counted in a headline.
+_NOUNS = {"collision": ("alert", "alerts"), "rejection": ("rejection", "rejections")}
+
+
+def _others(failures: Sequence[Failure]) -> str:
+    """`` (+3 more alerts; 1 other failure)`` after a headline's first failure; empty when it is alone."""
+    first = failures[0]
+    same = sum(1 for f in failures[1:] if f.kind == first.kind)
+    other = len(failures) - 1 - same
+    singular, plural = _NOUNS.get(first.kind, (f"{first.kind} failure", f"{first.kind} failures"))
+    parts = []
+    if same:
+        parts.append(f"+{same} more {singular if same == 1 else plural}")
+    if other:
+        parts.append(f"{other} other failure{'s' if other > 1 else ''}")
+    return f" ({'; '.join(parts)})" if parts else ""
+
+
+def route_error_lines(result: RunResult, shown: int = 10) -> list[str]:
+    """How many route errors the planner answered, and each distinct message: how often, for whom, when."""
+    errors = result.route_errors
+    distinct: dict[str, list[dict[str, Any]]] = {}
+    for error in errors:
+        distinct.setdefault(str(error["message"]), []).append(error)
+    lines = [f"route errors: {len(errors)} ({len(distinct)} distinct message{'s' if len(distinct) > 1 else ''})"]
+    for message, group in list(distinct.items())[:shown]:
+        vehicles = sorted({int(e["vehicle"]) for e in group if e["vehicle"] is not None})
+        who = "vehicle " if len(vehicles) == 1 else "vehicles "
+        span = f"t = {group[0]['time']:.2f} s" if len(group) == 1 else f"t = {group[0]['time']:.2f}-{group[-1]['time']:.2f} s"
+        lines.append(f"  {len(group)}x, {who}{', '.join(map(str, vehicles))}, {span}: {message}")
+    if len(distinct) > shown:
+        lines.append(f"  ... and {len(distinct) - shown} more distinct messages (all in result.json)")
+    return lines
 
 
 _ARTIFACT_ORDER = ("picture", "mcap", "rviz", "trace", "result")
@@ -122,4 +171,6 @@ def failure_lines(result: RunResult, shown: int, more_hint: str) -> list[str]:
     hidden = len(result.failures) - shown
     if hidden > 0:
         lines.append(f"... and {hidden} more failure(s) ({more_hint})")
+    if result.failures and result.route_errors:
+        lines += route_error_lines(result)
     return lines

@@ -16,6 +16,7 @@ from typing import Any, Literal
 from fleetsim.planning.checks import Rejection
 from fleetsim.planning.reservations import CollisionAlert
 from fleetsim.scenario import Expectations, Task
+from fleetsim.sim.diagnosis import Diagnosis
 from fleetsim.sim.trace import Trace
 
 __all__ = ["AlertEvent", "DeadlockReport", "Failure", "Metrics", "RejectionEvent", "RunResult", "judge"]
@@ -75,15 +76,20 @@ class AlertEvent:
 @dataclass(frozen=True, slots=True)
 class DeadlockReport:
     time: float
-    waiting: tuple[int, ...]
-    cycle: tuple[int, ...]  # vehicles that wait for each other in turn; empty if none was found
+    diagnosis: Diagnosis  # why each waiting vehicle waits, the cycles and the root causes
+
+    @property
+    def waiting(self) -> tuple[int, ...]:
+        return self.diagnosis.waiting
+
+    @property
+    def cycle(self) -> tuple[int, ...]:
+        """The first (shortest) wait-for cycle; empty if there is none."""
+        return self.diagnosis.cycles[0] if self.diagnosis.cycles else ()
 
     @property
     def message(self) -> str:
-        text = f"waiting: vehicles {', '.join(map(str, self.waiting))}"
-        if self.cycle:
-            text += "; wait-for cycle: " + " -> ".join(map(str, (*self.cycle, self.cycle[0])))
-        return text
+        return self.diagnosis.headline()
 
 
 @dataclass(frozen=True, slots=True)
@@ -134,6 +140,7 @@ class RunResult:
     ended: Ending
     deadlock: DeadlockReport | None
     metrics: Metrics
+    diagnosis: Diagnosis | None = None  # why tasks are pending at a deadlock or the time limit
     checkpoints: tuple[tuple[int, str], ...] = ()
     artifacts: Mapping[str, str] = field(default_factory=lambda: MappingProxyType({}))
     trace: Trace | None = field(default=None, compare=False, repr=False)
@@ -158,7 +165,12 @@ class RunResult:
             "ended": self.ended,
             "deadlock": None
             if self.deadlock is None
-            else {"time": self.deadlock.time, "waiting": list(self.deadlock.waiting), "cycle": list(self.deadlock.cycle)},
+            else {
+                "time": round(self.deadlock.time, 6),
+                "waiting": list(self.deadlock.waiting),
+                "cycle": list(self.deadlock.cycle),
+                "cycles": [list(cycle) for cycle in self.deadlock.diagnosis.cycles],
+            },
             "metrics": self.metrics.to_dict(),
             "artifacts": dict(self.artifacts),
         }
@@ -181,6 +193,7 @@ def judge(  # noqa: PLR0913 - the facts of a run, named
     collisions: tuple[AlertEvent, ...],
     deadlock: DeadlockReport | None,
     planner_error: Failure | None,
+    diagnosis: Diagnosis | None = None,
 ) -> tuple[Failure, ...]:
     """Every way the run falls short of ``expect`` (SPEC §13), in a fixed order."""
     failures: list[Failure] = []
@@ -189,7 +202,8 @@ def judge(  # noqa: PLR0913 - the facts of a run, named
     failures += _judge_rejections(expect, rejections)
     failures += _judge_collisions(expect, collisions)
     if deadlock is not None and not expect.deadlock:
-        failures.append(Failure("deadlock", deadlock.time, f"deadlock: {deadlock.message}", {"waiting": list(deadlock.waiting), "cycle": list(deadlock.cycle)}))
+        stuck = {"waiting": list(deadlock.waiting), "cycle": list(deadlock.cycle), **deadlock.diagnosis.to_dict()}
+        failures.append(Failure("deadlock", deadlock.time, deadlock.message, stuck))
     if expect.deadlock and deadlock is None:
         failures.append(Failure("expectation", end_time, "the scenario expects a deadlock, but the run ended without one", {"expect": "deadlock"}))
     wanted = tasks_total if expect.tasks == "all" else expect.tasks
@@ -199,7 +213,11 @@ def judge(  # noqa: PLR0913 - the facts of a run, named
         kind = "timeout" if ended == "time-limit" else "expectation"
         reason = "the time limit was reached" if ended == "time-limit" else f"the run ended ({ended})"
         msg = f"{tasks_completed} of {tasks_total} tasks completed, {wanted} expected; {reason} with {listing}{more} pending"
-        failures.append(Failure(kind, end_time, msg, {"pending": [t.id for t in pending], "expect": "tasks"}))
+        details: dict[str, Any] = {"pending": [t.id for t in pending], "expect": "tasks"}
+        if kind == "timeout" and diagnosis is not None:
+            msg = f"{msg}; {diagnosis.headline()}"
+            details.update(diagnosis.to_dict())
+        failures.append(Failure(kind, end_time, msg, details))
     if expect.max_makespan is not None and makespan is not None and makespan > expect.max_makespan:
         msg = f"makespan {makespan:.2f} s exceeds max_makespan {expect.max_makespan:g} s"
         failures.append(Failure("expectation", makespan, msg, {"expect": "max_makespan"}))

@@ -24,6 +24,7 @@ __all__ = [
     "SPACING",
     "arc",
     "corridor",
+    "grid",
     "loop",
     "quantized",
     "s_curve",
@@ -103,6 +104,27 @@ def warehouse(junctions_per_side: int) -> list[Segment]:
             build.add(Shape.CURVE, arc(x + r, y - r, r, 90.0))
             build.add(Shape.STRAIGHT, ((x + r, y), (x + SPACING - r, y)))
             build.add(Shape.STRAIGHT, ((x, y + r), (x, y + SPACING - r)))
+    return build.segments
+
+
+def grid(nodes_per_side: int, spacing: float = 2.0) -> list[Segment]:
+    """A square grid of two-way straights joining neighbouring nodes ``spacing`` metres apart.
+
+    Nodes sit at ``(i * spacing, j * spacing)``; the horizontal straights come first (row by row, west to
+    east), then the vertical ones (column by column, south to north): ``2 * n * (n - 1)`` segments, ids 1..
+    Every junction is a crossing of up to four straights, so only vehicles that turn in place drive it.
+    """
+    if nodes_per_side < 2:
+        msg = f"nodes_per_side={nodes_per_side!r} must be >= 2"
+        raise ValueError(msg)
+    build = _Builder()
+    n = nodes_per_side
+    for j in range(n):
+        for i in range(n - 1):
+            build.add(Shape.STRAIGHT, ((i * spacing, j * spacing), ((i + 1) * spacing, j * spacing)))
+    for i in range(n):
+        for j in range(n - 1):
+            build.add(Shape.STRAIGHT, ((i * spacing, j * spacing), (i * spacing, (j + 1) * spacing)))
     return build.segments
 
 

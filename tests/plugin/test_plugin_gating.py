@@ -504,21 +504,22 @@ def test_summary_table_and_metrics_json_have_one_row_per_scenario(
     rows = {row["id"]: row for row in metric_rows(project.path / "metrics.json")}
     assert list(rows) == [f"{SUITE_FILE}::corridor-passing-bay", f"{SUITE_FILE}::crossing"]  # sorted by id
     table = fleetsim_table(result)
-    assert table[0] == ["scenario", "outcome", "tasks", "makespan", "alerts", "rejections", "hash", "realtime"]
+    assert table[0] == ["scenario", "outcome", "tasks", "makespan", "alerts", "rejections", "route errors", "hash", "realtime"]
     assert [row[:2] for row in table[1:]] == [["crossing", "passed"], ["corridor-passing-bay", "failed"]]  # suite order
     for cells in table[1:]:
         row = rows[f"{SUITE_FILE}::{cells[0]}"]
         assert row["outcome"] == cells[1]
         assert row["trace_hash"] == recorded[cells[0]].hash
         assert row["planner"] == RESERVING
-        assert cells[2:7] == [
+        assert cells[2:8] == [
             f"{row['tasks_completed']}/{row['tasks_total']}",
             f"{row['makespan']:.1f} s",
             str(row["alerts"]),
             str(row["rejections"]),
+            "0",  # route errors: the reference planner finds every route
             row["trace_hash"][:12],
         ]
-        assert re.fullmatch(r"\d+x", cells[7])
+        assert re.fullmatch(r"\d+x", cells[8])
     result.stdout.fnmatch_lines(["metrics of 2 scenario(s) written to *metrics.json"])
 
 

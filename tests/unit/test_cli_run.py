@@ -82,7 +82,7 @@ def test_the_shipped_suites_pass_with_the_reserving_planner(capsys: pytest.Captu
     status, out, err = run(capsys, "run", str(SUITES), "--planner", RESERVING)
     assert status == 0, out + err
     header, *rows = out.splitlines()[:8]
-    assert header.split() == ["scenario", "outcome", "tasks", "makespan", "alerts", "rejections", "hash", "realtime"]
+    assert header.split() == ["scenario", "outcome", "tasks", "makespan", "alerts", "rejections", "route", "errors", "hash", "realtime"]
     expected = [[f"caught-bugs.fleetsim.yaml::{name}", "passed"] for name in ("crossing-collides", "corridor-head-on")]
     expected += [["caught-bugs.fleetsim.yaml::generated-layouts", "xfailed"]]  # the hunt catches BFSPlanner
     expected += [[f"examples.fleetsim.yaml::{name}", "passed"] for name in NAMES]

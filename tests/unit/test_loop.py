@@ -60,7 +60,7 @@ def test_head_on_with_reserving_planner_ends_in_a_reported_deadlock(tmp_path: Pa
     assert (result.status, result.ended) == ("failed", "deadlock")
     assert result.deadlock is not None and result.deadlock.cycle == (1, 2)
     [failure] = [f for f in result.failures if f.kind == "deadlock"]
-    assert failure.message == "deadlock: waiting: vehicles 1, 2; wait-for cycle: 1 -> 2 -> 1"
+    assert failure.message == "vehicles 1 and 2 wait for each other (1 -> 2 -> 1) over segments 1 and 3"
     # Each vehicle first drives its start segment to the end (it is fixed), then nothing moves for 3 s.
     assert failure.time == pytest.approx(6.0 + 3.0, abs=0.11)
 
