@@ -226,7 +226,7 @@ class Diagnosis:
             others = self.roots[1:]
             if others:
                 groups = [
-                    _GROUPS[kind](len(roots), ", ".join(str(v) for r in roots for v in r.vehicles))
+                    _GROUPS[kind](len(roots), ", ".join(str(v) for v in sorted(v for r in roots for v in r.vehicles)))
                     for kind in _ROOT_ORDER
                     if (roots := [r for r in others if r.kind == kind])
                 ]
