@@ -7,6 +7,7 @@ Layout geometry without Hypothesis lives in :mod:`fleetsim.strategies.geometry`.
 
 from fleetsim.strategies._files import load_saved, save_scenario
 from fleetsim.strategies._layouts import LAYOUT_KINDS, layouts
+from fleetsim.strategies._room import NoRoomError
 from fleetsim.strategies._scenarios import GenerationSpec, scenarios
 
-__all__ = ["LAYOUT_KINDS", "GenerationSpec", "layouts", "load_saved", "save_scenario", "scenarios"]
+__all__ = ["LAYOUT_KINDS", "GenerationSpec", "NoRoomError", "layouts", "load_saved", "save_scenario", "scenarios"]

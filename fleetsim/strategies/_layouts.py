@@ -8,12 +8,12 @@ from hypothesis.strategies import SearchStrategy
 from fleetsim.layout.segment import Segment
 from fleetsim.strategies import geometry
 
-__all__ = ["LAYOUT_KINDS", "check_kind", "check_range", "draw_layout", "layouts"]
+__all__ = ["LAYOUT_KINDS", "SMALLEST_FIRST", "check_kind", "check_range", "draw_kind_layout", "draw_layout", "layouts", "plainest_layout"]
 
 LAYOUT_KINDS = ("warehouse", "loop", "corridor")
 # For "any", the kind whose smallest layout is smallest comes first: Hypothesis shrinks a sampled value
 # toward the first choice, so a counterexample ends on the simplest layout that still fails.
-_SMALLEST_FIRST = ("corridor", "loop", "warehouse")
+SMALLEST_FIRST = ("corridor", "loop", "warehouse")
 
 
 def check_kind(kind: str) -> str:
@@ -34,14 +34,29 @@ def check_range(name: str, value: tuple[int, int], minimum: int) -> tuple[int, i
 def draw_layout(draw: st.DrawFn, kind: str, size: tuple[int, int], one_way: bool | None) -> list[Segment]:
     """Draw the kind first, then the size (so both shrink toward the minimum), then the options."""
     if kind == "any":
-        kind = draw(st.sampled_from(_SMALLEST_FIRST))
-    n = draw(st.integers(*size))
+        kind = draw(st.sampled_from(SMALLEST_FIRST))
+    return draw_kind_layout(draw, kind, draw(st.integers(*size)), one_way)
+
+
+def draw_kind_layout(draw: st.DrawFn, kind: str, n: int, one_way: bool | None) -> list[Segment]:
+    """A layout of ``kind`` and size ``n``, its options (bays, lane shift, one-way) drawn."""
     if kind == "warehouse":
         segments = geometry.warehouse(n)
     elif kind == "loop":
         segments = _loop(draw, n, one_way)
     else:
         segments = _corridor(draw, n)
+    return geometry.quantized(segments)
+
+
+def plainest_layout(kind: str, n: int, one_way: bool | None) -> list[Segment]:
+    """The layout of ``kind`` and size ``n`` without options: no lane shift, one passing bay at the start."""
+    if kind == "warehouse":
+        segments = geometry.warehouse(n)
+    elif kind == "loop":
+        segments = geometry.loop(n, one_way=bool(one_way))
+    else:
+        segments = geometry.corridor(n, [(0, 1)])
     return geometry.quantized(segments)
 
 

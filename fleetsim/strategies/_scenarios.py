@@ -3,7 +3,8 @@
 Everything is valid by construction rather than filtered afterwards, so Hypothesis rarely discards an
 example: starts are drawn only among segments whose conflict sets miss every earlier start's, and goals
 only among segments the vehicle can still reach with its turn capability whatever route a planner took
-to the goal before. Counts are drawn first (``st.integers``), so they shrink toward the minimum.
+to the goal before. Counts are drawn first (``st.integers``), so they shrink toward the minimum. The
+layout is replaced by a larger one when it has no room for the number of vehicles drawn.
 
 Every scenario is also solvable without a possible collision, so a failing run blames the planner, not
 the scenario: the vehicles could do their tasks one after another, each keeping clear of the others
@@ -26,7 +27,8 @@ from fleetsim.layout.segment import Segment
 from fleetsim.load.scenario import default_vehicle_type
 from fleetsim.planners.routing import State, next_states
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Scenario, ScenarioSettings, Task, Vehicle, VehicleType
-from fleetsim.strategies._layouts import check_kind, check_range, draw_layout
+from fleetsim.strategies._layouts import SMALLEST_FIRST, check_kind, check_range, draw_kind_layout, plainest_layout
+from fleetsim.strategies._room import NoRoomError, Room, clashes, spare_starts
 
 __all__ = ["GenerationSpec", "scenarios"]
 
@@ -201,30 +203,104 @@ def _usable(layout: Layout, standing: Iterable[int]) -> frozenset[int]:
     return frozenset(sid for sid in layout.segments if sid not in blocked)
 
 
-def _draw_starts(draw: st.DrawFn, layout: Layout, wanted: Sequence[VehicleType]) -> list[tuple[State, VehicleType]]:
-    """A start per wanted vehicle while the layout holds more: fewer than drawn, never an invalid scenario."""
+def _draw_starts(
+    draw: st.DrawFn, layout: Layout, wanted: Sequence[VehicleType], apart: Layout, spare: frozenset[int], room: Room
+) -> list[tuple[State, VehicleType]]:
+    """A start per wanted vehicle, each leaving room for the rest.
+
+    ``spare`` holds at least ``len(wanted)`` starts pairwise apart in ``apart`` (the layout with the
+    largest radius of the spec, whose conflict sets contain ``layout``'s). A start is kept only if
+    enough spare starts stay apart from it, or a new spare set of the segments still free is large
+    enough; so some spare start is always an option for the next vehicle. A start that would leave
+    too little room gives way to the next one that leaves enough: what a drawn start means then does
+    not depend on how many vehicles follow, which keeps shrinking stable.
+    """
     starts: list[tuple[State, VehicleType]] = []
     taken: set[int] = set()
-    for vehicle_type in wanted:
+    blocked: set[int] = set()  # segments clashing in ``apart`` with a start so far
+    left = set(spare)
+
+    def leaves(segment: int, still: int) -> set[int] | None:
+        near = clashes(apart, segment)
+        if len(left - near) >= still:
+            return left - near
+        again = spare_starts(apart, room.capabilities, among=set(apart.segments) - blocked - near)
+        return set(again) if len(again) >= still else None
+
+    for number, vehicle_type in enumerate(wanted, start=1):
         options = _starts(layout, taken, vehicle_type.turn_capability)
-        if not options:
-            break
-        start = draw(st.sampled_from(options))
+        first = options.index(draw(st.sampled_from(options)))
+        still = len(wanted) - number
+        for start in (*options[first:], *options[:first]):
+            rest = leaves(start[0], still)
+            if rest is not None:
+                break
+        assert rest is not None, "a spare start is always an option"
         starts.append((start, vehicle_type))
         taken |= layout.conflicts(start[0])
+        blocked |= clashes(apart, start[0])
+        left = rest
     return starts
 
 
-def _draw_scenario(draw: st.DrawFn, spec: GenerationSpec, name: str) -> Scenario:
+class _Sizing:
+    """Which layouts have room for how many vehicles of a spec (see :mod:`fleetsim.strategies._room`)."""
+
+    def __init__(self, spec: GenerationSpec) -> None:
+        self.spec = spec
+        self.kinds = SMALLEST_FIRST if spec.layout == "any" else (spec.layout,)
+        self.sizes = range(spec.size[0], spec.size[1] + 1)
+        self.radius = _radius(spec.types, spec.type_map, spec.settings)  # the largest any mix of types gives
+        self.room = Room(self._plainest, {t.turn_capability for t in spec.types})
+
+    def _plainest(self, kind: str, size: int) -> Layout:
+        return self.layout(plainest_layout(kind, size, self.spec.one_way))
+
+    def layout(self, segments: Sequence[Segment]) -> Layout:
+        return _layout(segments, self.spec.settings, self.radius)
+
+    def check(self) -> None:
+        """Refuse a spec none of whose layouts has room for its largest number of vehicles."""
+        most = self.spec.vehicles[1]
+        if not any(self.room.smallest(kind, self.sizes, most) is not None for kind in self.kinds):
+            raise NoRoomError(self.spec.layout, self.spec.size, self.spec.vehicles, self.room.most(self.kinds, self.sizes), self.radius)
+
+    def draw(self, draw: st.DrawFn) -> tuple[str, int, list[Segment]]:
+        """Kind, size and segments, drawn as :func:`fleetsim.strategies.layouts` draws them."""
+        kind = draw(st.sampled_from(self.kinds))
+        size = draw(st.integers(*self.spec.size))
+        return kind, size, draw_kind_layout(draw, kind, size, self.spec.one_way)
+
+    def fit(self, kind: str, size: int, segments: list[Segment], count: int) -> tuple[list[Segment], Layout, frozenset[int]]:
+        """A layout with room for ``count`` vehicles: its segments, its largest-radius layout, a spare set.
+
+        The drawn layout when it has room; else the plainest layout of the next kind (in smallest-first
+        order, starting with the drawn one) and size (from the drawn one up) that has. The layout is
+        drawn before the number of vehicles, so a counterexample shrinks toward fewer vehicles and a
+        smaller layout independently.
+        """
+        apart = self.layout(segments)
+        spare = spare_starts(apart, self.room.capabilities)
+        if len(spare) >= count:
+            return segments, apart, spare
+        first = self.kinds.index(kind)
+        for other in (*self.kinds[first:], *self.kinds[:first]):
+            sizes = [n for n in self.sizes if n >= size] if other == kind else self.sizes
+            fitting = self.room.smallest(other, sizes, count) or self.room.smallest(other, self.sizes, count)
+            if fitting is not None:
+                return plainest_layout(other, fitting, self.spec.one_way), self.room.layout(other, fitting), self.room.spare(other, fitting)
+        raise AssertionError("check() found room for the most vehicles in some kind")
+
+
+def _draw_scenario(draw: st.DrawFn, spec: GenerationSpec, sizing: _Sizing, name: str) -> Scenario:
     settings, types = spec.settings, spec.type_map
-    segments = draw_layout(draw, spec.layout, spec.size, spec.one_way)
-    wanted = [draw(st.sampled_from(spec.types)) for _ in range(draw(st.integers(*spec.vehicles)))]
-    layout = _layout(segments, settings, _radius(wanted, types, settings))
-    starts = _draw_starts(draw, layout, wanted)
-    used = [vehicle_type for _, vehicle_type in starts]
-    radius = _radius(used, types, settings)
-    if radius != layout.vehicle_radius:  # a smaller radius only shrinks conflict sets: starts stay apart
-        layout = _layout(segments, settings, radius)
+    kind, size, drawn = sizing.draw(draw)
+    count = draw(st.integers(*spec.vehicles))
+    segments, apart, spare = sizing.fit(kind, size, drawn, count)
+    wanted = [draw(st.sampled_from(spec.types)) for _ in range(count)]
+    radius = _radius(wanted, types, settings)
+    layout = apart if radius == apart.vehicle_radius else _layout(segments, settings, radius)
+    starts = _draw_starts(draw, layout, wanted, apart, spare, sizing.room)
     vehicles: list[Vehicle] = []
     tasks: list[Task] = []
     parked: list[int] = []  # where the vehicles so far end up: their last goal, else their start
@@ -249,10 +325,18 @@ def _draw_scenario(draw: st.DrawFn, spec: GenerationSpec, name: str) -> Scenario
 
 
 def scenarios(spec: GenerationSpec = GenerationSpec(), *, name: str = "generated") -> SearchStrategy[Scenario]:
-    """Complete, valid scenarios as ``spec`` describes; each loads back unchanged after :func:`save_scenario`."""
+    """Complete, valid scenarios as ``spec`` describes; each loads back unchanged after :func:`save_scenario`.
+
+    Every scenario has a number of vehicles in ``spec.vehicles``: layouts are drawn large enough for
+    it. A spec none of whose layouts has room for ``spec.vehicles[1]`` vehicles raises
+    :class:`NoRoomError` (a ``ValueError``) here, before anything is drawn.
+    """
+
+    sizing = _Sizing(spec)
+    sizing.check()
 
     @st.composite
     def strategy(draw: st.DrawFn) -> Scenario:
-        return _draw_scenario(draw, spec, name)
+        return _draw_scenario(draw, spec, sizing, name)
 
     return strategy()

@@ -24,7 +24,7 @@ pytestmark = pytest.mark.integration
 # Tiled keeps JSON coordinates as doubles; TMX keeps about 6 significant digits of pixels.
 TOLERANCE_M = {".json": 1e-9, ".tmx": 1e-3}
 
-any_kind = st.sampled_from(LAYOUT_KINDS).flatmap(lambda kind: scenarios(GenerationSpec(layout=kind, size=(1, 2))))
+any_kind = st.sampled_from(LAYOUT_KINDS).flatmap(lambda kind: scenarios(GenerationSpec(layout=kind, size=(1, 2), vehicles=(1, 2))))
 
 
 @settings(max_examples=10, deadline=None, suppress_health_check=[HealthCheck.too_slow])
