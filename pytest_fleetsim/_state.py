@@ -27,7 +27,14 @@ from fleetsim.gating.baseline import (
     write_metrics,
 )
 from fleetsim.gating.lockfile import HashLock, LockEntry, LockFileError, lock_path_for
-from fleetsim.gating.generated import counterexample_entry, counterexample_story, hunt, record_counterexample
+from fleetsim.gating.generated import (
+    counterexample_entry,
+    counterexample_story,
+    hunt,
+    hunt_facts,
+    hunt_label,
+    record_counterexample,
+)
 from fleetsim.gating.verify import run_checked
 from fleetsim.load.scenario import load_scenario
 from fleetsim.load.suite import load_suite
@@ -180,21 +187,28 @@ class FleetsimState:
 
     def _hunt(self, item: ScenarioItem, make: Any, identity: str, heading: str) -> None:
         """A generated entry: Hypothesis hunts for a failing scenario; a shrunk one is saved and reported."""
+        assert item.spec.generate is not None
         try:
             found = hunt(item.spec, item.suite, make, identity=identity, planner_timeout=self.timeout)
+        except LoadError as error:  # a generate block no layout has room for
+            raise ScenarioFailed(_story(str(error), heading)) from None
         except PlannerSpecError as error:
             raise ScenarioFailed(_story(f"planner-error: {error}", heading, error.details)) from None
-        item.user_properties.append(("fleetsim_generated_examples", str(found.tried)))
+        item.user_properties += [(f"fleetsim_{key}", str(value)) for key, value in hunt_facts(found).items()]
+        label = hunt_label(item.spec.name, found)
         if found.counterexample is None or found.result is None:
+            if found.result is not None:
+                self._describe(item, found.result, None, identity, label=label, generated=True)
             return
         folder = artifact_folder(self.artifacts, item.path, item.spec.name)
-        extra = {"suite": str(item.path), "nodeid": item.nodeid, "line": item.spec.line, "generated": found.tried}
+        extra = {"suite": str(item.path), "nodeid": item.nodeid, "line": item.spec.line, **hunt_facts(found)}
         paths = record_counterexample(found, folder, extra, record_every=self.record_every)
         shown = {kind: _relative(self.config, Path(path)) for kind, path in paths.items()}
         result = replace(found.result, artifacts={**found.result.artifacts, **shown})
-        self._describe(item, result, None, identity)
+        self._describe(item, result, None, identity, label=label, generated=True)
         entry = counterexample_entry(item.spec, Path(paths["scenario"]), item.path)
-        story = "\n\n" + counterexample_story(found, shown["scenario"], _relative(self.config, item.path), entry)
+        where = _relative(self.config, item.path)
+        story = "\n\n" + counterexample_story(found, item.spec.generate.examples, shown["scenario"], where, entry)
         raise ScenarioFailed(failure_report(result, heading=heading) + story)
 
     def _lock(self, suite: Path) -> HashLock:
@@ -210,8 +224,14 @@ class FleetsimState:
         shown = {kind: _relative(self.config, Path(path)) for kind, path in paths.items()}
         return replace(result, artifacts={**result.artifacts, **shown})
 
-    def _describe(self, item: ScenarioItem, result: RunResult, record: LockEntry | None, identity: str) -> None:
-        """JUnit properties, and the payload that travels to the controller with the test's report."""
+    def _describe(
+        self, item: ScenarioItem, result: RunResult, record: LockEntry | None, identity: str, *, label: str = "", generated: bool = False
+    ) -> None:
+        """JUnit properties, and the payload that travels to the controller with the test's report.
+
+        A generated entry (``generated``) gets its summary row but stays out of the metrics document:
+        its runs are different scenarios every time, so there is nothing to compare with a baseline.
+        """
         metrics = result.metrics
         item.user_properties += [
             ("fleetsim_planner", identity),
@@ -229,7 +249,8 @@ class FleetsimState:
             "index": item.index,
             "planner": identity,
             "metrics": ScenarioMetrics.from_result(item.nodeid, "failed", result).to_dict(),  # outcome: see _metrics
-            "cells": list(summary_cells(item.spec.name, "", result)),
+            "cells": list(summary_cells(label or item.spec.name, "", result)),
+            "generated": generated,
             "record": None if record is None else {"hash": record.hash, "steps": record.steps, "checkpoints": list(record.checkpoints)},
         }
 
@@ -258,7 +279,7 @@ class FleetsimState:
             self._record_hashes(ordered)
         else:
             self._note_stale_entries(ordered)
-        rows = [self._metrics(o) for o in ordered]
+        rows = [self._metrics(o) for o in ordered if not o.payload.get("generated")]
         if self.metrics_json is not None:
             write_metrics(self.metrics_json, rows)
             self.notes.append(f"metrics of {len(rows)} scenario(s) written to {self.metrics_json}")

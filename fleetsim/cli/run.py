@@ -22,7 +22,16 @@ from fleetsim.errors import FleetsimError, LoadError
 from fleetsim.load.scenario import load_scenario
 from fleetsim.load.scenario_files import did_you_mean
 from fleetsim.load.suite import SUITE_SUFFIX, ScenarioSpec, Suite, discover_suites, load_suite
-from fleetsim.gating.generated import counterexample_entry, counterexample_story, hunt, record_counterexample
+from fleetsim.gating.generated import (
+    DEFAULT_ARTIFACTS,
+    Hunt,
+    counterexample_entry,
+    counterexample_story,
+    hunt,
+    hunt_facts,
+    hunt_label,
+    record_counterexample,
+)
 from fleetsim.recording.artifacts import artifact_folder, write_run_artifacts
 from fleetsim.sim.loop import RunProgress, run_scenario
 from fleetsim.sim.planner_spec import PlannerFactory, PlannerSpecError, load_planner_factory
@@ -54,6 +63,12 @@ class _Outcome:
     target: _Target
     result: RunResult
     loaded: bool
+    hunt: Hunt | None = None  # a generated entry's hunt
+
+    @property
+    def label(self) -> str:
+        """The target's label; a generated entry's says what its hunt ran."""
+        return self.target.label if self.hunt is None else hunt_label(self.target.label, self.hunt)
 
     @property
     def xfail(self) -> str | None:
@@ -81,12 +96,13 @@ def run(args: argparse.Namespace) -> int:
     factory = load_planner_factory(args.planner, call_timeout=timeout)
     targets = _targets(args.suites)
     record = (Path(args.record), args.record_every) if args.record else None
+    counterexamples = record or (DEFAULT_ARTIFACTS, args.record_every)  # always saved
     table = sys.stderr if args.json else sys.stdout
     progress = _Progress(sys.stderr, len(targets))
     outcomes = []
     for index, target in enumerate(targets, 1):
         with progress.scenario(index, target.label):
-            outcome = _run_target(target, factory, timeout, progress.update, record)
+            outcome = _run_target(target, factory, timeout, progress.update, record, counterexamples)
         progress.done(outcome)
         outcomes.append(outcome)
         if args.json:
@@ -152,6 +168,7 @@ def _run_target(
     timeout: float | None,
     on_progress: Callable[[RunProgress], None],
     record: tuple[Path, int] | None = None,
+    counterexamples: tuple[Path, int] = (DEFAULT_ARTIFACTS, 1),
 ) -> _Outcome:
     if target.error is not None:
         return _Outcome(target, _load_failure(target.label, factory.spec, target.error), loaded=False)
@@ -160,7 +177,7 @@ def _run_target(
         if target.suite.planner is not None:  # the suite documents this planner, whatever was asked
             factory = load_planner_factory(target.suite.planner, call_timeout=timeout)
         if target.spec.generate is not None:
-            return _hunt_target(target, factory, timeout, record)
+            return _hunt_target(target, factory, timeout, counterexamples)
         scenario = load_scenario(target.spec, target.suite)
     except (LoadError, PlannerSpecError) as error:
         return _Outcome(target, _load_failure(target.spec.name, factory.spec, error), loaded=False)
@@ -177,22 +194,24 @@ def _run_target(
     return _Outcome(target, result, loaded=True)
 
 
-def _hunt_target(target: _Target, factory: PlannerFactory, timeout: float | None, record: tuple[Path, int] | None) -> _Outcome:
-    """A generated entry: hunt for a failing scenario; report and save a shrunk counterexample."""
-    assert target.suite is not None and target.spec is not None
+def _hunt_target(target: _Target, factory: PlannerFactory, timeout: float | None, counterexamples: tuple[Path, int]) -> _Outcome:
+    """A generated entry: hunt for a failing scenario; a shrunk counterexample is always saved (under
+    ``--record``'s folder, else the default artifact folder) and its suite entry printed."""
+    assert target.suite is not None and target.spec is not None and target.spec.generate is not None
     found = hunt(target.spec, target.suite, factory, identity=factory.spec, planner_timeout=timeout)
-    if found.result is None:
-        return _Outcome(target, _unrun(target.spec.name, factory.spec, "passed", "no-counterexample", ()), loaded=True)
+    if found.result is None:  # examples: 0
+        return _Outcome(target, _unrun(target.spec.name, factory.spec, "passed", "no-counterexample", ()), loaded=True, hunt=found)
     result = found.result
-    if record is not None:
-        root, every = record
+    if found.counterexample is not None:
+        root, every = counterexamples
         folder = artifact_folder(root, target.suite_path, target.spec.name)
-        extra = {"suite": str(target.suite_path), "line": target.spec.line, "generated": found.tried}
+        extra = {"suite": str(target.suite_path), "line": target.spec.line, **hunt_facts(found)}
         paths = record_counterexample(found, folder, extra, record_every=every)
         result = replace(result, artifacts={**result.artifacts, **paths})
         entry = counterexample_entry(target.spec, Path(paths["scenario"]), target.suite_path)
-        print(f"{target.label}: {counterexample_story(found, paths['scenario'], str(target.suite_path), entry)}", file=sys.stderr)
-    return _Outcome(target, result, loaded=True)
+        story = counterexample_story(found, target.spec.generate.examples, paths["scenario"], str(target.suite_path), entry)
+        print(f"{target.label}: {story}", file=sys.stderr)
+    return _Outcome(target, result, loaded=True, hunt=found)
 
 
 def _load_failure(name: str, planner: str, error: LoadError | PlannerSpecError) -> RunResult:
@@ -231,6 +250,8 @@ def _document(outcome: _Outcome) -> dict[str, Any]:
         document["trace_hash"] = None  # nothing ran, so there is no hash to compare
     document["suite"] = str(outcome.target.suite_path)
     document["xfail"] = outcome.xfail
+    if outcome.hunt is not None:
+        document.update(hunt_facts(outcome.hunt))
     return document
 
 
@@ -286,7 +307,7 @@ def _isatty(stream: TextIO) -> bool:
 
 
 def _print_summary(outcomes: list[_Outcome], stream: TextIO) -> None:
-    rows = [summary_cells(o.target.label, o.word, o.result if o.loaded else None) for o in outcomes]
+    rows = [summary_cells(o.label, o.word, o.result if o.loaded else None) for o in outcomes]
     for line in format_table(rows):
         print(line, file=stream)
     words = [o.word for o in outcomes]

@@ -7,19 +7,28 @@ complete run). Under CI (``CI`` set) the search is derandomised, so a gate gives
 every run; elsewhere each run explores new scenarios. Generated runs are not hash-gated (their hashes
 would change with every new example), and a counterexample is saved as an ordinary scenario folder
 with a suite entry to paste in, so the bug stays covered after it is fixed.
+
+A hunt writes nothing into the working directory: Hypothesis gets no example database (a
+counterexample is kept as a scenario folder instead) and keeps its caches, which it would otherwise
+put in ``.hypothesis/`` under the working directory, in a temporary folder removed afterwards.
 """
 
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Mapping
+import tempfile
+import warnings
+from collections.abc import Callable, Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from hypothesis import HealthCheck, Phase, find, settings
-from hypothesis.errors import NoSuchExample
+from hypothesis import HealthCheck, Phase, configuration, find, settings
+from hypothesis.errors import HypothesisWarning, NoSuchExample
+from hypothesis.strategies import SearchStrategy
 
+from fleetsim.errors import Location, SuiteError
 from fleetsim.load.scenario import default_vehicle_type
 from fleetsim.load.suite import ScenarioSpec, Suite
 from fleetsim.planning.protocol import Planner
@@ -27,20 +36,47 @@ from fleetsim.recording.artifacts import write_run_artifacts
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Expectations, Scenario
 from fleetsim.sim.loop import run_scenario
 from fleetsim.sim.result import RunResult
-from fleetsim.strategies import GenerationSpec, save_scenario, scenarios
+from fleetsim.strategies import GenerationSpec, NoRoomError, save_scenario, scenarios
 
-__all__ = ["COUNTEREXAMPLE_FOLDER", "Hunt", "counterexample_entry", "generation_spec", "hunt", "counterexample_story", "in_ci", "record_counterexample"]
+__all__ = [
+    "COUNTEREXAMPLE_FOLDER",
+    "DEFAULT_ARTIFACTS",
+    "Hunt",
+    "counterexample_entry",
+    "counterexample_story",
+    "generation_spec",
+    "counts_story",
+    "hunt",
+    "hunt_facts",
+    "hunt_label",
+    "in_ci",
+    "record_counterexample",
+]
 
 COUNTEREXAMPLE_FOLDER = "counterexample"
+DEFAULT_ARTIFACTS = Path("fleetsim-results")  # under the working directory, as pytest's --fleetsim-artifacts
 
 
 @dataclass(frozen=True, slots=True)
 class Hunt:
-    """What a hunt found: the runs it tried, and the shrunk counterexample with its run (if any)."""
+    """What a hunt ran and found.
 
-    tried: int
+    ``generated``: scenarios Hypothesis generated and the planner ran on (at most the entry's
+    ``examples``; when one failed, it is the last of them). ``shrink_runs``: runs of smaller variants
+    of the failing one while Hypothesis shrank it, its final replay of the shrunk one included.
+    ``counterexample`` and ``result``: the shrunk scenario and one more run of it that keeps the trace
+    for the recording; without a counterexample, ``result`` is the last generated scenario's run.
+    """
+
+    generated: int
+    shrink_runs: int = 0
     counterexample: Scenario | None = None
     result: RunResult | None = None
+
+    @property
+    def ran(self) -> int:
+        """Every run of the hunt: generated, shrink runs and the recorded run of the counterexample."""
+        return self.generated + self.shrink_runs + (self.counterexample is not None)
 
 
 def in_ci() -> bool:
@@ -69,6 +105,28 @@ def generation_spec(spec: ScenarioSpec, suite: Suite) -> GenerationSpec:
     )
 
 
+def _strategy(spec: ScenarioSpec, suite: Suite) -> SearchStrategy[Scenario]:
+    """The entry's scenarios strategy; a generate block no layout has room for is a :class:`SuiteError`."""
+    try:
+        return scenarios(generation_spec(spec, suite), name=spec.name)
+    except NoRoomError as error:
+        problem = error.describe(f"generate.vehicles={list(error.vehicles)!r}", f"size {list(error.size)!r}", "larger layouts (size)")
+        raise SuiteError(f"scenario {spec.name!r}: {problem}", Location(spec.suite_path, spec.line, field="generate")) from None
+
+
+@contextmanager
+def _hypothesis_storage_elsewhere() -> Iterator[None]:
+    """Hypothesis's caches in a temporary folder for the hunt, not ``.hypothesis/`` in the working
+    directory; whatever folder it used before (the user's own tests may run in this process) after."""
+    before = vars(configuration).get("__hypothesis_home_directory")
+    with tempfile.TemporaryDirectory(prefix="fleetsim-hypothesis-") as folder:
+        configuration.set_hypothesis_home_dir(folder)
+        try:
+            yield
+        finally:
+            configuration.set_hypothesis_home_dir(before)
+
+
 def hunt(
     spec: ScenarioSpec,
     suite: Suite,
@@ -78,35 +136,50 @@ def hunt(
     planner_timeout: float | None = 10.0,
     derandomize: bool | None = None,
 ) -> Hunt:
-    """Run generated scenarios of ``spec`` until one fails its ``expect``; shrink it and run it again."""
+    """Run generated scenarios of ``spec`` until one fails its ``expect``; shrink it and run it again.
+
+    A generate block no layout of its size has room for is a :class:`SuiteError` before anything runs.
+    """
     assert spec.generate is not None
-    strategy = scenarios(generation_spec(spec, suite), name=spec.name)
-    tried = 0
+    strategy = _strategy(spec, suite)
+    generated = shrink_runs = 0
+    shrinking = False
+    last: RunResult | None = None  # a passing hunt's summary row shows the last run
 
     def judged(scenario: Scenario) -> Scenario:
         return replace(scenario, expect=spec.expect)
 
     def fails(scenario: Scenario) -> bool:
-        nonlocal tried
-        tried += 1
-        run = run_scenario(judged(scenario), make_planner(), planner_name=identity, planner_timeout=planner_timeout, keep_trace=False)
-        return not run.passed
+        nonlocal generated, shrink_runs, shrinking, last
+        # find() reports one bug, so Hypothesis stops generating at the first failure: every run after
+        # it is a shrink run.
+        if shrinking:
+            shrink_runs += 1
+        else:
+            generated += 1
+        last = run_scenario(judged(scenario), make_planner(), planner_name=identity, planner_timeout=planner_timeout, keep_trace=False)
+        shrinking = shrinking or not last.passed
+        return not last.passed
 
     search = settings(
         max_examples=spec.generate.examples,
         derandomize=in_ci() if derandomize is None else derandomize,
-        database=None,  # nothing written into the user's project; a counterexample is saved as a folder
+        database=None,  # a counterexample is saved as a scenario folder instead
         deadline=None,
         phases=(Phase.generate, Phase.shrink),
         suppress_health_check=list(HealthCheck),
     )
     try:
-        found = find(strategy, fails, settings=search)
+        with _hypothesis_storage_elsewhere(), warnings.catch_warnings():
+            # find() describes the failing example for a report it does not show; a scenario's repr
+            # is large, and the warning about that would only confuse (the counterexample is saved).
+            warnings.filterwarnings("ignore", "Generating overly large repr", HypothesisWarning)
+            found = find(strategy, fails, settings=search)
     except NoSuchExample:
-        return Hunt(tried)
+        return Hunt(generated, result=last)
     counterexample = judged(found)
     result = run_scenario(counterexample, make_planner(), planner_name=identity, planner_timeout=planner_timeout, keep_trace=True)
-    return Hunt(tried, counterexample, result)
+    return Hunt(generated, shrink_runs, counterexample, result)
 
 
 def _expect_lines(expect: Expectations) -> list[str]:
@@ -141,9 +214,31 @@ def record_counterexample(found: Hunt, folder: Path, extra: Mapping[str, Any], *
     return paths
 
 
-def counterexample_story(found: Hunt, saved: str, suite: str, entry: str) -> str:
+def counts_story(found: Hunt, examples: int) -> str:
+    """How many scenarios a hunt ran, in words."""
+    if found.counterexample is None:
+        return f"Hypothesis ran {found.generated} generated scenario(s) (at most {examples}, the entry's examples); none failed."
+    return (
+        f"Hypothesis ran {found.generated} generated scenario(s) (at most {examples}, the entry's examples); the last failed, "
+        f"and {found.shrink_runs} shrink run(s) reduced it to a counterexample, which ran once more to be recorded "
+        f"({found.ran} runs in all)."
+    )
+
+
+def counterexample_story(found: Hunt, examples: int, saved: str, suite: str, entry: str) -> str:
     """What a report says about a saved counterexample (paths as the reader should see them)."""
     return (
-        f"Hypothesis tried {found.tried} generated scenario(s) and shrank the first failing one; it is saved as "
-        f"{saved}/. To keep it as a regression scenario, add to {suite}:\n\n{entry}"
+        f"{counts_story(found, examples)} It is saved as {saved}/. To keep it as a regression scenario, add to {suite}:\n\n{entry}"
     )
+
+
+def hunt_label(name: str, found: Hunt) -> str:
+    """The entry's name in a summary table, with what its hunt ran."""
+    if found.counterexample is None:
+        return f"{name} ({found.generated} generated)"
+    return f"{name} ({found.generated} generated, {found.shrink_runs} shrink runs)"
+
+
+def hunt_facts(found: Hunt) -> dict[str, int]:
+    """The counts a result document records for a generated entry."""
+    return {"generated": found.generated, "shrink_runs": found.shrink_runs}

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import pytest
 
 SUITE = """\
@@ -30,7 +32,7 @@ def test_a_caught_planner_fails_with_the_counterexample_saved_and_a_suite_entry_
 
     result.assert_outcomes(failed=1)
     result.stdout.fnmatch_lines([
-        "*Hypothesis tried * generated scenario(s) and shrank the first failing one; it is saved as fleetsim-results/hunting/random-loops/counterexample/*",
+        "*It is saved as fleetsim-results/hunting/random-loops/counterexample/*",
         "  - name: random-loops-counterexample",
         "    dir: fleetsim-results/hunting/random-loops/counterexample/",
     ])
@@ -50,3 +52,34 @@ def test_a_sound_planner_passes_a_generated_entry(hunting: pytest.Pytester) -> N
 
     result.assert_outcomes(passed=1)
     assert not (hunting.path / "fleetsim-results").exists()
+
+
+def test_a_passing_generated_entry_has_a_summary_row_with_the_examples_it_ran(hunting: pytest.Pytester) -> None:
+    result = hunting.runpytest_inprocess("--planner", "fleetsim.planners:ReservingPlanner")
+
+    result.assert_outcomes(passed=1)
+    result.stdout.fnmatch_lines(["*= fleetsim =*", "scenario * outcome *", "random-loops (30 generated) * passed *"])
+
+
+def test_a_failing_generated_entry_says_how_many_scenarios_ran(hunting: pytest.Pytester) -> None:
+    result = hunting.runpytest_inprocess("--planner", "fleetsim.planners:BFSPlanner")
+
+    result.assert_outcomes(failed=1)
+    result.stdout.fnmatch_lines([
+        "Hypothesis ran * generated scenario(s) (at most 30, the entry's examples); the last failed, and * shrink run(s)*",
+        "random-loops (* generated, * shrink runs) * failed *",
+    ])
+    document = (hunting.path / "fleetsim-results" / "hunting" / "random-loops" / "result.json").read_text(encoding="utf-8")
+    recorded = json.loads(document)
+    assert 1 <= recorded["generated"] <= 30 and recorded["shrink_runs"] >= 1
+
+
+def test_a_generate_block_that_cannot_hold_its_vehicles_fails_at_its_suite_entry(hunting: pytest.Pytester) -> None:
+    hunting.makefile(".fleetsim.yaml", hunting=SUITE.replace("vehicles: [1, 3]", "vehicles: [9, 9]").replace("size: [1, 2]", "size: [1, 1]"))
+    result = hunting.runpytest_inprocess("--planner", "fleetsim.planners:ReservingPlanner")
+
+    result.assert_outcomes(failed=1)
+    assert (
+        "hunting.fleetsim.yaml:8: field 'generate': scenario 'random-loops': generate.vehicles=[9, 9] needs room for 9 vehicles "
+        "with non-conflicting starts, but loop layouts of size [1, 1] have room for 2"
+    ) in result.stdout.str()
