@@ -55,10 +55,12 @@ def test_a_sound_planner_passes_a_generated_entry(hunting: pytest.Pytester) -> N
 
 
 def test_a_passing_generated_entry_has_a_summary_row_with_the_examples_it_ran(hunting: pytest.Pytester) -> None:
-    result = hunting.runpytest_inprocess("--planner", "fleetsim.planners:ReservingPlanner")
+    result = hunting.runpytest_inprocess("--planner", "fleetsim.planners:ReservingPlanner", "--fleetsim-metrics-json", "metrics.json")
 
     result.assert_outcomes(passed=1)
     result.stdout.fnmatch_lines(["*= fleetsim =*", "scenario * outcome *", "random-loops (30 generated) * passed *"])
+    metrics = (hunting.path / "metrics.json").read_text(encoding="utf-8")
+    assert "random-loops" not in metrics, "a different scenario every time: nothing to compare with a baseline"
 
 
 def test_a_failing_generated_entry_says_how_many_scenarios_ran(hunting: pytest.Pytester) -> None:
