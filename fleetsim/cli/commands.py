@@ -18,7 +18,7 @@ from fleetsim.load.suite import discover_suites, load_suite
 from fleetsim.load.text import write_text_atomically
 from fleetsim.load.tiled import TiledMap, load_map
 from fleetsim.recording.artifacts import RESULT_FILE, TRACE_FILE
-from fleetsim.recording.picture import failure_caption, failure_step, render_frame_svg, stuck_details
+from fleetsim.recording.picture import failure_caption, failure_step, picture_overlays, render_frame_svg
 from fleetsim.recording.replay import Frame, TraceError, frame_at
 from fleetsim.recording.svg import render_layout_svg
 from fleetsim.scenario import Scenario
@@ -178,8 +178,10 @@ def _render_step(args: argparse.Namespace) -> int:
     if last_step < 0:
         raise UsageError(f"{trace_path}: the trace has no steps")
     found = None
+    failures: list[Failure] = []
     if document.get("status") == "failed":
-        found = failure_step(_failures(document, result_path), scenario.settings.time_step, last_step)
+        failures = _failures(document, result_path)
+        found = failure_step(failures, scenario.settings.time_step, last_step)
     if args.step is None:
         step = found[0] if found is not None else last_step
     elif 0 <= args.step <= last_step:
@@ -197,13 +199,14 @@ def _render_step(args: argparse.Namespace) -> int:
             "name the run's scenario with --suite SUITE::SCENARIO"
         )
         raise UsageError(msg) from None
+    stuck = rejected = None
     if found is not None and found[0] == step:
-        caption = failure_caption(found[1])
+        caption = failure_caption(found[1], failures, at=frame.time)
+        stuck, rejected = picture_overlays(found[1])
     else:
         caption = f"t = {frame.time:.2f} s \u2014 {scenario.name}, step {step} of {last_step}"
     output = Path(args.output)
-    stuck = stuck_details(found[1]) if found is not None and found[0] == step else None
-    write_text_atomically(output, render_frame_svg(scenario, frame, caption=caption, stuck=stuck))
+    write_text_atomically(output, render_frame_svg(scenario, frame, caption=caption, stuck=stuck, rejected=rejected))
     print(f"wrote {output} ({scenario.name}, step {step} of {last_step}, t = {frame.time:.2f} s)")
     return 0
 

@@ -9,7 +9,7 @@ change.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from enum import Enum
 
 from fleetsim.enums import JointKind, TurnCapability
@@ -58,6 +58,7 @@ class Rejection:
     leg_index: int | None
     segment: int | None
     message: str
+    plan: FleetPlan | None = field(default=None, compare=False, repr=False)  # the plan refused
 
     def __str__(self) -> str:
         where = f"vehicle {self.vehicle_id}"
@@ -84,7 +85,7 @@ Check = Callable[[FleetPlan, CheckContext], "Rejection | None"]
 
 def _reject(code: RejectionCode, plan: FleetPlan, index: int | None, message: str) -> Rejection:
     segment = plan.legs[index].segment if index is not None else None
-    return Rejection(code, plan.vehicle_id, index, segment, message)
+    return Rejection(code, plan.vehicle_id, index, segment, message, plan)
 
 
 def _goal_legs(plan: FleetPlan) -> list[tuple[int, FleetLeg]]:
@@ -279,10 +280,10 @@ def check_plans(plans: Sequence[FleetPlan], ctx: CheckContext) -> list[FleetPlan
         if plan.vehicle_id not in ctx.plans:
             known = ", ".join(str(v) for v in sorted(ctx.plans))
             msg = f"vehicle {plan.vehicle_id} is not in the scenario (vehicles: {known})"
-            results.append(Rejection(RejectionCode.UNKNOWN_VEHICLE, plan.vehicle_id, None, None, msg))
+            results.append(Rejection(RejectionCode.UNKNOWN_VEHICLE, plan.vehicle_id, None, None, msg, plan))
         elif counts[plan.vehicle_id] > 1:
             msg = f"the response holds {counts[plan.vehicle_id]} plans for this vehicle; all are rejected"
-            results.append(Rejection(RejectionCode.DUPLICATE_PLAN, plan.vehicle_id, None, None, msg))
+            results.append(Rejection(RejectionCode.DUPLICATE_PLAN, plan.vehicle_id, None, None, msg, plan))
         else:
             results.append(check_plan(plan, ctx) or plan)
     return results

@@ -20,7 +20,7 @@ from typing import Any
 
 from fleetsim.load.text import write_text_atomically
 from fleetsim.recording.picture import failure_picture, stuck_details
-from fleetsim.recording.recorder import record_mcap
+from fleetsim.recording.recorder import record_mcap, rviz_config
 from fleetsim.scenario import Scenario
 from fleetsim.sim.result import RunResult
 
@@ -80,7 +80,7 @@ def write_run_artifacts(
         write_text_atomically(folder / TRACE_FILE, "\n".join(lines) + "\n")
     if lines and scenario is not None:
         paths["mcap"] = str(record_mcap(folder / MCAP_FILE, scenario, lines, every=record_every, stuck=_stuck(result)).path)
-        shutil.copyfile(RVIZ_CONFIG, folder / RVIZ_FILE)
+        write_text_atomically(folder / RVIZ_FILE, rviz_config(scenario, RVIZ_CONFIG.read_text(encoding="utf-8")))
         paths["rviz"] = str(folder / RVIZ_FILE)
         picture = failure_picture(scenario, result)
         if picture is not None:

@@ -10,6 +10,7 @@ deterministic (fixed order, fixed number formats), so pictures of the same run a
 from __future__ import annotations
 
 import math
+import textwrap
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from typing import Any
@@ -21,9 +22,10 @@ from fleetsim.recording.colours import svg_colour, vehicle_colours
 from fleetsim.recording.replay import Frame, Pose, frame_at
 from fleetsim.recording.svg import _arrow, _document, _Frame, _frame, _label_svg, _point_at, _segment_svg
 from fleetsim.scenario import Scenario, Vehicle
-from fleetsim.sim.result import Failure, RunResult
+from fleetsim.sim.report import first_line
+from fleetsim.sim.result import MOMENTLESS, Failure, RunResult
 
-__all__ = ["failure_caption", "failure_picture", "failure_step", "render_frame_svg", "stuck_details"]
+__all__ = ["failure_caption", "failure_picture", "failure_step", "picture_overlays", "render_frame_svg", "stuck_details"]
 
 _MAP = "#a8a8a8"
 _ALERT = "#ff8c00"
@@ -32,13 +34,13 @@ _LEGEND = "thick: fixed legs \u00b7 dashed: planned legs \u00b7 orange: segments
 _WAITS = "#2c3e50"
 _CYCLE = "#d0021b"
 _CONTESTED = "#8e44ad"
+_REJECTED = "#d6008f"
+_REJECTED_LEGEND = "magenta, dashed: the rejected plan (red outline: the leg that failed the check)"
+_MIN_WIDTH = 480.0  # user units: room for a readable caption on the smallest maps
 _STUCK_LEGEND = (
     "arrow: waits for (red: in a wait-for cycle; dotted: plans to drive near its free next leg) \u00b7 "
     "red ring: root cause \u00b7 purple: contested segments"
 )
-# Failures stamped with the start of the step they happened in (the loop's ``now``); the others carry
-# the end of a step (deadlock, time limit, expectations).
-_AT_STEP_START = frozenset({"rejection", "collision", "planner-error"})
 
 
 def render_frame_svg(
@@ -48,39 +50,79 @@ def render_frame_svg(
     caption: str,
     pixels_per_metre: float = 40.0,
     stuck: Mapping[str, Any] | None = None,
+    rejected: Mapping[str, Any] | None = None,
 ) -> str:
     """Draw ``frame`` of a run of ``scenario`` as an SVG document with ``caption`` on top.
 
+    The picture is as wide as the map (at least :data:`_MIN_WIDTH`); the caption and legends wrap to it.
     ``stuck``: the details of a deadlock or timeout failure (``vehicles``, ``cycles``, ``roots``, as in
-    ``result.json``); who waits for whom is drawn over the fleet.
+    ``result.json``); who waits for whom is drawn over the fleet. ``rejected``: the details of a
+    rejection (its ``plan`` and ``leg_index``); the refused plan is drawn with its offending leg marked.
     """
     font = 0.4 * pixels_per_metre
-    caption_line = " ".join(caption.split())  # one line: a newline would run off the picture
-    legends = [_LEGEND, _STUCK_LEGEND] if stuck else [_LEGEND]
-    view = _frame(scenario.layout, margin=1.5, pixels_per_metre=pixels_per_metre, top=(2.4 + 1.2 * len(legends)) * font)
-    # Wide enough for the caption even on a small map (about 0.6 em per character of sans-serif).
-    needed = 2 * font + 0.6 * font * max(len(caption_line), *(len(legend) * 0.7 for legend in legends))
-    view = replace(view, width=max(view.width, needed))
+    legends = [_LEGEND, *([_STUCK_LEGEND] if stuck else []), *([_REJECTED_LEGEND] if rejected and rejected.get("plan") else [])]
+    view = _frame(scenario.layout, margin=1.5, pixels_per_metre=pixels_per_metre)
+    width = max(view.width, _MIN_WIDTH)
+    # About 0.6 em per character of sans-serif: lines as long as the picture is wide.
+    caption_lines = [part for line in caption.splitlines() for part in _wrap(line, width - 2 * font, font)]
+    legend_lines = [part for legend in legends for part in _wrap(legend, width - 2 * font, 0.7 * font)]
+    top = (0.8 + 1.25 * len(caption_lines) + 0.95 * len(legend_lines) + 0.6) * font
+    # Centre the map when the picture is wider than it.
+    view = replace(view, min_x=view.min_x - (width - view.width) / 2 / view.scale, width=width, height=view.height + top, top=top)
     colours = {vid: svg_colour(rgba) for vid, rgba in vehicle_colours(scenario).items()}
+    y = 0.8 * font
+    text = ['<g class="caption" font-family="sans-serif">']
+    for line in caption_lines:
+        y += 1.25 * font
+        text.append(f'<text class="caption-text" x="{font:.1f}" y="{y - 0.25 * font:.1f}" font-size="{font:.1f}" fill="{_INK}">{escape(line)}</text>')
+    for line in legend_lines:
+        y += 0.95 * font
+        text.append(f'<text class="legend" x="{font:.1f}" y="{y:.1f}" font-size="{0.7 * font:.1f}" fill="#555555">{escape(line)}</text>')
+    text.append("</g>")
     body = [
         *_alerts_svg(scenario, frame, view),
         *(_contested_svg(scenario, view, stuck) if stuck else []),
         *_map_svg(scenario, view),
         *_plans_svg(scenario, frame, view, colours),
+        *(_rejected_svg(scenario, view, rejected) if rejected and rejected.get("plan") else []),
         *_labels_svg(scenario, view),
         *_vehicles_svg(scenario, frame, view, colours, font * 0.8),
         *(_waits_svg(scenario, frame, view, stuck) if stuck else []),
-        '<g class="caption" font-family="sans-serif">',
-        f'<text class="caption-text" x="{font:.1f}" y="{1.4 * font:.1f}" font-size="{font:.1f}" fill="{_INK}">'
-        f"{escape(caption_line)}</text>",
-        *(
-            f'<text class="legend" x="{font:.1f}" y="{(2.6 + 1.0 * row) * font:.1f}" font-size="{0.7 * font:.1f}" fill="#555555">'
-            f"{escape(legend)}</text>"
-            for row, legend in enumerate(legends)
-        ),
-        "</g>",
+        *text,
     ]
     return _document(view, f"{scenario.name}: step {frame.step}", body)
+
+
+def _wrap(text: str, width: float, font: float) -> list[str]:
+    """``text`` in lines of at most ``width`` user units at ``font`` size (about 0.6 em a character)."""
+    return textwrap.wrap(" ".join(text.split()), width=max(20, int(width / (0.6 * font))), break_on_hyphens=False) or [""]
+
+
+def _rejected_svg(scenario: Scenario, view: _Frame, rejected: Mapping[str, Any]) -> list[str]:
+    """The refused plan in magenta, dashed, its legs numbered; the leg that failed the check outlined in red."""
+    layout = scenario.layout
+    width = 0.12 * view.scale
+    offending = rejected.get("leg_index")
+    parts = [f'<g class="rejected-plan" data-vehicle="{int(rejected.get("vehicle", 0))}" data-code="{escape(str(rejected.get("code", "")))}" fill="none">']
+    for index, leg in enumerate(rejected.get("plan", ())):
+        segment = layout.segments.get(int(leg["segment"]))
+        if segment is None:
+            continue  # an unknown-segment rejection names a segment the map lacks
+        if index == offending:
+            parts.append(
+                f'<polyline class="rejected-leg" data-leg="{index}" data-segment="{segment.id}" points="{view.points(segment.waypoints)}" '
+                f'stroke="{_CYCLE}" stroke-width="{3 * width:.2f}" stroke-opacity="0.6" stroke-linecap="round" stroke-linejoin="round"/>'
+            )
+        parts.append(
+            f'<polyline class="rejected-leg-path" data-leg="{index}" data-segment="{segment.id}" points="{view.points(segment.waypoints)}" '
+            f'stroke="{_REJECTED}" stroke-width="{width:.2f}" stroke-dasharray="{2 * width:.2f} {width:.2f}" stroke-linecap="round"/>'
+        )
+        tip, heading = _point_at(segment, 0.5)
+        if leg.get("traverse") == Traverse.BACKWARD.value:
+            heading += math.pi
+        parts.append(_arrow(view, tip, heading, 0.3, _REJECTED, 'class="rejected-arrow"'))
+    parts.append("</g>")
+    return parts
 
 
 def _alerts_svg(scenario: Scenario, frame: Frame, view: _Frame) -> list[str]:
@@ -252,33 +294,50 @@ def _vehicle_outline(vehicle: Vehicle, pose: Pose) -> tuple[list[Point], list[Po
 
 
 def _step_of(failure: Failure, time_step: float, last_step: int) -> int:
-    ticks = round(failure.time / time_step)
-    step = ticks if failure.kind in _AT_STEP_START else ticks - 1
-    return min(max(step, 0), last_step)
+    # Every event is stamped with the end of the step it happened in (the loop's convention).
+    return min(max(round(failure.time / time_step) - 1, 0), last_step)
 
 
 def failure_step(failures: Sequence[Failure], time_step: float, last_step: int) -> tuple[int, Failure] | None:
-    """The step (0..``last_step``) of the earliest failure and that failure; None without failures.
+    """The step (0..``last_step``) of the earliest failure that has a moment, and that failure.
 
-    Rejections, collision alerts and planner errors carry the time the step started (the reservation
-    check runs before motion), so they belong to step ``time / time_step``; every other failure carries
-    the time a step ended, so it belongs to the step before. Ties go to the failure listed first.
+    A failure at time t belongs to the step that ended at t (step ``t / time_step - 1``). Hash failures
+    have no moment: when they are all there is, the picture is of the last step. Ties go to the failure
+    listed first. None without failures.
     """
-    found = [(_step_of(failure, time_step, last_step), index) for index, failure in enumerate(failures)]
-    if not found:
-        return None
-    step, index = min(found)
-    return step, failures[index]
+    timed = [(_step_of(f, time_step, last_step), index) for index, f in enumerate(failures) if f.kind not in MOMENTLESS]
+    if timed:
+        step, index = min(timed)
+        return step, failures[index]
+    return (last_step, failures[0]) if failures else None
 
 
-def failure_caption(failure: Failure) -> str:
-    """``t = 12.30 s — collision: <first line of the message>``."""
-    first_line = failure.message.splitlines()[0] if failure.message else ""
-    return f"t = {failure.time:.2f} s \u2014 {failure.kind}: {first_line}"
+def _lead(kind: str, text: str) -> str:
+    """``kind: text``, or ``text`` alone when it already says what kind of failure it is."""
+    return text if kind[:6].lower() in text[:40].lower() else f"{kind}: {text}"
+
+
+def failure_caption(failure: Failure, failures: Sequence[Failure] = (), *, at: float | None = None) -> str:
+    """``t = 12.30 s — <the failure's first line>``, then a line per hash failure among ``failures``.
+
+    ``at``: the time of the picture, for a failure without a moment of its own (a hash failure).
+    """
+    when = failure.time if failure.kind not in MOMENTLESS or at is None else at
+    lines = [f"t = {when:.2f} s \u2014 {_lead(failure.kind, first_line(failure.message) or failure.kind)}"]
+    for other in failures:
+        if other is not failure and other.kind in MOMENTLESS:
+            lines.append(f"also {other.kind}: {first_line(other.message)}")
+    return "\n".join(lines)
+
+
+def picture_overlays(failure: Failure) -> tuple[Mapping[str, Any] | None, Mapping[str, Any] | None]:
+    """What a failure adds to its picture: who waits for whom (``stuck``) and the refused plan (``rejected``)."""
+    rejected = failure.details if failure.kind == "rejection" and failure.details.get("plan") else None
+    return stuck_details(failure), rejected
 
 
 def failure_picture(scenario: Scenario, result: RunResult) -> tuple[int, str] | None:
-    """The step of ``result``'s first failure and its picture; None for a passed run or no kept trace."""
+    """The step of ``result``'s first failure with a moment and its picture; None for a passed run or no kept trace."""
     if result.passed or result.trace is None or len(result.trace.lines) < 2:
         return None
     lines = result.trace.lines
@@ -287,7 +346,9 @@ def failure_picture(scenario: Scenario, result: RunResult) -> tuple[int, str] | 
         return None
     step, failure = found
     frame = frame_at(scenario, lines, step)
-    return step, render_frame_svg(scenario, frame, caption=failure_caption(failure), stuck=stuck_details(failure))
+    caption = failure_caption(failure, result.failures, at=frame.time)
+    stuck, rejected = picture_overlays(failure)
+    return step, render_frame_svg(scenario, frame, caption=caption, stuck=stuck, rejected=rejected)
 
 
 def stuck_details(failure: Failure) -> Mapping[str, Any] | None:

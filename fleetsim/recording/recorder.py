@@ -15,7 +15,8 @@ Topics:
   (RViz draws nothing for a URDF with several roots).
 - ``/fleetsim/map``: the segments (LINE_LIST); ``/fleetsim/labels``: vehicle ids, locked to their frames.
 - ``/fleetsim/plans``: each vehicle's plan in its colour, fixed legs thick, planned legs thin.
-- ``/fleetsim/alerts``: segments of the collision alerts in force, orange, with the alert text.
+- ``/fleetsim/alerts``: segments of the collision alerts in force, orange, each with a short label
+  (``segment 7: 1 ⟂ 2``) beside its middle, placed so that labels do not overlap.
 - ``/fleetsim/sim_time``: a text marker with the simulated time.
 - ``/fleetsim/stuck``: at the end of a run that deadlocked or ran out of time with tasks pending, who waits
   for whom (namespace ``wait_for``, arrows; ``wait_for_cycle`` red; ``planned_near`` thin), the root-cause
@@ -30,6 +31,7 @@ leaves a half-written file where a reviewer looks.
 from __future__ import annotations
 
 import contextlib
+import math
 import os
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
@@ -41,6 +43,7 @@ from mcap.writer import CompressionType, Writer
 
 from fleetsim import __version__
 from fleetsim.enums import Traverse
+from fleetsim.layout.segment import Segment
 from fleetsim.planning.protocol import FleetPlan
 from fleetsim.planning.reservations import CollisionAlert
 from fleetsim.recording import messages as m
@@ -48,7 +51,18 @@ from fleetsim.recording.colours import vehicle_colours
 from fleetsim.recording.replay import Frame, replay
 from fleetsim.scenario import Scenario
 
-__all__ = ["QOS_TRANSIENT_LOCAL", "QOS_VOLATILE", "TOPICS", "Recording", "fleet_urdf", "record_mcap"]
+__all__ = [
+    "QOS_TRANSIENT_LOCAL",
+    "QOS_VOLATILE",
+    "TOPICS",
+    "FramedView",
+    "Recording",
+    "alert_label",
+    "fleet_urdf",
+    "framed_view",
+    "record_mcap",
+    "rviz_config",
+]
 
 
 def _qos(durability: int, depth: int) -> str:
@@ -165,10 +179,9 @@ class _Scene:
         self.ids = tuple(sorted(v.id for v in scenario.vehicles))
         self.transforms = m.FleetTransforms("map", [_frame_name(vehicle_id) for vehicle_id in self.ids])
         layout = scenario.layout
-        xs = [x for segment in layout.segments.values() for x, _ in segment.waypoints]
-        ys = [y for segment in layout.segments.values() for _, y in segment.waypoints]
-        self.top_left = (min(xs), max(ys) + 1.0)
-        self.letter = max(0.3, 0.02 * max(max(xs) - min(xs), max(ys) - min(ys)))
+        view = framed_view(scenario)
+        self.letter = view.letter
+        self.top_left = (view.min_x, view.max_y + 2.0 * self.letter)
         self._points: dict[tuple[int, float], list[Any]] = {}
         self._shown: dict[int, FleetPlan] = {}  # the plan each vehicle's markers show
         self._sent: dict[tuple[str, int], tuple[tuple[int, Traverse], ...]] = {}  # (namespace, vehicle) -> legs drawn
@@ -234,13 +247,34 @@ class _Scene:
         return m.marker_array(markers) if markers else None
 
     def alerts(self, time: m.Stamp, alerts: Sequence[CollisionAlert]) -> Any:
+        """The alert segments in orange and a short label each (``segment 7: 1 ⟂ 2``) beside its middle.
+
+        Labels are placed one by one, each at the first spot near its segment's middle where it does not
+        overlap a label placed before it (the full thesis text goes to ``/rosout``).
+        """
         markers = [m.delete_all(time, "")]
+        placed: list[tuple[float, float, float, float]] = []
         for number, alert in enumerate(alerts):
-            waypoints = self.scenario.layout.segments[alert.segment].waypoints
             markers.append(m.line_list(time, "alert_segments", number, self.points([alert.segment], 0.05), _ALERT_WIDTH, _ORANGE))
-            x, y = waypoints[len(waypoints) // 2]
-            markers.append(m.text_marker(time, "map", "alert_text", number, f"COLLISION ALERT: {alert}", (x, y, 1.0), self.letter, _ORANGE))
+            text = alert_label(alert)
+            x, y = self._free_spot(self.scenario.layout.segments[alert.segment], text, placed)
+            markers.append(m.text_marker(time, "map", "alert_text", number, text, (x, y, 1.0), self.letter, _ORANGE))
         return m.marker_array(markers)
+
+    def _free_spot(self, segment: Segment, text: str, placed: list[tuple[float, float, float, float]]) -> tuple[float, float]:
+        """A spot beside ``segment``'s middle where ``text`` overlaps no box in ``placed`` (which it joins)."""
+        mx, my, heading = segment.pose_at(segment.length / 2, Traverse.FORWARD)
+        half_w, half_h = 0.3 * self.letter * len(text), 0.6 * self.letter
+        nx, ny = -math.sin(heading), math.cos(heading)  # left of the segment
+        step = 1.4 * self.letter
+        spots = [(mx + side * k * step * nx, my + side * k * step * ny) for k in range(1, 12) for side in (1, -1)]
+        box = (0.0, 0.0, 0.0, 0.0)
+        for x, y in spots:
+            box = (x - half_w, y - half_h, x + half_w, y + half_h)
+            if not any(box[0] < b[2] and b[0] < box[2] and box[1] < b[3] and b[1] < box[3] for b in placed):
+                break
+        placed.append(box)
+        return (box[0] + box[2]) / 2, (box[1] + box[3]) / 2
 
     def stuck(self, time: m.Stamp, poses: Mapping[int, Any], stuck: Mapping[str, Any]) -> Any:
         """Who waits for whom at the end of a stuck run (the failure's details, as in result.json)."""
@@ -276,6 +310,59 @@ class _Scene:
     def sim_time(self, time: m.Stamp, seconds: float) -> Any:
         x, y = self.top_left
         return m.marker_array([m.text_marker(time, "map", "sim_time", 0, f"t = {seconds:.2f} s", (x, y, 0.0), self.letter, _WHITE)])
+
+
+def alert_label(alert: CollisionAlert) -> str:
+    """``segment 7: 1 ⟂ 2``: the segment, its primary holders, then the others (the short form)."""
+    primary = ",".join(map(str, alert.primary))
+    secondary = ",".join(map(str, alert.secondary))
+    return f"segment {alert.segment}: {primary} \u27c2 {secondary}" if secondary else f"segment {alert.segment}: {primary}"
+
+
+@dataclass(frozen=True, slots=True)
+class FramedView:
+    """Where to look at a scenario's map: its bounding box, the RViz view that frames it, a text height."""
+
+    min_x: float
+    min_y: float
+    max_x: float
+    max_y: float
+    scale: float  # RViz TopDownOrtho pixels per metre
+    letter: float  # text marker height, metres
+
+    @property
+    def centre(self) -> tuple[float, float]:
+        return (self.min_x + self.max_x) / 2, (self.min_y + self.max_y) / 2
+
+
+# The render area of the shipped RViz layout's window (1400 x 900 less the panels), pixels.
+_VIEW_PIXELS = (1050.0, 800.0)
+_LETTER_PIXELS = 14.0  # the smallest text height that reads at the framed view
+
+
+def framed_view(scenario: Scenario) -> FramedView:
+    """The map's bounding box (with a margin), the RViz scale that shows all of it, and a text height
+    that follows the vehicles' size and stays legible at that scale."""
+    segments = scenario.layout.segments.values()
+    xs = [x for segment in segments for x, _ in segment.waypoints]
+    ys = [y for segment in segments for _, y in segment.waypoints]
+    margin = 2.0
+    width, height = max(xs) - min(xs) + 2 * margin, max(ys) - min(ys) + 2 * margin
+    scale = min(_VIEW_PIXELS[0] / width, _VIEW_PIXELS[1] / height)
+    size = max(max(v.type.length, v.type.width) for v in scenario.vehicles) if scenario.vehicles else 1.0
+    letter = max(0.35 * size, _LETTER_PIXELS / scale)
+    return FramedView(min(xs) - margin, min(ys) - margin, max(xs) + margin, max(ys) + margin, scale, letter)
+
+
+def rviz_config(scenario: Scenario, template: str) -> str:
+    """The shipped RViz layout with its view framing ``scenario``'s map."""
+    view = framed_view(scenario)
+    cx, cy = view.centre
+    framed = template.replace("      Scale: 20\n      X: 0\n      Y: 0\n", f"      Scale: {view.scale:.3f}\n      X: {cx:.3f}\n      Y: {cy:.3f}\n")
+    if framed == template:
+        msg = "the RViz layout template has no 'Scale: 20 / X: 0 / Y: 0' view to frame"
+        raise ValueError(msg)
+    return f"# Framed on scenario {scenario.name!r}: centre ({cx:.2f}, {cy:.2f}) m, {view.scale:.1f} px/m.\n{framed}"
 
 
 def _log_lines(event: Sequence[Any]) -> tuple[int, str] | None:

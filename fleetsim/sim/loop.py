@@ -6,6 +6,11 @@ unrouted) or ``fix_legs``, and each response is checked and applied at once; (3)
 (4) motion over [t, t + dt] with task completions; (5) t ← t + dt and the step goes into the trace;
 (6) the end: all tasks done, the time limit, a stop-on event, a planner error, or deadlock (tasks
 pending, nothing moved and no plan changed for ``deadlock_after`` seconds).
+
+Event times: every event of a step (a rejection, a route error, a planner error, a collision alert, a
+completed task, the end of the run) is stamped t + dt, the end of the step it happened in. That is the
+time of the step's frame in the trace, the recording and the pictures, so the fleet a reviewer sees at a
+reported time is the fleet at that event. The planner's calls of that step see ``fleet.time`` = t.
 """
 
 from __future__ import annotations
@@ -72,48 +77,49 @@ class _Run:
 
     # -- the steps -----------------------------------------------------------------------------------
 
-    def plan(self, now: float, events: list[list[Any]], plans: list[list[Any]]) -> bool:
-        """Step 2; False when the planner failed and the run must end."""
+    def plan(self, now: float, stamp: float, events: list[list[Any]], plans: list[list[Any]]) -> bool:
+        """Step 2 at ``now`` (what the planner sees); its events are stamped ``stamp``, the step's end.
+        False when the planner failed and the run must end."""
         try:
             for outcome in self.controller.consult_all(self.planner, now):
-                self._note(outcome, now, events, plans)
+                self._note(outcome, now, stamp, events, plans)
         except (PlannerFault, PlannerError) as fault:
-            self._planner_failed(fault, now, events)
+            self._planner_failed(fault, stamp, events)
             return False
         return True
 
-    def _planner_failed(self, fault: PlannerFault | PlannerError, now: float, events: list[list[Any]]) -> None:
+    def _planner_failed(self, fault: PlannerFault | PlannerError, stamp: float, events: list[list[Any]]) -> None:
         details: dict[str, Any] = {"vehicle": fault.vehicle_id}
         if isinstance(fault, PlannerFault) and fault.details:
             details["traceback"] = fault.details
-        self.planner_error = Failure("planner-error", now, str(fault), details)
+        self.planner_error = Failure("planner-error", stamp, str(fault), details)
         events.append(["planner-error", fault.vehicle_id])
 
-    def _note(self, outcome: CallOutcome, now: float, events: list[list[Any]], plans: list[list[Any]]) -> None:
+    def _note(self, outcome: CallOutcome, now: float, stamp: float, events: list[list[Any]], plans: list[list[Any]]) -> None:
         for plan in outcome.accepted:
             plans.append(plan_record(plan))
             if plan.vehicle_id != outcome.vehicle_id or plan != outcome.previous:
                 self.last_activity = now
-                self.plan_changed[plan.vehicle_id] = now
+                self.plan_changed[plan.vehicle_id] = stamp
                 self.accepted_plans += 1
         for rejection in outcome.rejections:
-            self.rejections.append(RejectionEvent(now, rejection))
+            self.rejections.append(RejectionEvent(stamp, rejection))
             events.append(["reject", rejection.code.value, rejection.vehicle_id, rejection.leg_index])
         for error in outcome.route_errors:
             vehicle = error.vehicle_id if error.vehicle_id is not None else outcome.vehicle_id
-            self.route_errors.append({"time": round(now, 6), "vehicle": vehicle, "message": error.message})
+            self.route_errors.append({"time": round(stamp, 6), "vehicle": vehicle, "message": error.message})
             events.append(["route-error", vehicle, error.message])
         for task_id in outcome.completed:
             events.append(["complete", task_id])
             self.last_activity = now
 
-    def check_reservations(self, now: float, events: list[list[Any]]) -> int:
+    def check_reservations(self, stamp: float, events: list[list[Any]]) -> int:
         """Step 3; alerts are reported when they appear, not again while they persist."""
         alerts = set(self.controller.alerts())
         fresh = sorted(alerts - self.active_alerts, key=lambda a: (a.segment, a.primary, a.secondary))
         self.active_alerts = alerts
         for alert in fresh:
-            self.collisions.append(AlertEvent(now, alert))
+            self.collisions.append(AlertEvent(stamp, alert))
             events.append(["alert", alert.segment, list(alert.primary), list(alert.secondary)])
         return len(fresh)
 
@@ -228,10 +234,12 @@ def _simulate(
         events: list[list[Any]] = []
         plans: list[list[Any]] = []
         run.controller.bookkeeping()
-        planned_ok = run.plan(now, events, plans) if step % period == 0 else True
+        # Every event of the step is stamped with its end, when the step enters the trace and the recording
+        # (the planner is asked at ``now``). Times are multiples of dt, never sums of them.
+        end = (step + 1) * dt
+        planned_ok = run.plan(now, end, events, plans) if step % period == 0 else True
         rejected = any(e[0] == "reject" for e in events)
-        alerted = run.check_reservations(now, events) > 0 if planned_ok else False
-        end = (step + 1) * dt  # times are multiples of dt, never sums of them
+        alerted = run.check_reservations(end, events) > 0 if planned_ok else False
         moved = run.move(dt, end, events) if planned_ok else ()
         # The trace holds what changed; at step 0 that is everyone (the start), later only who moved.
         if step == 0:

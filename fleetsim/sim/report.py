@@ -9,7 +9,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
-from fleetsim.sim.result import Failure, RunResult
+from fleetsim.sim.result import MOMENTLESS, Failure, RunResult
 
 __all__ = [
     "SUMMARY_COLUMNS",
@@ -17,9 +17,11 @@ __all__ = [
     "failure_lines",
     "failure_report",
     "failure_text",
+    "first_line",
     "format_table",
     "route_error_lines",
     "summary_cells",
+    "when",
 ]
 
 # What each failure kind breaks, in the words of the suite file (SPEC §13 ``expect``) or the harness.
@@ -78,6 +80,19 @@ def failure_text(result: RunResult, failure: Failure) -> str:
     return failure.message
 
 
+def first_line(text: str) -> str:
+    """A message's first line; one that ends with a colon goes on with the next (a command to run, say)."""
+    lines = text.splitlines() or [""]
+    if len(lines) > 1 and lines[0].endswith(":"):
+        return f"{lines[0]} {lines[1].strip()}"
+    return lines[0]
+
+
+def when(failure: Failure) -> str:
+    """``deadlock at t=47.00 s``; a failure of the whole run (the trace hash) has no moment: ``hash-missing``."""
+    return failure.kind if failure.kind in MOMENTLESS else f"{failure.kind} at t={failure.time:.2f} s"
+
+
 def broken_expectation(failure: Failure) -> str:
     """Which expectation (or harness rule) a failure broke, as the user would look it up."""
     expect = failure.details.get("expect")
@@ -94,7 +109,7 @@ def failure_report(result: RunResult, *, heading: str, shown: int = 5) -> str:
     lines = []
     if result.failures:  # first, since pytest's short summary shows a report's first line
         first = result.failures[0]
-        lines.append(f"{first.kind} at t={first.time:.2f} s: {failure_text(result, first).splitlines()[0]}{_others(result.failures)}")
+        lines.append(f"{when(first)}: {first_line(failure_text(result, first))}{_others(result.failures)}")
     lines.append(heading)
     if result.trace_hash:
         lines.append(
@@ -108,7 +123,7 @@ def failure_report(result: RunResult, *, heading: str, shown: int = 5) -> str:
         count = f" ({len(failures)} times)" if len(failures) > 1 else ""
         lines += ["", f"broken: {broken}{count}"]
         for failure in failures[:shown]:
-            lines.append(f"  {failure.kind} at t={failure.time:.2f} s:")
+            lines.append(f"  {when(failure)}:")
             lines += ["    " + line for line in failure_text(result, failure).splitlines()]
         if len(failures) > shown:
             lines.append(f"  ... and {len(failures) - shown} more (all in result.json)")
@@ -166,7 +181,7 @@ def failure_lines(result: RunResult, shown: int, more_hint: str) -> list[str]:
     """The first ``shown`` failures, each as ``kind at t=...:`` with its text indented below."""
     lines = []
     for failure in result.failures[:shown]:
-        lines.append(f"{failure.kind} at t={failure.time:.2f} s:")
+        lines.append(f"{when(failure)}:")
         lines += ["  " + line for line in failure_text(result, failure).splitlines()]
     hidden = len(result.failures) - shown
     if hidden > 0:

@@ -14,17 +14,22 @@ from types import MappingProxyType
 from typing import Any, Literal
 
 from fleetsim.planning.checks import Rejection
+from fleetsim.planning.protocol import FleetPlan
 from fleetsim.planning.reservations import CollisionAlert
 from fleetsim.scenario import Expectations, Task
 from fleetsim.sim.diagnosis import Diagnosis
 from fleetsim.sim.trace import Trace
 
-__all__ = ["AlertEvent", "DeadlockReport", "Failure", "Metrics", "RejectionEvent", "RunResult", "judge"]
+__all__ = ["MOMENTLESS", "AlertEvent", "DeadlockReport", "Failure", "Metrics", "RejectionEvent", "RunResult", "judge", "plan_legs"]
 
 # "no-counterexample": a generated suite entry whose hunt found no scenario the planner fails.
 Ending = Literal[
     "completed", "time-limit", "deadlock", "rejection", "collision", "planner-error", "load-error", "no-counterexample"
 ]
+
+
+# Failures of the run as a whole, without a moment of their own: its trace hash against the recorded one.
+MOMENTLESS = frozenset({"hash-mismatch", "hash-missing"})
 
 
 @dataclass(frozen=True, slots=True)
@@ -54,7 +59,22 @@ class RejectionEvent:
             "leg_index": r.leg_index,
             "segment": r.segment,
             "message": r.message,
+            **({"plan": plan_legs(r.plan)} if r.plan is not None else {}),
         }
+
+
+def plan_legs(plan: FleetPlan) -> list[dict[str, Any]]:
+    """A plan's legs as JSON objects, in driving order."""
+    return [
+        {
+            "segment": leg.segment,
+            "traverse": leg.traverse.value,
+            "progress": leg.progress.value,
+            "fixed": leg.fixed,
+            **({"goal_for_task": leg.goal_for_task} if leg.goal_for_task is not None else {}),
+        }
+        for leg in plan.legs
+    ]
 
 
 @dataclass(frozen=True, slots=True)
@@ -224,12 +244,19 @@ def judge(  # noqa: PLR0913 - the facts of a run, named
     return tuple(failures)
 
 
+def _rejection_details(rejection: Rejection) -> dict[str, Any]:
+    details: dict[str, Any] = {"code": rejection.code.value, "vehicle": rejection.vehicle_id}
+    if rejection.leg_index is not None:
+        details["leg_index"] = rejection.leg_index
+        details["segment"] = rejection.segment
+    if rejection.plan is not None:
+        details["plan"] = plan_legs(rejection.plan)
+    return details
+
+
 def _judge_rejections(expect: Expectations, rejections: tuple[RejectionEvent, ...]) -> list[Failure]:
     if expect.rejections == "none":
-        return [
-            Failure("rejection", e.time, f"plan rejected: {e.rejection}", {"code": e.rejection.code.value, "vehicle": e.rejection.vehicle_id})
-            for e in rejections
-        ]
+        return [Failure("rejection", e.time, f"plan rejected: {e.rejection}", _rejection_details(e.rejection)) for e in rejections]
     if expect.rejections == "any":
         return [] if rejections else [Failure("expectation", 0.0, "the scenario expects plan rejections, but there were none", {"expect": "rejections"})]
     seen = {e.rejection.code.value for e in rejections}

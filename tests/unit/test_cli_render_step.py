@@ -68,7 +68,7 @@ def test_by_default_the_failure_step_is_drawn_as_failure_picture_draws_it(
     status, out, _ = render(capsys, "--trace", str(collided), "-o", str(output))
     assert status == 0 and "step 1 of 1" in out
     root = picture(output)
-    assert texts(root, "caption-text") == ["t = 0.10 s — collision: possible collision on segment 2: primary 1; secondary 2"]
+    assert texts(root, "caption-text") == ["t = 0.20 s — possible collision on segment 2: primary 1; secondary 2"]  # the frame's own time
     assert alert_segments(root) == {2, 3, 6, 7}
     expected = failure_picture(crossing(), run_scenario(crossing(), BFSPlanner(), keep_trace=True))
     assert expected is not None and output.read_text(encoding="utf-8") == expected[1]

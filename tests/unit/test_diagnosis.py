@@ -203,11 +203,12 @@ def test_a_planner_that_answers_only_route_errors_says_so_in_the_headline(tmp_pa
     found = findings(result)
     asked = len(result.route_errors)  # once a step: it drove its start leg, then stood for 2 s
     assert found[1]["reason"] == "no-route" and asked == round(result.sim_time / 0.1)
-    assert (found[1]["route_errors"], found[1]["since"], found[1]["message"]) == (asked, 0.0, "no route to segment 3")
+    # Stamped with the end of the step of the call (the first call is at t = 0).
+    assert (found[1]["route_errors"], found[1]["since"], found[1]["message"]) == (asked, 0.1, "no route to segment 3")
     assert result.failures[0].message.startswith(f"the planner answered nothing but route errors ({asked}); vehicle 1: the planner finds no route")
     report = failure_report(result, heading="h")
     assert f"route errors: {asked} (1 distinct message)" in report
-    assert f"  {asked}x, vehicle 1, t = 0.00-{result.sim_time - 0.1:.2f} s: no route to segment 3" in report
+    assert f"  {asked}x, vehicle 1, t = 0.10-{result.sim_time:.2f} s: no route to segment 3" in report
 
 
 def test_route_errors_then_routes_are_counted_but_not_called_the_only_answer(tmp_path: Path) -> None:

@@ -106,7 +106,7 @@ def test_the_failure_report_opens_with_one_line_and_lists_broken_expectations_an
     result = replace(result, artifacts=paths)
     report = failure_report(result, heading="fleetsim scenario 'crossing'")
     first, second = report.splitlines()[:2]
-    assert first.startswith("collision at t=0.10 s: COLLISION ALERT: Possible collision detected on segment")
+    assert first == "collision at t=0.20 s: COLLISION ALERT: Possible collision detected on segment '2' (+3 more alerts; 1 other failure)"
     assert second == "fleetsim scenario 'crossing'"
     assert "broken: expect.collisions: none (4 times)" in report and "broken: expect.tasks" in report
     assert f"artifacts: {paths['trace']}\n           {paths['result']}" in report  # the trace first, then the result
