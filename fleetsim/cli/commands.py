@@ -15,7 +15,7 @@ from fleetsim.layout.layout import Layout, build_layout
 from fleetsim.load.scenario import load_scenario
 from fleetsim.load.scenario_files import did_you_mean
 from fleetsim.load.suite import discover_suites, load_suite
-from fleetsim.load.text import write_text_atomically
+from fleetsim.load.text import json_problem, write_text_atomically
 from fleetsim.load.tiled import TiledMap, load_map
 from fleetsim.recording.artifacts import RESULT_FILE, TRACE_FILE
 from fleetsim.recording.picture import failure_caption, failure_step, picture_overlays, render_frame_svg
@@ -246,7 +246,7 @@ def _read_result(path: Path) -> dict[str, Any]:
     try:
         document = json.loads(_read_text(path))
     except json.JSONDecodeError as error:
-        raise UsageError(f"{path}:{error.lineno}: not JSON ({error.msg})") from None
+        raise UsageError(f"{path}:{error.lineno}:{error.colno}: {json_problem(error)}") from None
     if not isinstance(document, dict):
         raise UsageError(f"{path}: must hold a JSON object (a run's result), not {type(document).__name__}")
     return document

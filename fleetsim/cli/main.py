@@ -7,6 +7,9 @@ one-line located error and exit status 1 (2 for a mistake on the command line it
 from __future__ import annotations
 
 import argparse
+import contextlib
+import os
+import signal
 import sys
 from collections.abc import Sequence
 
@@ -149,11 +152,23 @@ def main(argv: Sequence[str] | None = None) -> int:
     except FleetsimError as error:
         print(f"fleetsim: error: {error}", file=sys.stderr)
         return 1
+    except BrokenPipeError:
+        return _reader_gone()
     except OSError as error:
-        print(f"fleetsim: error: {error.filename}: {error.strerror}", file=sys.stderr)
+        where = f"{error.filename}: " if error.filename is not None else ""
+        print(f"fleetsim: error: {where}{error.strerror or error}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         return 130
+
+
+def _reader_gone() -> int:
+    """The reader of our output went away (``fleetsim inspect map.json | head``): end quietly, as a
+    process killed by SIGPIPE does (exit status 128 + 13), without a second error at exit's flush."""
+    with contextlib.suppress(OSError):
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    return 128 + signal.SIGPIPE
 
 
 if __name__ == "__main__":

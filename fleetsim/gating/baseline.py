@@ -19,8 +19,8 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Literal, NamedTuple, get_args
 
-from fleetsim.load.text import write_text_atomically
 from fleetsim.errors import FleetsimError, Location
+from fleetsim.load.text import json_problem, write_text_atomically
 from fleetsim.sim.result import RunResult
 
 __all__ = [
@@ -167,11 +167,11 @@ def read_metrics(path: Path | str) -> dict[str, ScenarioMetrics]:
     try:
         document = json.loads(text)
     except json.JSONDecodeError as exc:
-        msg = f"{Location(path, exc.lineno, exc.colno)}: malformed JSON: {exc.msg}"
+        msg = f"{Location(path, exc.lineno, exc.colno)}: {json_problem(exc)}"
         raise BaselineError(msg) from None
     found = document.get("format") if isinstance(document, dict) else None
     if found != METRICS_FORMAT:
-        msg = f"{path}: format={found!r} must be {METRICS_FORMAT!r} (a JSON object written by --fleetsim-metrics-json)"
+        msg = f"{path}: its \"format\" is {found!r}, not {METRICS_FORMAT!r}: this is not a metrics file written by --fleetsim-metrics-json"
         raise BaselineError(msg)
     if not isinstance(document.get("scenarios"), list):
         msg = f"{path}: scenarios={document.get('scenarios')!r} must be a list"

@@ -2,13 +2,37 @@
 
 from __future__ import annotations
 
+import json
 import os
 import tempfile
 from pathlib import Path
 
 from fleetsim.errors import LoadError, Location
 
-__all__ = ["read_text_file", "write_text_atomically"]
+__all__ = ["json_problem", "read_text_file", "write_text_atomically"]
+
+# The json module's messages, in the words of someone who edits the file.
+_JSON_WORDS = {
+    "Unterminated string starting at": "a string that starts here runs to the end of the file (is the file cut short?)",
+    "Expecting value": "a value (a number, a string, true/false/null, an object or a list) is expected here",
+    "Expecting ',' delimiter": "a ',' between items (or the closing bracket) is expected here",
+    "Expecting ':' delimiter": "a ':' after the key is expected here",
+    "Expecting property name enclosed in double quotes": "a key in double quotes is expected here",
+    "Extra data": "more text follows the end of the JSON document",
+    "Invalid control character at": "a control character (a raw newline or tab) is inside a string; write it as \\n or \\t",
+    "Invalid \\escape": "a backslash escape here is not valid JSON",
+    "Invalid \\uXXXX escape": "a \\u escape here does not have four hex digits",
+}
+
+
+def json_problem(error: json.JSONDecodeError) -> str:
+    """What is wrong with a JSON file, as a sentence (its line and column go into the location)."""
+    words = _JSON_WORDS.get(error.msg, error.msg[:1].lower() + error.msg[1:])
+    if not error.doc[error.pos :].strip() and error.msg not in ("Extra data", "Unterminated string starting at"):
+        words += "; the file ends there (is it cut short?)"
+    elif error.msg.startswith("Expecting property name") and error.doc[error.pos : error.pos + 1] in "}]":
+        words += " (JSON allows no comma after the last item)"
+    return f"the file is not valid JSON: {words}"
 
 
 def read_text_file(path: Path, error_type: type[LoadError], where: Location | None = None) -> str:

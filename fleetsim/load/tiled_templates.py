@@ -20,7 +20,7 @@ from types import MappingProxyType
 from typing import TypeVar
 
 from fleetsim.errors import Location, MapError
-from fleetsim.load.text import read_text_file
+from fleetsim.load.text import json_problem, read_text_file
 
 __all__ = [
     "ObjectFields",
@@ -162,7 +162,7 @@ def parse_json(text: str, path: Path, object_id: int | None = None) -> object:
         return json.loads(text)
     except json.JSONDecodeError as exc:
         where = Location(path, line=exc.lineno, column=exc.colno, object_id=object_id)
-        raise MapError(f"malformed JSON: {exc.msg}", where) from None
+        raise MapError(json_problem(exc), where) from None
     except (ValueError, RecursionError) as exc:  # an integer too long to convert; absurd nesting
         raise MapError(f"unreadable JSON: {exc}", Location(path, object_id=object_id)) from None
 

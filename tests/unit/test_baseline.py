@@ -156,7 +156,7 @@ def test_a_metrics_file_saved_with_a_byte_order_mark_reads(tmp_path: Path) -> No
 def test_malformed_json_is_reported_with_line_and_column(tmp_path: Path) -> None:
     path = tmp_path / "metrics.json"
     path.write_text('{\n  "format": "fleetsim-metrics/1",\n  "scenarios": [,]\n}\n', encoding="utf-8")
-    with pytest.raises(BaselineError, match=f"^{re.escape(str(path))}:3:17: malformed JSON"):
+    with pytest.raises(BaselineError, match=f"^{re.escape(str(path))}:3:17: the file is not valid JSON: a value .* is expected here"):
         read_metrics(path)
 
 
@@ -167,8 +167,8 @@ def _scenario(**changes: object) -> dict[str, object]:
 @pytest.mark.parametrize(
     ("document", "problem"),
     [
-        ([], "format=None must be 'fleetsim-metrics/1'"),
-        ({"format": "fleetsim-metrics/2", "scenarios": []}, "format='fleetsim-metrics/2' must be 'fleetsim-metrics/1'"),
+        ([], "its \"format\" is None, not 'fleetsim-metrics/1'"),
+        ({"format": "fleetsim-metrics/2", "scenarios": []}, "its \"format\" is 'fleetsim-metrics/2', not 'fleetsim-metrics/1'"),
         ({"format": "fleetsim-metrics/1", "scenarios": {}}, "scenarios={} must be a list"),
         ({"format": "fleetsim-metrics/1", "scenarios": [_scenario(), _scenario()]}, f"scenarios[1]: id {CROSSING!r} appears twice"),
         ({"format": "fleetsim-metrics/1", "scenarios": [7]}, "scenarios[0]: scenario=7 must be a JSON object"),

@@ -32,6 +32,17 @@ def _edit(relative: str, old: str, new: str) -> Callable[[Path], None]:
     return apply
 
 
+def _cut(relative: str, after: str) -> Callable[[Path], None]:
+    """Cut the file short just after the first ``after`` (a download or a copy that stopped)."""
+
+    def apply(root: Path) -> None:
+        path = root / relative
+        text = path.read_text(encoding="utf-8")
+        path.write_text(text[: text.index(after) + len(after)], encoding="utf-8")
+
+    return apply
+
+
 def _both(*edits: Callable[[Path], None]) -> Callable[[Path], None]:
     def apply(root: Path) -> None:
         for edit in edits:
@@ -60,6 +71,10 @@ CASES = [
     ("unknown segment in tasks.csv", _edit(TASKS, "2,8,", "2,88,"), ["tasks.csv:3", "88"]),
     ("missing CSV header", _edit(VEHICLES, "vehicle_id,start_segment_id,segment_orientation,progress_direction\n", ""),
      ["vehicles.csv:1", "missing header", "1,1,forward,forward"]),
+    ("map cut short in a string", _cut(MAP, '"orientation":"orth'),
+     ["map.json:70:", "not valid JSON: a string that starts here runs to the end of the file (is the file cut short?)"]),
+    ("map cut short between items", _cut(MAP, '"infinite":false,'),
+     ["map.json:3:", "a key in double quotes is expected here; the file ends there (is it cut short?)"]),
     ("YAML syntax error", _edit(SUITE, "name: broken", "name: [broken"), [f"{SUITE}:"]),
     ("schema violation", _edit(SUITE, "turn_capability: in_place", "turn_capability: hover"), [f"{SUITE}:4:", "'hover'"]),
 ]
