@@ -37,14 +37,14 @@ Reason = Literal["waits-for", "blocked-by-idle", "not-fixed", "no-route", "no-pl
 RootKind = Literal["cycle", "idle", "not-fixed", "no-route", "no-plan", "moving"]
 REASONS: tuple[Reason, ...] = ("waits-for", "blocked-by-idle", "not-fixed", "no-route", "no-plan", "moving")
 _ROOT_ORDER: dict[RootKind, int] = {"cycle": 0, "idle": 1, "no-route": 2, "no-plan": 3, "not-fixed": 4, "moving": 5}
-# The headline's summary of further root causes of one kind: (how many, their vehicles) -> words.
-_GROUPS: dict[RootKind, Any] = {
-    "cycle": lambda n, ids: f"{n} more wait-for cycle{'s' if n > 1 else ''} (vehicles {ids})",
-    "idle": lambda n, ids: f"{n} more vehicle{'s' if n > 1 else ''} with no tasks left in the way ({ids})",
-    "no-route": lambda n, ids: f"{n} vehicle{'s' if n > 1 else ''} without a route ({ids})",
-    "no-plan": lambda n, ids: f"{n} vehicle{'s' if n > 1 else ''} whose plan ends before the goal ({ids})",
-    "not-fixed": lambda n, ids: f"{n} vehicle{'s' if n > 1 else ''} whose free next leg the planner does not fix ({ids})",
-    "moving": lambda n, ids: f"{n} vehicle{'s' if n > 1 else ''} still driving ({ids})",
+# The headline's summary of further root causes of one kind: what one, and several, are called.
+_GROUPS: dict[RootKind, tuple[str, str]] = {
+    "cycle": ("more wait-for cycle", "more wait-for cycles"),
+    "idle": ("more vehicle with no tasks left in the way", "more vehicles with no tasks left in the way"),
+    "no-route": ("vehicle without a route", "vehicles without a route"),
+    "no-plan": ("vehicle whose plan ends before the goal", "vehicles whose plans end before the goal"),
+    "not-fixed": ("vehicle whose free next leg the planner does not fix", "vehicles whose free next leg the planner does not fix"),
+    "moving": ("vehicle still driving", "vehicles still driving"),
 }
 # Cycles listed at most (a dense knot of waiting vehicles can hold exponentially many).
 _MAX_CYCLES = 50
@@ -226,7 +226,7 @@ class Diagnosis:
             others = self.roots[1:]
             if others:
                 groups = [
-                    _GROUPS[kind](len(roots), ", ".join(str(v) for v in sorted(v for r in roots for v in r.vehicles)))
+                    f"{len(roots)} {_GROUPS[kind][len(roots) > 1]} ({', '.join(map(str, sorted(v for r in roots for v in r.vehicles)))})"
                     for kind in _ROOT_ORDER
                     if (roots := [r for r in others if r.kind == kind])
                 ]
