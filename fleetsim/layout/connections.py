@@ -29,6 +29,7 @@ __all__ = [
     "Touch",
     "away_vectors",
     "can_connect",
+    "dangling_ends",
     "endpoint_array",
     "find_connections",
     "joint_kinds",
@@ -113,6 +114,20 @@ def touching_endpoints(segments: Sequence[Segment], radius: float) -> tuple[Touc
     return tuple(
         Touch(_endpoint(segments, int(i)), _endpoint(segments, int(j)), float(gap))
         for (i, j), gap in zip(pairs.tolist(), gaps.tolist())
+    )
+
+
+def dangling_ends(segments: Sequence[Segment], touches: Sequence[Touch]) -> tuple[Endpoint, ...]:
+    """The ends of ``segments`` that meet no other end in ``touches`` (dead ends), in segment order.
+
+    The two ends of a closed loop meet each other, so they are not dangling.
+    """
+    met = {(e.segment.id, e.at_last) for t in touches for e in (t.a, t.b)}
+    return tuple(
+        Endpoint(segment, at_last)
+        for segment in segments
+        for at_last in (False, True)
+        if (segment.id, at_last) not in met
     )
 
 

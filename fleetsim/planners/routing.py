@@ -1,8 +1,9 @@
 """Route search over (segment, traverse, progress) states, shared by the reference planners.
 
-A vehicle's next states follow the layout's connections and the progress rules of SPEC §4: a vehicle
-that can only follow curves keeps its progress at smooth joints, flips it at cusps and cannot take
-corners; a vehicle that turns in place keeps its progress everywhere (it turns on the spot instead).
+A vehicle's next states (:func:`~fleetsim.layout.reachability.next_steps`, re-exported here) follow the
+layout's connections and the progress rules of SPEC §4; the scenario loader's task check uses the same
+rules, so a goal it accepts is one these searches can find. Equal-cost ties are broken by
+:func:`~fleetsim.layout.reachability.state_key`, never by hashing or insertion order.
 """
 
 from __future__ import annotations
@@ -10,11 +11,12 @@ from __future__ import annotations
 import heapq
 import math
 from collections import deque
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import replace
 
 from fleetsim.enums import JointKind, Progress, Traverse, TurnCapability
 from fleetsim.layout.layout import Layout
+from fleetsim.layout.reachability import State, next_states, next_steps, state_key
 from fleetsim.planning.protocol import FleetLeg
 from fleetsim.scenario import Task
 
@@ -29,24 +31,8 @@ __all__ = [
     "straight_line_estimate",
 ]
 
-State = tuple[int, Traverse, Progress]
 Cost = Callable[[int, Traverse, JointKind], float]  # (segment entered, its traverse, joint crossed)
 Estimate = Callable[[int, Traverse], float]  # a lower bound of the cost from a state to the goal
-
-
-def next_steps(layout: Layout, capability: TurnCapability, state: State) -> Iterator[tuple[State, JointKind]]:
-    """The states a vehicle may drive on to from ``state``, each with the joint it crosses."""
-    segment, traverse, progress = state
-    for next_segment, next_traverse, joint in layout.successors(segment, traverse):
-        if capability is TurnCapability.IN_PLACE or joint is JointKind.SAME:
-            yield (next_segment, next_traverse, progress), joint
-        elif joint is JointKind.OPPOSITE:
-            yield (next_segment, next_traverse, progress.flipped), joint
-        # a corner (turn_in_place) is no way on for a vehicle that only follows curves
-
-
-def next_states(layout: Layout, capability: TurnCapability, state: State) -> Iterator[State]:
-    return (following for following, _ in next_steps(layout, capability, state))
 
 
 def _rebuild(came_from: dict[State, State], end: State) -> list[State]:
@@ -73,12 +59,6 @@ def breadth_first_route(layout: Layout, capability: TurnCapability, start: State
                 return _rebuild(came_from, following)
             frontier.append(following)
     return None
-
-
-def _order(state: State) -> tuple[int, int, int]:
-    """A total order on states, so equal-cost ties never depend on hashing or insertion order."""
-    segment, traverse, progress = state
-    return segment, traverse is Traverse.BACKWARD, progress is Progress.REVERSE
 
 
 def straight_line_estimate(layout: Layout, goal: int) -> Estimate:
@@ -122,7 +102,7 @@ def shortest_route(
     must_match = arrive is not None and capability is TurnCapability.CURVE
     best: dict[State, float] = {start: 0.0}
     came_from: dict[State, State] = {}
-    heap: list[tuple[float, tuple[int, int, int], float, State]] = [(0.0, _order(start), 0.0, start)]
+    heap: list[tuple[float, tuple[int, int, int], float, State]] = [(0.0, state_key(start), 0.0, start)]
     infinity = math.inf
     while heap:
         _, _, spent, state = heapq.heappop(heap)
@@ -136,7 +116,7 @@ def shortest_route(
                 best[following] = total
                 came_from[following] = state
                 bound = total + (estimate(following[0], following[1]) if estimate is not None else 0.0)
-                heapq.heappush(heap, (bound, _order(following), total, following))
+                heapq.heappush(heap, (bound, state_key(following), total, following))
     return None
 
 
