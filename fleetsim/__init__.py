@@ -13,6 +13,7 @@ from fleetsim.errors import (
     PlannerError,
     ScenarioFileError,
     SuiteError,
+    UnreachableTaskError,
 )
 from fleetsim.layout import Connection, Layout, LintFinding, Segment, build_layout
 from fleetsim.load import (
@@ -91,6 +92,7 @@ __all__ = [
     "TiledMap",
     "Traverse",
     "TurnCapability",
+    "UnreachableTaskError",
     "Vehicle",
     "VehicleState",
     "VehicleType",

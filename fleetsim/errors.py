@@ -19,6 +19,7 @@ __all__ = [
     "PlannerProcessError",
     "ScenarioFileError",
     "SuiteError",
+    "UnreachableTaskError",
 ]
 
 
@@ -64,6 +65,31 @@ class MapError(LoadError):
 
 class ScenarioFileError(LoadError):
     """``vehicles.csv`` or ``tasks.csv`` is malformed or refers to something that does not exist."""
+
+
+class UnreachableTaskError(ScenarioFileError):
+    """A task whose goal its vehicle cannot reach from where it will be (its start, or its previous
+    task's goal), found before any run. ``location`` is the task's row in ``tasks.csv``.
+
+    ``notes`` are the map warnings and layout lint of the scenario, which often show the cause (a gap
+    between two segment ends); ``fleetsim validate`` prints them with the error.
+    """
+
+    def __init__(
+        self,
+        problem: str,
+        location: Location | None = None,
+        *,
+        task_id: int,
+        vehicle_id: int,
+        goal_segment: int,
+        notes: tuple[str, ...] = (),
+    ) -> None:
+        self.task_id = task_id
+        self.vehicle_id = vehicle_id
+        self.goal_segment = goal_segment
+        self.notes = notes
+        super().__init__(problem, location)
 
 
 class SuiteError(LoadError):

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal
@@ -19,6 +19,7 @@ __all__ = [
     "Task",
     "Vehicle",
     "VehicleType",
+    "longest_vehicle",
 ]
 
 RGBA = tuple[float, float, float, float]
@@ -69,6 +70,13 @@ class Vehicle:
     traverse: Traverse
     progress: Progress
     type: VehicleType
+
+
+def longest_vehicle(vehicles: Iterable[Vehicle], vehicle_types: Iterable[VehicleType]) -> float:
+    """The length of the longest vehicle type in use: over ``vehicles``, else over ``vehicle_types``,
+    else the default type's (a gap shorter than this is one no vehicle of the scenario spans)."""
+    lengths = [vehicle.type.length for vehicle in vehicles] or [t.length for t in vehicle_types]
+    return max(lengths, default=DEFAULT_VEHICLE_TYPE.length)
 
 
 @dataclass(frozen=True, slots=True)
@@ -126,4 +134,9 @@ class Scenario:
     map_path: Path | None = None
     vehicles_path: Path | None = None
     tasks_path: Path | None = None
-    warnings: tuple[str, ...] = ()  # load-time notes that did not stop loading (e.g. unknown map shapes)
+    warnings: tuple[str, ...] = ()  # load-time notes that did not stop loading (e.g. shapes on non-polylines)
+
+    @property
+    def vehicle_length(self) -> float:
+        """The longest vehicle type the scenario's vehicles use (lint reports gaps up to this long)."""
+        return longest_vehicle(self.vehicles, self.vehicle_types.values())

@@ -9,7 +9,7 @@ from typing import Any
 
 from fleetsim.cli.run import UsageError
 from fleetsim.enums import ConflictModel
-from fleetsim.errors import LoadError
+from fleetsim.errors import LoadError, UnreachableTaskError
 from fleetsim.exec.protocol import encode_layout
 from fleetsim.layout.layout import Layout, build_layout
 from fleetsim.load.scenario import load_scenario
@@ -21,7 +21,7 @@ from fleetsim.recording.artifacts import RESULT_FILE, TRACE_FILE
 from fleetsim.recording.picture import failure_caption, failure_step, picture_overlays, render_frame_svg
 from fleetsim.recording.replay import Frame, TraceError, frame_at
 from fleetsim.recording.svg import render_layout_svg
-from fleetsim.scenario import Scenario
+from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Scenario
 from fleetsim.sim.result import Failure
 
 __all__ = ["inspect", "render", "validate"]
@@ -56,19 +56,24 @@ def validate(args: argparse.Namespace) -> int:
             except LoadError as error:
                 print(f"  FAIL {spec.name}\n       {error}")
                 failed += 1
-                continue
-            loaded += 1
-            layout = scenario.layout
-            print(
-                f"  ok   {spec.name}: {len(layout.segments)} segments, {len(layout.connections)} connections, "
-                f"{len(scenario.vehicles)} vehicles, {len(scenario.tasks)} tasks"
-            )
-            notes = [*scenario.warnings, *(f"{f.severity} {f.code}: {f.message}" for f in layout.lint())]
+                notes = list(error.notes) if isinstance(error, UnreachableTaskError) else []
+            else:
+                loaded += 1
+                layout = scenario.layout
+                print(
+                    f"  ok   {spec.name}: {len(layout.segments)} segments, {len(layout.connections)} connections, "
+                    f"{len(scenario.vehicles)} vehicles, {len(scenario.tasks)} tasks"
+                )
+                notes = [*scenario.warnings, *_lint_notes(layout, scenario.vehicle_length)]
             warnings += len(notes)
             for note in notes:
                 print(f"       {note}")
     print(f"{len(paths)} suite(s): {loaded} scenario(s) valid, {failed} failed, {warnings} lint warning(s)")
     return 1 if failed else 0
+
+
+def _lint_notes(layout: Layout, vehicle_length: float) -> list[str]:
+    return [f"{f.severity} {f.code}: {f.message}" for f in layout.lint(vehicle_length)]
 
 
 def _layout_from_args(args: argparse.Namespace) -> tuple[TiledMap, Layout]:
@@ -93,7 +98,7 @@ def layout_document(tiled_map: TiledMap, layout: Layout) -> dict[str, Any]:
         **encode_layout(layout),  # the layout part of a planner process's init message, too
         "lint": [
             {"code": f.code, "severity": f.severity, "segments": list(f.segments), "message": f.message}
-            for f in layout.lint()
+            for f in layout.lint(DEFAULT_VEHICLE_TYPE.length)
         ],
         "warnings": list(tiled_map.warnings),
     }
@@ -122,7 +127,7 @@ def _print_layout(tiled_map: TiledMap, layout: Layout) -> None:
     for sid in layout.segments:
         others = sorted(layout.conflicts(sid) - {sid})
         print(f"  {sid}: {', '.join(map(str, others)) if others else '-'}")
-    notes = [*tiled_map.warnings, *(f"{f.severity} {f.code}: {f.message}" for f in layout.lint())]
+    notes = [*tiled_map.warnings, *_lint_notes(layout, DEFAULT_VEHICLE_TYPE.length)]
     print("\nlint" + ("" if notes else ": clean"))
     for note in notes:
         print(f"  {note}")

@@ -100,9 +100,13 @@ class Layout:
         self._require(segment)
         return self._conflicts[segment]
 
-    def lint(self) -> tuple[LintFinding, ...]:
-        """Warnings about the map's drawing (dangling ends, near misses, ...); see :mod:`.lint`."""
-        return lint_layout(self)
+    def lint(self, vehicle_length: float | None = None) -> tuple[LintFinding, ...]:
+        """Warnings about the map's drawing (dangling ends, near misses, ...); see :mod:`.lint`.
+
+        With ``vehicle_length`` (metres), dangling ends that close to another segment's end are
+        reported as ``gap`` too.
+        """
+        return lint_layout(self, vehicle_length)
 
 
 def _check_setting(name: str, value: float, *, upper: float | None = None) -> float:

@@ -8,6 +8,10 @@ Codes (all warnings):
   of the state graph (the part covering the most segments; ties go to the smallest segment id).
 - ``near-miss``: two ends of different segments farther apart than the connection tolerance but closer
   than ten times it — almost certainly meant to connect.
+- ``gap``: a dangling end whose nearest end of another segment is at least ten connection tolerances
+  away (else it is a near miss) but within a vehicle length: a gap a vehicle cannot cross, often meant
+  to be a joint. Only when a vehicle length is given (a scenario's longest vehicle type; ``fleetsim
+  inspect`` uses the default type's); linting a bare layout skips it.
 - ``no-connection``: two ends touch, but the segments' one-way directions both lead into, or both out
   of, the joint, so no connection exists either way (they still conflict).
 - ``zero-length``: a segment shorter than the connection tolerance.
@@ -26,7 +30,14 @@ from typing import TYPE_CHECKING, Literal, TypeAlias
 import networkx as nx
 
 from fleetsim.enums import Traverse
-from fleetsim.layout.connections import Endpoint, Touch, can_connect, touching_endpoints, traverse_rank
+from fleetsim.layout.connections import (
+    Endpoint,
+    Touch,
+    can_connect,
+    dangling_ends,
+    touching_endpoints,
+    traverse_rank,
+)
 from fleetsim.layout.segment import Segment
 
 if TYPE_CHECKING:
@@ -64,14 +75,37 @@ def _describe(end: Endpoint) -> str:
     return f"the {end.name} end of segment {end.segment.id}"
 
 
-def _dangling_ends(segments: Sequence[Segment], touches: Sequence[Touch]) -> Iterator[LintFinding]:
-    met = {(e.segment.id, e.at_last) for t in touches for e in (t.a, t.b)}
-    for segment in segments:
-        for at_last in (False, True):
-            if (segment.id, at_last) not in met:
-                end = Endpoint(segment, at_last)
-                msg = f"{_describe(end)} at {_point(end.point)} meets no other segment end (a dead end)"
-                yield LintFinding("dangling-end", "warning", (segment.id,), msg)
+def _dangling_ends(dangling: Sequence[Endpoint]) -> Iterator[LintFinding]:
+    for end in dangling:
+        msg = f"{_describe(end)} at {_point(end.point)} meets no other segment end (a dead end)"
+        yield LintFinding("dangling-end", "warning", (end.segment.id,), msg)
+
+
+def _gaps(
+    segments: Sequence[Segment], dangling: Sequence[Endpoint], tolerance: float, vehicle_length: float
+) -> Iterator[LintFinding]:
+    """Each dangling end's nearest end of another segment, when it lies within a vehicle length."""
+    loose = {(end.segment.id, end.at_last) for end in dangling}
+    nearest: dict[tuple[int, bool], Touch] = {}
+    for t in touching_endpoints(segments, vehicle_length):
+        if t.a.segment.id == t.b.segment.id:
+            continue
+        for end, other in ((t.a, t.b), (t.b, t.a)):
+            key = (end.segment.id, end.at_last)
+            if key in loose and (key not in nearest or t.gap < nearest[key].gap):
+                nearest[key] = Touch(end, other, t.gap)
+    reported: set[frozenset[tuple[int, bool]]] = set()
+    for t in nearest.values():
+        pair = frozenset({(t.a.segment.id, t.a.at_last), (t.b.segment.id, t.b.at_last)})
+        if t.gap < _NEAR_MISS_FACTOR * tolerance or pair in reported:
+            continue  # a near miss says it already
+        reported.add(pair)
+        msg = (
+            f"{_describe(t.a)} at {_point(t.a.point)} is a dead end {t.gap:.2f} m from {_describe(t.b)} "
+            f"at {_point(t.b.point)}, within a vehicle length ({vehicle_length:g} m): "
+            "did you mean to connect them?"
+        )
+        yield LintFinding("gap", "warning", _ids(t), msg)
 
 
 def _near_misses(near: Sequence[Touch], tolerance: float) -> Iterator[LintFinding]:
@@ -151,14 +185,19 @@ def _finding_key(f: LintFinding) -> tuple[bool, str, tuple[int, ...], str]:
     return (f.severity != "error", f.code, f.segments, f.message)
 
 
-def lint_layout(layout: Layout) -> tuple[LintFinding, ...]:
-    """Every finding for ``layout``, errors first, then by code, segments and message."""
+def lint_layout(layout: Layout, vehicle_length: float | None = None) -> tuple[LintFinding, ...]:
+    """Every finding for ``layout``, errors first, then by code, segments and message.
+
+    ``vehicle_length`` (metres) enables the ``gap`` check: dangling ends that far from another end.
+    """
     segments = tuple(layout.segments.values())
     tolerance = layout.connection_tolerance
     near = touching_endpoints(segments, _NEAR_MISS_FACTOR * tolerance)
     touches = [t for t in near if t.gap <= tolerance]
+    dangling = dangling_ends(segments, touches)
     findings = [
-        *_dangling_ends(segments, touches),
+        *_dangling_ends(dangling),
+        *(_gaps(segments, dangling, tolerance, vehicle_length) if vehicle_length else ()),
         *_near_misses(near, tolerance),
         *_no_connections(touches),
         *_zero_length(segments, tolerance),

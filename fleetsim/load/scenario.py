@@ -1,8 +1,8 @@
 """Assembling a complete :class:`~fleetsim.scenario.Scenario`: map, vehicles, layout, tasks, checks.
 
 The order is forced by the data: the vehicle rows are checked against the map's segments, the layout's
-conflict radius depends on the vehicle types those rows use, and the start-conflict check needs the
-layout. Nothing is returned half loaded: either a whole scenario or one located error.
+conflict radius depends on the vehicle types those rows use, and the start-conflict check and the task
+check (every goal reachable, :mod:`.task_reach`) need the layout. Nothing is returned half loaded: either a whole scenario or one located error.
 """
 
 from __future__ import annotations
@@ -12,17 +12,18 @@ from pathlib import Path
 from types import MappingProxyType
 
 from fleetsim.enums import ConflictModel
-from fleetsim.errors import Location, ScenarioFileError, SuiteError
+from fleetsim.errors import Location, ScenarioFileError, SuiteError, UnreachableTaskError
 from fleetsim.layout.layout import Layout, build_layout
 from fleetsim.load.scenario_files import (
     MAP_FILE_NAMES,
     TASKS_FILE_NAME,
     VEHICLES_FILE_NAME,
     map_candidates,
-    read_tasks,
+    read_tasks_with_lines,
     read_vehicles_with_lines,
 )
 from fleetsim.load.suite import ScenarioSpec, Suite
+from fleetsim.load.task_reach import check_tasks_reachable
 from fleetsim.load.tiled import load_map
 from fleetsim.scenario import (
     DEFAULT_VEHICLE_TYPE,
@@ -31,6 +32,7 @@ from fleetsim.scenario import (
     ScenarioSettings,
     Vehicle,
     VehicleType,
+    longest_vehicle,
 )
 
 __all__ = ["default_vehicle_type", "load_scenario", "load_scenario_dir"]
@@ -117,11 +119,19 @@ def _assemble(
         conflict_model=settings.conflict_model,
         source=map_path,
     )
-    tasks = read_tasks(
+    located_tasks = read_tasks_with_lines(
         tasks_path, segments, vehicles, map_name=map_path.name, vehicles_name=vehicles_path.name
     )
+    tasks = tuple(task for task, _ in located_tasks)
     if not settings.allow_start_conflicts:
         _reject_start_conflicts(located, layout, vehicles_path)
+    try:
+        check_tasks_reachable(layout, vehicles, located_tasks, tasks_path)
+    except UnreachableTaskError as error:
+        # The map's lint often shows the cause (a gap between two ends): hand it to whoever reports.
+        length = longest_vehicle(vehicles, vehicle_types.values())
+        error.notes = (*tiled.warnings, *(f"{f.severity} {f.code}: {f.message}" for f in layout.lint(length)))
+        raise
     _check_expected_collisions(name, expect, layout, map_path, origin)
     return Scenario(
         name=name,

@@ -38,6 +38,7 @@ __all__ = [
     "did_you_mean",
     "map_candidates",
     "read_tasks",
+    "read_tasks_with_lines",
     "read_vehicles",
     "read_vehicles_with_lines",
 ]
@@ -274,15 +275,15 @@ def read_vehicles(
 # -- tasks.csv ------------------------------------------------------------------------------------
 
 
-def read_tasks(
+def read_tasks_with_lines(
     path: Path | str,
     segments: Mapping[int, Segment],
     vehicles: Iterable[Vehicle] | Mapping[int, Vehicle],
     *,
     map_name: str = "the map",
     vehicles_name: str = VEHICLES_FILE_NAME,
-) -> tuple[Task, ...]:
-    """The tasks of ``tasks.csv`` in file order; task id = 1-based data-row number."""
+) -> tuple[tuple[Task, int], ...]:
+    """Like :func:`read_tasks`, each task paired with its line in the file (for later errors)."""
     path = Path(path)
     known = set(vehicles) if isinstance(vehicles, Mapping) else {vehicle.id for vehicle in vehicles}
     tasks = []
@@ -292,5 +293,18 @@ def read_tasks(
             raise row.error("vehicle_id", f"vehicle {vehicle_id} is not in {vehicles_name}")
         segment = _segment(row, "goal_segment_id", segments, map_name)
         progress = _choice(row, "goal_progress_direction", Progress)
-        tasks.append(Task(number, vehicle_id, segment.id, progress))
+        tasks.append((Task(number, vehicle_id, segment.id, progress), row.line))
     return tuple(tasks)
+
+
+def read_tasks(
+    path: Path | str,
+    segments: Mapping[int, Segment],
+    vehicles: Iterable[Vehicle] | Mapping[int, Vehicle],
+    *,
+    map_name: str = "the map",
+    vehicles_name: str = VEHICLES_FILE_NAME,
+) -> tuple[Task, ...]:
+    """The tasks of ``tasks.csv`` in file order; task id = 1-based data-row number."""
+    rows = read_tasks_with_lines(path, segments, vehicles, map_name=map_name, vehicles_name=vehicles_name)
+    return tuple(task for task, _ in rows)

@@ -38,14 +38,14 @@ def make_dir(tmp_path: Path, vehicles: str, tasks: str = NO_TASKS, name: str = "
 
 
 def test_a_scenario_folder_loads_completely(tmp_path: Path) -> None:
-    folder = make_dir(tmp_path, "1,1,forward,,\n2,3,backward,reverse,\n", NO_TASKS + "1,2\n2,1\n")
+    folder = make_dir(tmp_path, "1,1,forward,,\n2,3,backward,reverse,\n", NO_TASKS + "1,2\n2,3\n")
     scenario = load_scenario_dir(folder)
     assert scenario.name == "sc"
     assert sorted(scenario.layout.segments) == [1, 2, 3]
     assert [(v.id, v.start_segment, v.type) for v in scenario.vehicles] == [
         (1, 1, DEFAULT_VEHICLE_TYPE), (2, 3, DEFAULT_VEHICLE_TYPE)
     ]
-    assert [(t.id, t.vehicle_id, t.goal_segment) for t in scenario.tasks] == [(1, 1, 2), (2, 2, 1)]
+    assert [(t.id, t.vehicle_id, t.goal_segment) for t in scenario.tasks] == [(1, 1, 2), (2, 2, 3)]
     assert (scenario.settings, scenario.expect) == (ScenarioSettings(), Expectations())
     assert (scenario.map_path, scenario.vehicles_path, scenario.tasks_path) == (
         folder / "map.json", folder / "vehicles.csv", folder / "tasks.csv"
@@ -164,7 +164,7 @@ def load_first(tmp_path: Path, suite_text: str, vehicles: str, tasks: str = NO_T
 
 def test_a_suite_scenario_gets_its_settings_types_and_expectations(tmp_path: Path) -> None:
     text = SUITE + "    allow_start_conflicts: true\n"  # the big vehicle reaches across to segment 1
-    scenario = load_first(tmp_path, text, "1,1,forward,,\n2,3,forward,,big\n", NO_TASKS + "2,1\n")
+    scenario = load_first(tmp_path, text, "1,1,forward,,\n2,3,forward,,big\n", NO_TASKS + "2,3\n")
     assert scenario.name == "one"
     assert [vehicle.type.name for vehicle in scenario.vehicles] == ["small", "big"]
     assert (scenario.layout.connection_tolerance, scenario.layout.joint_angle_tolerance) == (0.1, 20.0)
@@ -198,10 +198,10 @@ def test_every_load_failure_is_a_load_error(tmp_path: Path) -> None:
 def test_map_warnings_reach_the_scenario(tmp_path: Path) -> None:
     folder = make_dir(tmp_path, "1,1,forward,,\n")
     doc = (folder / "map.json").read_text(encoding="utf-8")
-    # Turn segment 3 into a polyline of a class fleetsim does not know: it is skipped with a warning.
-    marked = doc.replace('{"id":3,"name":"","type":"straight"', '{"id":3,"name":"","type":"ramp"')
-    assert marked != doc
+    # Turn segment 3 into a polygon: a shape class on a non-polyline is skipped with a warning.
+    start = doc.index('{"id":3,')
+    marked = doc[:start] + doc[start:].replace('"polyline"', '"polygon"', 1)
     (folder / "map.json").write_text(marked, encoding="utf-8")
     scenario = load_scenario_dir(folder)
     assert sorted(scenario.layout.segments) == [1, 2]
-    assert len(scenario.warnings) == 1 and "ramp" in scenario.warnings[0]
+    assert len(scenario.warnings) == 1 and "object 3" in scenario.warnings[0] and "polygon" in scenario.warnings[0]

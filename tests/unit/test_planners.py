@@ -20,7 +20,7 @@ from fleetsim.load.scenario import load_scenario_dir
 from fleetsim.load.tiled_writer import write_map
 from fleetsim.planners import BFSPlanner, ReservingPlanner
 from fleetsim.planning import FleetController, FleetPlan, Planner
-from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Scenario
+from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Scenario, Task
 
 SUITE = Path(__file__).resolve().parents[2] / "scenario_suites" / "examples.fleetsim.yaml"
 EXAMPLES = [spec.name for spec in load_suite(SUITE).scenarios]
@@ -149,7 +149,10 @@ def test_unreachable_goal_is_a_route_error(tmp_path: Path) -> None:
         Segment(1, Shape.STRAIGHT, Direction.FORWARD, ((0.0, 0.0), (4.0, 0.0))),
         Segment(2, Shape.STRAIGHT, Direction.FORWARD, ((4.0, 0.0), (8.0, 0.0))),
     )
-    scenario = _scenario(tmp_path, segments, "1,2,forward,\n", "1,1,\n", TurnCapability.IN_PLACE)
+    # Loading refuses an unreachable task, so the task is put in after loading: a planner must still
+    # answer a goal it cannot reach (a scenario built in Python, or a planner of its own making).
+    scenario = _scenario(tmp_path, segments, "1,2,forward,\n", "", TurnCapability.IN_PLACE)
+    scenario = replace(scenario, tasks=(Task(1, 1, 1),))
     for planner in (BFSPlanner(), ReservingPlanner()):
         [outcome] = FleetController(scenario).planning_round(planner, 0.0)
         [error] = outcome.route_errors
