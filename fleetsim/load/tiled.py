@@ -4,6 +4,9 @@ Parsed by hand with :mod:`json` and :mod:`xml.etree` because the available Tiled
 templates. The pipeline: read the document → walk (nested) object layers summing offsets → resolve each
 object against its template → keep visible polylines whose class is a shape → transform to the world
 frame (origin at the map centre, y up, so RViz shows what Tiled shows).
+
+A polyline whose class names no shape is an error (with a "did you mean"): a typo must not silently drop
+a segment. A polyline with no class at all, and every other object, is ignored.
 """
 
 from __future__ import annotations
@@ -18,6 +21,7 @@ from pathlib import Path
 from fleetsim.enums import Direction, Shape
 from fleetsim.errors import Location, MapError
 from fleetsim.layout.segment import Point, Segment
+from fleetsim.load.scenario_files import did_you_mean
 from fleetsim.load.text import read_text_file
 from fleetsim.load.tiled_templates import (
     ObjectFields,
@@ -295,6 +299,16 @@ def _segment(fields: ObjectFields, shape: Shape, placed: _Placed, header: _Heade
                    _world_points(polyline, fields, placed.offset, header))
 
 
+def _unknown_class(fields: ObjectFields, placed: _Placed, path: Path) -> MapError:
+    """A polyline whose class names no shape: a typo would otherwise silently drop a segment."""
+    shape_class = fields.shape_class or ""
+    hint = did_you_mean(_word(shape_class), [shape.value for shape in Shape])
+    what = "" if fields.id is not None else f"{_describe(placed)}: "  # the location names the id
+    msg = (f"{what}unknown class {shape_class!r} on a polyline{hint} (segments are polylines of class "
+           "straight, curve or s_curve; clear the class to have fleetsim ignore this polyline)")
+    return MapError(msg, Location(path, object_id=fields.id))
+
+
 def _segments(placed: list[_Placed], header: _Header,
               path: Path) -> tuple[tuple[Segment, ...], tuple[str, ...]]:
     _check_unique_ids(placed, path)
@@ -315,9 +329,8 @@ def _segments(placed: list[_Placed], header: _Header,
             continue
         if shape is None:
             if fields.shape_class:
-                warnings.append(f"{name}: unknown class {fields.shape_class!r} on a polyline; ignored "
-                                "(expected straight, curve or s_curve)")
-            continue
+                raise _unknown_class(fields, item, path)
+            continue  # a polyline without a class is a drawing aid, not a segment
         segments.append(_segment(fields, shape, item, header, path))
     if not segments:
         msg = "the map has no segments (visible polyline objects of class straight, curve or s_curve)"

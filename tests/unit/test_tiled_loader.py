@@ -10,6 +10,7 @@ from typing import Any
 import pytest
 
 from fleetsim.enums import Direction, Shape
+from fleetsim.errors import MapError
 from fleetsim.load import tiled_templates
 from fleetsim.load.tiled import TiledMap, load_map
 
@@ -235,13 +236,34 @@ def test_invisible_layers_groups_and_objects_are_skipped(tmp_path: Path, suffix:
     assert [s.id for s in load(tmp_path, suffix, document).segments] == [1, 5]
 
 
-def test_unknown_class_on_a_polyline_is_a_warning_naming_file_and_object(tmp_path: Path,
-                                                                         suffix: str) -> None:
-    document = tiled_map(layer(poly(1), poly(7, shape="wall"), poly(8, shape="")))
-    loaded = load(tmp_path, suffix, document)
-    assert [s.id for s in loaded.segments] == [1]
-    (warning,) = loaded.warnings
-    assert "map" + suffix in warning and "object 7" in warning and "'wall'" in warning
+def test_unknown_class_on_a_polyline_is_an_error_naming_file_object_and_class(tmp_path: Path,
+                                                                              suffix: str) -> None:
+    document = tiled_map(layer(poly(1), poly(7, shape="wall")))
+    with pytest.raises(MapError) as caught:
+        load(tmp_path, suffix, document)
+    assert str(caught.value) == (
+        f"{tmp_path / ('map' + suffix)}: object 7: unknown class 'wall' on a polyline (segments are "
+        "polylines of class straight, curve or s_curve; clear the class to have fleetsim ignore this polyline)"
+    )
+    assert caught.value.location is not None and caught.value.location.object_id == 7
+
+
+@pytest.mark.parametrize(("typo", "meant"), [("stright", "straight"), ("Curv", "curve"), ("s-curv", "s_curve")])
+def test_a_misspelt_class_on_a_polyline_says_did_you_mean(tmp_path: Path, suffix: str, typo: str,
+                                                          meant: str) -> None:
+    with pytest.raises(MapError, match=f"object 7: unknown class '{typo}' on a polyline; did you mean '{meant}'"):
+        load(tmp_path, suffix, tiled_map(layer(poly(1), poly(7, shape=typo))))
+
+
+def test_a_polyline_without_a_class_is_ignored_without_a_warning(tmp_path: Path, suffix: str) -> None:
+    loaded = load(tmp_path, suffix, tiled_map(layer(poly(1), poly(8, shape=""))))
+    assert [s.id for s in loaded.segments] == [1] and loaded.warnings == ()
+
+
+def test_an_unknown_class_on_a_rectangle_is_ignored(tmp_path: Path, suffix: str) -> None:
+    rectangle = {"id": 2, "type": "stright", "x": 1, "y": 1, "width": 10, "height": 10}
+    loaded = load(tmp_path, suffix, tiled_map(layer(poly(1), rectangle)))
+    assert [s.id for s in loaded.segments] == [1] and loaded.warnings == ()
 
 
 def test_non_polyline_objects_and_other_layers_are_ignored(tmp_path: Path, suffix: str) -> None:
