@@ -108,13 +108,15 @@ def goal_states(layout: Layout, goal: int) -> tuple[State, ...]:
     return tuple((goal, t, p) for t in Traverse if segment.allows(t) for p in Progress)
 
 
-def arrivals(starts: Iterable[State], entered: Iterable[State], goal: int, progress: Progress | None) -> frozenset[State]:
+def arrivals(
+    starts: Iterable[State], entered: Iterable[State], goal: int, progress: Progress | None
+) -> frozenset[State]:
     """The states a vehicle may be in once it has reached segment ``goal`` arriving with ``progress``
     (``None``: either); empty when it cannot.
 
-    ``starts`` are where the vehicle may be now and ``entered`` (a superset of) the states on ``goal`` it
-    can drive on to. A vehicle already on the goal has reached it if its progress matches: its leg is
-    fixed, so the progress cannot change there.
+    ``starts`` are where the vehicle may be now and ``entered`` states it can drive on to from there
+    (those on other segments are passed over). A vehicle already on the goal has reached it if its
+    progress matches: its leg is fixed, so the progress cannot change there.
     """
     return frozenset(s for group in (starts, entered) for s in group if s[0] == goal and progress in (None, s[2]))
 
