@@ -44,7 +44,15 @@ def validate(args: argparse.Namespace) -> int:
         print(f"{path}: suite {suite.name!r}, {len(suite.scenarios)} scenario(s)")
         for spec in suite.scenarios:
             if spec.generate is not None:
+                from fleetsim.gating.generated import check_generate_block  # Hypothesis only when needed
+
                 g = spec.generate
+                try:
+                    check_generate_block(spec, suite)
+                except LoadError as error:
+                    print(f"  FAIL {spec.name}\n       {error}")
+                    failed += 1
+                    continue
                 loaded += 1
                 print(
                     f"  ok   {spec.name}: generated ({g.layout} layouts of size {g.size[0]}-{g.size[1]}, "

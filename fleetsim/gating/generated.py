@@ -38,20 +38,7 @@ from fleetsim.sim.loop import run_scenario
 from fleetsim.sim.result import RunResult
 from fleetsim.strategies import GenerationSpec, NoRoomError, save_scenario, scenarios
 
-__all__ = [
-    "COUNTEREXAMPLE_FOLDER",
-    "DEFAULT_ARTIFACTS",
-    "Hunt",
-    "counterexample_entry",
-    "counterexample_story",
-    "generation_spec",
-    "counts_story",
-    "hunt",
-    "hunt_facts",
-    "hunt_label",
-    "in_ci",
-    "record_counterexample",
-]
+__all__ = ["COUNTEREXAMPLE_FOLDER", "DEFAULT_ARTIFACTS", "Hunt", "check_generate_block", "counterexample_entry", "counterexample_story", "counts_story", "generation_spec", "hunt", "hunt_facts", "hunt_label", "in_ci", "record_counterexample"]
 
 COUNTEREXAMPLE_FOLDER = "counterexample"
 DEFAULT_ARTIFACTS = Path("fleetsim-results")  # under the working directory, as pytest's --fleetsim-artifacts
@@ -103,6 +90,11 @@ def generation_spec(spec: ScenarioSpec, suite: Suite) -> GenerationSpec:
         vehicle_types=types,
         settings=spec.settings,
     )
+
+
+def check_generate_block(spec: ScenarioSpec, suite: Suite) -> None:
+    """Raise the located :class:`SuiteError` of a generate block no layout has room for; else nothing."""
+    _strategy(spec, suite)
 
 
 def _strategy(spec: ScenarioSpec, suite: Suite) -> SearchStrategy[Scenario]:

@@ -28,8 +28,9 @@ Ending = Literal[
 ]
 
 
-# Failures of the run as a whole, without a moment of their own: its trace hash against the recorded one.
-MOMENTLESS = frozenset({"hash-mismatch", "hash-missing"})
+# Failures without a moment of their own: the run's trace hash against the recorded one, and a scenario
+# that did not load (so never ran).
+MOMENTLESS = frozenset({"hash-mismatch", "hash-missing", "load-error"})
 
 
 @dataclass(frozen=True, slots=True)

@@ -195,6 +195,19 @@ def test_a_generate_block_whose_layouts_cannot_hold_its_vehicles_is_refused_with
     )
 
 
+def test_fleetsim_validate_refuses_a_generate_block_no_layout_has_room_for(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = write_warehouse_suite(tmp_path, size="[1, 1]", vehicles="[4, 5]")
+    assert main(["validate", str(path)]) == 1
+    out = capsys.readouterr().out
+    assert "  FAIL crowded-warehouse\n" in out and f"{path}:8: field 'generate'" in out and "0 scenario(s) valid, 1 failed" in out
+
+
+def test_fleetsim_validate_accepts_a_generate_block_with_room(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = write_warehouse_suite(tmp_path, size="[1, 2]", vehicles="[2, 4]")
+    assert main(["validate", str(path)]) == 0
+    assert "  ok   crowded-warehouse: generated" in capsys.readouterr().out
+
+
 def test_vehicles_range_is_honoured_in_a_hunt(tmp_path: Path) -> None:
     suite = load_suite(write_warehouse_suite(tmp_path, size="[1, 2]", vehicles="[2, 4]", examples=8))
     [spec] = suite.scenarios
