@@ -97,7 +97,7 @@ def parse_direction(raw: PropertyValue, where: Location) -> Direction:
     if isinstance(raw, int) and not isinstance(raw, bool):
         if 0 <= raw < len(_DIRECTION_ENUM):
             return _DIRECTION_ENUM[raw]
-        msg = f"direction={raw!r} must be an enum index 0, 1 or 2 (both, forward, backward)"
+        msg = f"the direction property is {raw!r}; as an enum index it must be 0, 1 or 2 (both, forward, backward)"
         raise MapError(msg, where)
     direction = _DIRECTIONS.get(_word(raw)) if isinstance(raw, str) else None
     if direction is not None:
@@ -111,7 +111,7 @@ def load_map(path: str | os.PathLike[str]) -> TiledMap:
     map_path = Path(path)
     suffix = map_path.suffix.lower()
     if suffix not in MAP_SUFFIXES:
-        msg = f"suffix={map_path.suffix!r} must be one of {', '.join(MAP_SUFFIXES)}"
+        msg = f"this is not a Tiled map file: a map is saved as {', '.join(MAP_SUFFIXES[:-1])} or {MAP_SUFFIXES[-1]}, and this file ends in {map_path.suffix or 'no suffix'!r}"
         raise MapError(msg, Location(map_path))
     text = read_text_file(map_path, MapError)
     if suffix == ".tmx":
@@ -137,7 +137,7 @@ def _positive_int(raw: object, name: str, where: Location) -> int:
         raise MapError(f"map attribute {name!r} is missing", where)
     value = as_int(raw, name, where)
     if value <= 0:
-        raise MapError(f"{name}={raw!r} must be a positive integer", where)
+        raise MapError(f"{name} is {raw!r}; it must be a positive integer", where)
     return value
 
 
@@ -146,11 +146,11 @@ def _header(attrs: Mapping[str, object], properties: Mapping[str, PropertyValue]
     where = Location(path)
     orientation = attrs.get("orientation")
     if orientation != "orthogonal":
-        msg = f"orientation={orientation!r} must be 'orthogonal' (other orientations are not supported)"
+        msg = f"the map's orientation is {orientation!r}; fleetsim reads orthogonal maps only"
         raise MapError(msg, where)
     infinite = attrs.get("infinite", False)
     if as_bool(infinite, "infinite", where):
-        msg = f"infinite={infinite!r} must be false (infinite maps are not supported)"
+        msg = f"the map is infinite (infinite = {infinite!r}); fleetsim reads fixed-size maps only (untick Infinite in Tiled's map properties)"
         raise MapError(msg, where)
     width, height, tile_width, tile_height = (
         _positive_int(attrs.get(name), name, where)
@@ -160,7 +160,7 @@ def _header(attrs: Mapping[str, object], properties: Mapping[str, PropertyValue]
     if raw_scale is not None:
         scale = as_number(raw_scale, "meters_per_pixel", where)
         if scale <= 0:
-            raise MapError(f"meters_per_pixel={raw_scale!r} must be a positive number", where)
+            raise MapError(f"the map property meters_per_pixel is {raw_scale!r}; it must be a positive number", where)
     return _Header(float(width * tile_width), float(height * tile_height), scale)
 
 
@@ -204,7 +204,7 @@ def _read_json(text: str, path: Path) -> tuple[_Header, list[_Placed]]:
     if not isinstance(document, dict):
         raise MapError("a JSON map must be an object", where)
     if document.get("type", "map") != "map":
-        raise MapError(f"type={document.get('type')!r} must be 'map'", where)
+        raise MapError(f"this JSON file is not a Tiled map: its type is {document.get('type')!r}, not 'map'", where)
     header = _header(document, json_properties(document.get("properties"), where), path)
     return header, list(_json_layers(document, (0.0, 0.0), "", path))
 
@@ -212,7 +212,7 @@ def _read_json(text: str, path: Path) -> tuple[_Header, list[_Placed]]:
 def _json_list(container: Mapping[str, object], key: str, where: Location) -> list[object]:
     value = container.get(key, [])
     if not isinstance(value, list):
-        raise MapError(f"{key}={value!r} must be a list", where)
+        raise MapError(f"{key} is {value!r}; it must be a list", where)
     return value
 
 
@@ -286,7 +286,7 @@ def _segment(fields: ObjectFields, shape: Shape, placed: _Placed, header: _Heade
         raise MapError(f"{_describe(placed)} is a {shape.value} polyline without an id", Location(path))
     where = Location(path, object_id=fields.id)
     if fields.id <= 0:
-        raise MapError(f"id={fields.id!r} must be a positive integer", where)
+        raise MapError(f"the object's id is {fields.id!r}; Tiled ids are positive integers", where)
     polyline = fields.polyline or ()
     if len(polyline) < 2:
         msg = f"polyline has {len(polyline)} point(s); a segment needs at least 2"

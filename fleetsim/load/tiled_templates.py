@@ -96,7 +96,7 @@ def as_number(raw: object, name: str, where: Location) -> float:
         except (ValueError, OverflowError):  # OverflowError: a JSON integer beyond any float
             value = None
     if value is None or not math.isfinite(value):
-        msg = f"{name}={raw!r} must be a number"
+        msg = f"{name} is {raw!r}; it must be a number"
         raise MapError(msg, where)
     return value
 
@@ -110,7 +110,7 @@ def as_int(raw: object, name: str, where: Location) -> int:
             return int(raw.strip())
     if isinstance(raw, float) and raw.is_integer():
         return int(raw)
-    msg = f"{name}={raw!r} must be an integer"
+    msg = f"{name} is {raw!r}; it must be an integer"
     raise MapError(msg, where)
 
 
@@ -125,13 +125,13 @@ def as_bool(raw: object, name: str, where: Location) -> bool:
         return bool(raw)
     if isinstance(raw, str) and raw.strip().lower() in _BOOL_TEXT:
         return _BOOL_TEXT[raw.strip().lower()]
-    msg = f"{name}={raw!r} must be a boolean (true/false or 1/0)"
+    msg = f"{name} is {raw!r}; it must be a boolean (true/false or 1/0)"
     raise MapError(msg, where)
 
 
 def _as_str(raw: object, name: str, where: Location) -> str:
     if not isinstance(raw, str):
-        msg = f"{name}={raw!r} must be a string"
+        msg = f"{name} is {raw!r}; it must be a string"
         raise MapError(msg, where)
     return raw
 
@@ -149,7 +149,7 @@ def _typed(kind: object, raw: object, name: str, where: Location) -> PropertyVal
         return None  # a Tiled 1.9+ class value (nested members) carries nothing fleetsim reads
     if raw is None or isinstance(raw, (str, int, float, bool)):
         return raw
-    msg = f"property {name!r} value={raw!r} must be a string, number or boolean"
+    msg = f"property {name!r} has the value {raw!r}; it must be a string, number or boolean"
     raise MapError(msg, where)
 
 
@@ -203,7 +203,7 @@ def json_properties(raw: object, where: Location) -> dict[str, PropertyValue]:
     if raw is None:
         return result
     if not isinstance(raw, list):
-        msg = f"properties={raw!r} must be a list of {{name, type, value}} objects"
+        msg = f"properties is {raw!r}; it must be a list of {{name, type, value}} objects"
         raise MapError(msg, where)
     for prop in raw:
         if not isinstance(prop, dict) or not isinstance(prop.get("name"), str):
@@ -236,7 +236,7 @@ def _xml_points(text: str, where: Location) -> tuple[Point, ...]:
             return tuple(zip(flat[::2], flat[1::2]))
     for pair in pairs:  # slow path: find the culprit for the message
         if len(pair) != 2:
-            msg = f"points={text!r} must be 'x,y' pairs separated by spaces"
+            msg = f"the points are {text!r}; they must be 'x,y' pairs separated by spaces"
             raise MapError(msg, where)
         as_number(pair[0], "point x", where)
         as_number(pair[1], "point y", where)
@@ -274,7 +274,7 @@ def read_xml_object(element: ET.Element, path: Path, owner_id: int | None = None
 
 def _json_points(raw: object, where: Location) -> tuple[Point, ...]:
     if not isinstance(raw, list):
-        raise MapError(f"polyline={raw!r} must be a list of {{x, y}} points", where)
+        raise MapError(f"the polyline is {raw!r}; it must be a list of {{x, y}} points", where)
     # Fast path first (plain finite numbers throughout), as in _xml_points.
     try:
         flat = [point[axis] for point in raw for axis in ("x", "y")]
@@ -381,5 +381,5 @@ def _json_template(text: str, path: Path, owner_id: int | None) -> ObjectFields:
     if not isinstance(document, dict) or document.get("type", "template") != "template":
         raise MapError("a JSON template must be an object with \"type\": \"template\"", where)
     if not isinstance(document.get("object"), dict):
-        raise MapError(f"object={document.get('object')!r} must be a JSON object", where)
+        raise MapError(f"the template's object is {document.get('object')!r}; it must be a JSON object", where)
     return read_json_object(document["object"], path, owner_id)

@@ -58,12 +58,12 @@ class PlannerFactory:
         try:
             planner = self.make()
         except Exception as exc:  # the user's constructor: report it, do not crash the harness
-            msg = f"planner={self.spec!r}: {_name(self.make)}() raised {_exception_line(exc)}{_where(exc)}"
+            msg = f"planner spec {self.spec!r}: {_name(self.make)}() raised {_exception_line(exc)}{_where(exc)}"
             raise PlannerSpecError(msg, self.spec, _user_traceback(exc)) from None
         missing = [name for name in METHODS if not callable(getattr(planner, name, None))]
         if missing:
             msg = (
-                f"planner={self.spec!r}: {_name(self.make)}() returned {planner!r}, which has no callable "
+                f"planner spec {self.spec!r}: {_name(self.make)}() returned {planner!r}, which has no callable "
                 f"{' or '.join(missing)}; a planner needs plan_routes(task, fleet, layout) and "
                 "fix_legs(task, fleet, layout)"
             )
@@ -88,15 +88,15 @@ def _exec_factory(spec: str, call_timeout: float | None) -> PlannerFactory:
     try:
         command = shlex.split(spec[len(EXEC_PREFIX) :])
     except ValueError as error:
-        msg = f"planner={spec!r}: the command cannot be split into words ({error})"
+        msg = f"planner spec {spec!r}: the command cannot be split into words ({error})"
         raise PlannerSpecError(msg, spec) from None
     if not command:
-        msg = f"planner={spec!r} names no command; write exec:COMMAND, e.g. 'exec:node planner.js'"
+        msg = f"planner spec {spec!r} names no command; write exec:COMMAND, e.g. 'exec:node planner.js'"
         raise PlannerSpecError(msg, spec)
     program = command[0]
     if shutil.which(program) is None:
         where = "is not a file" if os.sep in program else "is not on PATH"
-        msg = f"planner={spec!r}: the program {program!r} {where}"
+        msg = f"planner spec {spec!r}: the program {program!r} {where}"
         raise PlannerSpecError(msg, spec)
     return PlannerFactory(spec, functools.partial(SubprocessPlanner, command, timeout=call_timeout))
 
@@ -106,24 +106,24 @@ def _exec_factory(spec: str, call_timeout: float | None) -> PlannerFactory:
 
 def _split(spec: str) -> tuple[str, str]:
     if not isinstance(spec, str):
-        msg = f"planner={spec!r} must be a string like {EXAMPLE}"
+        msg = f"planner spec {spec!r} must be a string like {EXAMPLE}"
         raise PlannerSpecError(msg, repr(spec))
     module_name, colon, attr_path = spec.partition(":")
     if not colon:
-        msg = f"planner={spec!r} must look like module:attribute, e.g. {EXAMPLE}"
+        msg = f"planner spec {spec!r} must look like module:attribute, e.g. {EXAMPLE}"
         raise PlannerSpecError(msg, spec)
     if module_name.endswith(".py") or "/" in module_name or "\\" in module_name:
         stem = os.path.splitext(os.path.basename(module_name))[0]
         msg = (
-            f"planner={spec!r} names a file; name the module instead, e.g. {stem}:{attr_path or 'MyPlanner'} "
+            f"planner spec {spec!r} names a file; name the module instead, e.g. {stem}:{attr_path or 'MyPlanner'} "
             "(run fleetsim from the folder that holds the file)"
         )
         raise PlannerSpecError(msg, spec)
     if not _dotted_name(module_name):
-        msg = f"planner={spec!r}: the module part {module_name!r} must be a dotted Python name, e.g. {EXAMPLE}"
+        msg = f"planner spec {spec!r}: the module part {module_name!r} must be a dotted Python name, e.g. {EXAMPLE}"
         raise PlannerSpecError(msg, spec)
     if not _dotted_name(attr_path):
-        msg = f"planner={spec!r}: the attribute part {attr_path!r} must be a dotted Python name, e.g. {EXAMPLE}"
+        msg = f"planner spec {spec!r}: the attribute part {attr_path!r} must be a dotted Python name, e.g. {EXAMPLE}"
         raise PlannerSpecError(msg, spec)
     return module_name, attr_path
 
@@ -146,19 +146,19 @@ def _import(spec: str, module_name: str) -> ModuleType:
     except ModuleNotFoundError as exc:
         if exc.name is not None and (module_name == exc.name or module_name.startswith(exc.name + ".")):
             raise PlannerSpecError(_no_module(spec, exc.name, cwd), spec) from None
-        msg = f"planner={spec!r}: importing {module_name!r} failed: {_exception_line(exc)}{_where(exc)}"
+        msg = f"planner spec {spec!r}: importing {module_name!r} failed: {_exception_line(exc)}{_where(exc)}"
         raise PlannerSpecError(msg, spec, _user_traceback(exc)) from None
     except (Exception, SystemExit) as exc:  # the user's module raised while it was imported
-        msg = f"planner={spec!r}: importing {module_name!r} raised {_exception_line(exc)}{_where(exc)}"
+        msg = f"planner spec {spec!r}: importing {module_name!r} raised {_exception_line(exc)}{_where(exc)}"
         raise PlannerSpecError(msg, spec, _user_traceback(exc)) from None
 
 
 def _no_module(spec: str, missing: str, cwd: str) -> str:
     parent, _, child = missing.rpartition(".")
     if parent:
-        return f"planner={spec!r}: no module named {missing!r} (package {parent!r} has no module {child!r}); check the spelling"
+        return f"planner spec {spec!r}: no module named {missing!r} (package {parent!r} has no module {child!r}); check the spelling"
     return (
-        f"planner={spec!r}: no module named {missing!r}; check the spelling, run fleetsim from the folder that "
+        f"planner spec {spec!r}: no module named {missing!r}; check the spelling, run fleetsim from the folder that "
         f"holds {missing}.py (or the {missing}/ package), or install it (current directory: {cwd})"
     )
 
@@ -172,7 +172,7 @@ def _resolve(spec: str, module: ModuleType, attr_path: str) -> object:
         except AttributeError:
             names = _public_names(target)
             listing = f"; it has {_listing(names)}" if names else ""
-            msg = f"planner={spec!r}: {where!r} has no attribute {part!r}{did_you_mean(part, names)}{listing}"
+            msg = f"planner spec {spec!r}: {where!r} has no attribute {part!r}{did_you_mean(part, names)}{listing}"
             raise PlannerSpecError(msg, spec) from None
         where = f"{where}.{part}"
     return target
@@ -184,7 +184,7 @@ def _check_target(spec: str, target: object) -> None:
         if all(callable(getattr(target, name, None)) for name in METHODS):
             hint = "; it looks like a planner instance: name its class, or a function returning a fresh one"
         msg = (
-            f"planner={spec!r} names {_describe(target)}, which is not callable; it must be a planner "
+            f"planner spec {spec!r} names {_describe(target)}, which is not callable; it must be a planner "
             f"class or a zero-argument function returning a planner{hint}"
         )
         raise PlannerSpecError(msg, spec)
@@ -192,7 +192,7 @@ def _check_target(spec: str, target: object) -> None:
         missing = [name for name in METHODS if not callable(getattr(target, name, None))]
         if missing:
             msg = (
-                f"planner={spec!r}: class {target.__qualname__} has no {' or '.join(missing)} method; a planner "
+                f"planner spec {spec!r}: class {target.__qualname__} has no {' or '.join(missing)} method; a planner "
                 "needs plan_routes(task, fleet, layout) and fix_legs(task, fleet, layout)"
             )
             raise PlannerSpecError(msg, spec)
@@ -204,7 +204,7 @@ def _check_target(spec: str, target: object) -> None:
         signature.bind()
     except TypeError:
         msg = (
-            f"planner={spec!r}: {_name(target)}{signature} needs arguments, but a planner is made with none; "
+            f"planner spec {spec!r}: {_name(target)}{signature} needs arguments, but a planner is made with none; "
             "give its parameters defaults, or name a zero-argument function that supplies them"
         )
         raise PlannerSpecError(msg, spec) from None

@@ -240,7 +240,7 @@ def test_a_planner_spec_that_gives_no_planner_is_a_usage_error(pytester: pytest.
     copy_example_suites(pytester)
     result = pytester.runpytest_inprocess("--planner", spec)
     assert result.ret == pytest.ExitCode.USAGE_ERROR
-    result.stderr.fnmatch_lines([f"ERROR: --planner: planner={spec!r}*{problem}*"])
+    result.stderr.fnmatch_lines([f"ERROR: --planner: planner spec {spec!r}*{problem}*"])
     assert "Traceback" not in output(result)
 
 

@@ -109,3 +109,11 @@ def test_bad_input_gives_one_located_error(
     assert len(error_lines) == 1, out
     for fragment in expected:
         assert fragment in error_lines[0], error_lines[0]
+
+
+def test_a_map_of_another_file_type_is_named_in_words(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = tmp_path / "map.csv"
+    path.write_text("vehicle_id\n", encoding="utf-8")
+    assert main(["inspect", str(path)]) == 1
+    err = capsys.readouterr().err
+    assert err == f"fleetsim: error: {path}: this is not a Tiled map file: a map is saved as .json, .tmj or .tmx, and this file ends in '.csv'\n"

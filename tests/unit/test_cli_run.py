@@ -254,7 +254,7 @@ def test_a_bad_planner_spec_exits_2_without_a_traceback(capsys: pytest.CaptureFi
     status, out, err = run(capsys, "run", str(EXAMPLES), "--planner", "foo")
     assert status == 2
     assert err == (
-        "fleetsim: error: planner='foo' must look like module:attribute, e.g. fleetsim.planners:ReservingPlanner\n"
+        "fleetsim: error: planner spec 'foo' must look like module:attribute, e.g. fleetsim.planners:ReservingPlanner\n"
     )
     assert out == ""
 

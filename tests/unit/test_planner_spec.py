@@ -116,7 +116,7 @@ def test_a_module_in_the_current_directory_is_importable(project: WriteModule) -
 
 def test_a_spec_without_a_colon_is_rejected_with_an_example() -> None:
     assert spec_error("foo") == (
-        "planner='foo' must look like module:attribute, e.g. fleetsim.planners:ReservingPlanner"
+        "planner spec 'foo' must look like module:attribute, e.g. fleetsim.planners:ReservingPlanner"
     )
 
 

@@ -75,19 +75,19 @@ def test_malformed_xml_reports_line_and_column(tmp_path: Path) -> None:
 
 def test_non_orthogonal_map_names_the_orientation(tmp_path: Path) -> None:
     header = HEADER.replace('"orthogonal"', '"isometric"')
-    assert "orientation='isometric'" in str(map_error(tmx(tmp_path, objects(straight()), header)))
+    assert "the map's orientation is 'isometric'; fleetsim reads orthogonal maps only" in str(map_error(tmx(tmp_path, objects(straight()), header)))
 
 
 def test_infinite_map_is_rejected(tmp_path: Path) -> None:
     header = HEADER.replace('infinite="0"', 'infinite="1"')
-    assert "infinite='1' must be false" in str(map_error(tmx(tmp_path, objects(straight()), header)))
+    assert "the map is infinite (infinite = '1')" in str(map_error(tmx(tmp_path, objects(straight()), header)))
 
 
 def test_infinite_json_map_is_rejected(tmp_path: Path) -> None:
     path = tmp_path / "inf.json"
     path.write_text(json.dumps({"orientation": "orthogonal", "infinite": True, "width": 1,
                                 "height": 1, "tilewidth": 32, "tileheight": 32, "layers": []}))
-    assert "infinite=True must be false" in str(map_error(path))
+    assert "the map is infinite (infinite = True); fleetsim reads fixed-size maps only" in str(map_error(path))
 
 
 def test_map_without_segments_is_rejected(tmp_path: Path) -> None:
@@ -99,7 +99,7 @@ def test_map_without_segments_is_rejected(tmp_path: Path) -> None:
 def test_bad_meters_per_pixel_is_rejected(tmp_path: Path, value: str, shown: str) -> None:
     props = f'<properties><property name="meters_per_pixel" value="{value}"/></properties>'
     error = map_error(tmx(tmp_path, props + objects(straight())))
-    assert f"meters_per_pixel={shown}" in str(error)
+    assert f"meters_per_pixel is {shown}; it must be a " in str(error)
 
 
 def test_missing_map_width_is_named(tmp_path: Path) -> None:
@@ -124,7 +124,7 @@ def test_unknown_direction_names_object_and_value(tmp_path: Path) -> None:
 
 def test_direction_enum_index_out_of_range_is_rejected(tmp_path: Path) -> None:
     message = str(map_error(tmx(tmp_path, objects(straight(body=direction("5", "int"))))))
-    assert "object 7" in message and "direction=5" in message
+    assert "object 7" in message and "the direction property is 5" in message
 
 
 def test_direction_int_property_that_is_not_a_number_is_rejected(tmp_path: Path) -> None:
@@ -134,7 +134,7 @@ def test_direction_int_property_that_is_not_a_number_is_rejected(tmp_path: Path)
 
 def test_non_numeric_coordinate_names_object_and_value(tmp_path: Path) -> None:
     body = objects('<object id="4" type="straight" x="abc" y="0"><polyline points="0,0 1,1"/></object>')
-    assert "object 4: x='abc' must be a number" in str(map_error(tmx(tmp_path, body)))
+    assert "object 4: x is 'abc'; it must be a number" in str(map_error(tmx(tmp_path, body)))
 
 
 def test_non_numeric_polyline_point_names_object_and_value(tmp_path: Path) -> None:
@@ -144,13 +144,13 @@ def test_non_numeric_polyline_point_names_object_and_value(tmp_path: Path) -> No
 
 def test_malformed_polyline_points_text_is_rejected(tmp_path: Path) -> None:
     message = str(map_error(tmx(tmp_path, objects(straight(points="0,0 1;1")))))
-    assert "object 7" in message and "points='0,0 1;1'" in message
+    assert "object 7" in message and "the points are '0,0 1;1'" in message
 
 
 def test_json_string_coordinate_that_is_not_a_number_is_rejected(tmp_path: Path) -> None:
     document = json_map()
     document["layers"][0]["layers"][0]["objects"][0]["polyline"][1]["y"] = "north"
-    assert "object 7: point y='north' must be a number" in str(map_error(save_json(tmp_path, document)))
+    assert "object 7: point y is 'north'; it must be a number" in str(map_error(save_json(tmp_path, document)))
 
 
 def test_polyline_with_one_point_is_rejected(tmp_path: Path) -> None:
