@@ -17,16 +17,20 @@ import sys
 import tempfile
 from pathlib import Path
 
-from fleetsim.layout import build_layout
-from fleetsim.load.scenario import load_scenario_dir
-from fleetsim.load.tiled_writer import write_map
-from fleetsim.planners import BFSPlanner, ReservingPlanner
-from fleetsim.planning.protocol import Planner
-from fleetsim.recording.artifacts import write_run_artifacts
-from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, ScenarioSettings
-from fleetsim.sim.loop import run_scenario
-from fleetsim.sim.report import failure_report
-from fleetsim.strategies.geometry import grid
+sys.path.insert(0, str(Path(__file__).parent))
+
+from warehouse import spread_starts  # noqa: E402
+
+from fleetsim.layout import build_layout  # noqa: E402
+from fleetsim.load.scenario import load_scenario_dir  # noqa: E402
+from fleetsim.load.tiled_writer import write_map  # noqa: E402
+from fleetsim.planners import BFSPlanner, ReservingPlanner  # noqa: E402
+from fleetsim.planning.protocol import Planner  # noqa: E402
+from fleetsim.recording.artifacts import write_run_artifacts  # noqa: E402
+from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, ScenarioSettings  # noqa: E402
+from fleetsim.sim.loop import run_scenario  # noqa: E402
+from fleetsim.sim.report import failure_report  # noqa: E402
+from fleetsim.strategies.geometry import grid  # noqa: E402
 
 __all__ = ["write_lattice_scenario"]
 
@@ -41,17 +45,7 @@ def write_lattice_scenario(folder: Path, side: int = 21, vehicles: int = 30, *, 
     ids = [segment.id for segment in segments]
     order = ids[:]
     rng.shuffle(order)
-    starts: list[int] = []
-    taken: set[int] = set()
-    for sid in order:
-        if len(starts) == vehicles:
-            break
-        if sid not in taken:
-            starts.append(sid)
-            taken |= layout.conflicts(sid)
-    if len(starts) < vehicles:
-        msg = f"vehicles={vehicles!r} do not fit on non-conflicting straights of a {side}x{side} grid ({len(starts)} do)"
-        raise ValueError(msg)
+    starts = spread_starts(layout, order, vehicles, f"straights of a {side}x{side} grid")
     folder.mkdir(parents=True, exist_ok=True)
     write_map(folder / "map.json", segments)
     rows = ["vehicle_id,start_segment_id,segment_orientation", *(f"{v},{s},forward" for v, s in enumerate(starts, start=1))]

@@ -21,7 +21,7 @@ from fleetsim.load.tiled_writer import write_map
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE
 from fleetsim.strategies.geometry import warehouse
 
-__all__ = ["aisles", "warehouse", "warehouse_with_at_least", "write_fleet_scenario"]
+__all__ = ["aisles", "spread_starts", "warehouse", "warehouse_with_at_least", "write_fleet_scenario"]
 
 
 def warehouse_with_at_least(segment_count: int) -> list[Segment]:
@@ -41,6 +41,22 @@ def _reachable(layout: Layout, segment: int, hops: int) -> set[int]:
         found.update(s for s, _ in lengths)
     found.discard(segment)
     return found
+
+
+def spread_starts(layout: Layout, candidates: list[int], vehicles: int, where: str) -> list[int]:
+    """The first ``vehicles`` of ``candidates`` (in their order) whose conflict sets do not meet."""
+    starts: list[int] = []
+    taken: set[int] = set()  # segments conflicting with a chosen start
+    for segment in candidates:
+        if len(starts) == vehicles:
+            break
+        if segment not in taken:
+            starts.append(segment)
+            taken |= layout.conflicts(segment)
+    if len(starts) < vehicles:
+        msg = f"vehicles={vehicles!r} must fit on non-conflicting {where} ({len(starts)} do)"
+        raise ValueError(msg)
+    return starts
 
 
 def write_fleet_scenario(
@@ -67,17 +83,7 @@ def write_fleet_scenario(
     rng = random.Random(seed)
     shuffled = aisles(side)
     rng.shuffle(shuffled)
-    starts: list[int] = []
-    taken: set[int] = set()  # segments conflicting with a chosen start
-    for aisle in shuffled:
-        if len(starts) == vehicles:
-            break
-        if aisle not in taken:
-            starts.append(aisle)
-            taken |= layout.conflicts(aisle)
-    if len(starts) < vehicles:
-        msg = f"vehicles={vehicles!r} must fit on non-conflicting aisles of a {side}x{side} lattice ({len(starts)} do)"
-        raise ValueError(msg)
+    starts = spread_starts(layout, shuffled, vehicles, f"aisles of a {side}x{side} lattice")
 
     aisle_ids = set(shuffled)
     near_parked: set[int] = set()  # conflicts with some vehicle's last goal: no goal may go there
