@@ -1,28 +1,39 @@
-"""A practical conflict-free planner: shortest routes, legs fixed only when no other vehicle holds them.
+"""The reference conflict-free planner: shortest routes, fixed to a safe place, with priorities and yielding.
 
-Routing is Dijkstra by length over (segment, traverse, progress) states, honouring the goal direction,
-with penalties for turning back at a cusp (the vehicle stops and reverses or turns round), for driving
-against another vehicle's plan (head-on) and for going near vehicles that have no tasks left (they will
-not move away). A new route is only planned; its legs are fixed from the next call on, once every
-vehicle of that planning round has made its route known. Fixing is where safety comes from: a leg is fixed only when its
-segment's conflict set holds no other vehicle's fixed leg, so the reservation check never alerts.
+Routing is A* by length over (segment, traverse, progress) states, honouring the goal direction, with
+penalties for turning back at a cusp, for driving against another vehicle's plan (head-on) and for going
+near vehicles that have no tasks left. Safety comes from fixing: a leg is fixed only when its segment's
+conflict set holds no other vehicle's fixed leg, so the reservation check never alerts.
 
-Head-on deadlock on two-way stretches is avoided by where a vehicle may stop: the legs fixed in one go
-end either at the goal or on a leg that no other vehicle's plan comes near (a place where others can
-pass). A vehicle therefore never commits to a stretch it might have to share head-on with a vehicle
-coming the other way. A vehicle that cannot fix anything while standing still looks for another route
-after 2 s, then at doubling intervals (up to 16 s) while it stays blocked, with the segments others hold
-counted as nearly impassable. Searches are A* with a straight-line estimate.
+Progress comes from priorities. A vehicle with a task ranks by how long it has worked on its current
+task (the longest first; ties by id, so at the start the order is the vehicles' ids); a vehicle with no
+tasks left ranks last. Three rules use the ranking:
+
+- *Stop only where you do not block.* Legs fixed in one go end at the goal or on a leg that no
+  higher-ranked vehicle's next legs come near; a vehicle never commits to wait where a higher-ranked one
+  is about to drive. A lower-ranked vehicle's plans are no reason to stop short.
+- *Make way.* A vehicle that stands blocked by a lower-ranked vehicle standing still (or by one with no
+  tasks left) moves it away: the planner returns a plan for the blocker too, whose fixed legs take it to
+  the nearest place off the blocked vehicle's route (a passing place, a side aisle, the other way round a
+  loop), and then on to its own goal. Idle vehicles near a route are moved before anyone arrives.
+- *Look for a way round.* A vehicle that still cannot fix anything looks for another route after 2 s,
+  then at doubling intervals (up to 16 s), counting the segments others hold as nearly impassable.
+
+The highest-ranked vehicle therefore always moves, makes another move, or finds a way round; when it
+reaches its goal it drops in rank and the next one is highest. Searches are deterministic (ties broken
+by state, never by hashing).
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import math
 from dataclasses import replace
-from typing import Any
 
 from fleetsim.enums import JointKind, Traverse
 from fleetsim.layout.layout import Layout
+from fleetsim.layout.reachability import State
+from fleetsim.planners.fleet_index import FleetIndex
+from fleetsim.planners.making_way import WayOut, ways_out
 from fleetsim.planners.routing import legs_along, mark_goal_on_fixed, shortest_route, straight_line_estimate
 from fleetsim.planning.protocol import FleetLeg, FleetPlan, Response, RouteError
 from fleetsim.planning.snapshot import FleetSnapshot
@@ -30,104 +41,45 @@ from fleetsim.scenario import Task
 
 __all__ = ["ReservingPlanner"]
 
-
-# Counts by key (a segment, or a (segment, traverse) drive); a key whose count falls to 0 is removed.
-Counts = dict[Any, int]
-
-
-def _add(counts: Counts, key: object, amount: int) -> None:
-    total = counts.get(key, 0) + amount
-    if total:
-        counts[key] = total
-    else:
-        del counts[key]
-
-
-class _FleetIndex:
-    """What each vehicle's plan holds *near* every segment, refreshed only for plans that changed.
-
-    ``fixed_near[s]`` counts fixed legs whose segment conflicts with ``s`` (conflicts are symmetric and
-    include the segment itself), so "does another vehicle hold a fixed leg that conflicts with ``s``" is
-    one subtraction. ``route_near`` does the same for all legs, ``drives`` counts (segment, traverse).
-    Plans are immutable, so an unchanged plan is the very same object: identity tells what to redo.
-    """
-
-    def __init__(self, layout: Layout) -> None:
-        self._layout = layout
-        self._plans: object = None  # the mapping last refreshed from
-        self._seen: dict[int, FleetPlan] = {}
-        self._mine: dict[int, tuple[Counts, Counts, Counts]] = {}  # each vehicle's (fixed near, route near, drives)
-        self.fixed_near: dict[int, int] = {}
-        self.route_near: dict[int, int] = {}
-        self.drives: dict[tuple[int, Traverse], int] = {}
-
-    def refresh(self, plans: Mapping[int, FleetPlan]) -> None:
-        if plans is self._plans:
-            return  # the same snapshot as last call: nothing can have changed
-        self._plans = plans
-        for vehicle_id, plan in plans.items():
-            if self._seen.get(vehicle_id) is not plan:
-                self._replace(vehicle_id, plan)
-
-    def _replace(self, vehicle_id: int, plan: FleetPlan) -> None:
-        totals: tuple[Counts, Counts, Counts] = (self.fixed_near, self.route_near, self.drives)
-        old = self._mine.get(vehicle_id)
-        if old is not None:
-            for counts, mine in zip(totals, old):
-                for key, amount in mine.items():
-                    _add(counts, key, -amount)
-        fixed: dict[int, int] = {}
-        route: dict[int, int] = {}
-        drives: dict[tuple[int, Traverse], int] = {}
-        fixed_count = len(plan.fixed_legs)
-        for index, leg in enumerate(plan.legs):
-            drives[(leg.segment, leg.traverse)] = drives.get((leg.segment, leg.traverse), 0) + 1
-            for near in self._layout.conflicts(leg.segment):
-                route[near] = route.get(near, 0) + 1
-                if index < fixed_count:
-                    fixed[near] = fixed.get(near, 0) + 1
-        new: tuple[Counts, Counts, Counts] = (fixed, route, drives)
-        for counts, mine in zip(totals, new):
-            for key, amount in mine.items():
-                _add(counts, key, amount)
-        self._seen[vehicle_id] = plan
-        self._mine[vehicle_id] = new
-
-    def mine(self, vehicle_id: int) -> tuple[dict[int, int], dict[int, int], dict[tuple[int, Traverse], int]]:
-        """The vehicle's own (fixed near, route near, drives) counts."""
-        return self._mine[vehicle_id]
-
-    def others_fix_near(self, vehicle_id: int, segment: int) -> bool:
-        """Another vehicle has a fixed leg that conflicts with ``segment``."""
-        return self.fixed_near.get(segment, 0) > self._mine[vehicle_id][0].get(segment, 0)
-
-    def others_drive_near(self, vehicle_id: int, segment: int) -> bool:
-        """Another vehicle's plan has a leg that conflicts with ``segment``."""
-        return self.route_near.get(segment, 0) > self._mine[vehicle_id][1].get(segment, 0)
-
-    def others_drive_way(self, vehicle_id: int, segment: int, traverse: Traverse) -> bool:
-        key = (segment, traverse)
-        return self.drives.get(key, 0) > self._mine[vehicle_id][2].get(key, 0)
+Rank = tuple[float, int]
+_OPPOSITE = {Traverse.FORWARD: Traverse.BACKWARD, Traverse.BACKWARD: Traverse.FORWARD}
 
 
 class ReservingPlanner:
-    """Shortest routes by length; legs fixed only when their reservations overlap no other vehicle's."""
+    """Shortest routes, fixed to a place where waiting blocks no higher-ranked vehicle; blockers make way."""
 
     turnaround_penalty = 10.0  # metres added for a cusp: stopping to reverse or turn round takes time
     oncoming_penalty = 50.0  # metres added for driving a segment that another plan drives the other way
     parked_penalty = 1_000.0  # metres added near a vehicle with no tasks left
     held_penalty = 200.0  # metres added, when looking for a way round, near legs others have fixed
+    ahead_legs = 6  # how many of a vehicle's next legs others keep clear of when they stop
+    push_after = 1.0  # seconds a vehicle stands blocked before it moves a lower-ranked blocker away
+    push_cooldown = 5.0  # seconds before a vehicle that was moved away is moved again
+    aside_for = 30.0  # seconds a vehicle that stepped aside keeps off the way of those it stepped aside for
     replan_interval = 2.0  # seconds a blocked, standing vehicle first waits before looking for another route
     max_replan_interval = 16.0  # the longest wait between looks
+    search_limit = 4_000  # states a search for a place to make way in looks at, at most
 
     def __init__(self) -> None:
-        self._index: _FleetIndex | None = None
+        self._index: FleetIndex | None = None
+        self._layout: Layout | None = None
+        self._lengths: dict[int, float] = {}
+        self._since: dict[int, tuple[int, float]] = {}  # vehicle -> (head task, when it became the head)
+        self._blocked: dict[int, float] = {}  # vehicle -> since when it stands unable to fix a leg
+        self._pushed: dict[int, float] = {}  # vehicle -> when it was last moved out of the way
         self._next_look: dict[int, tuple[float, float]] = {}  # vehicle -> (next look, current wait)
-        self._lengths: dict[int, float] | None = None
+        self._haven: dict[int, int] = {}  # vehicle -> the segment it was sent to wait on
+        self._aside: dict[int, tuple[float, tuple[int, ...]]] = {}  # vehicle -> (until when, for whom) it steps aside
 
-    def _refresh(self, fleet: FleetSnapshot, layout: Layout) -> _FleetIndex:
+    def _conflicts_of(self, segment: int) -> frozenset[int]:
+        assert self._layout is not None
+        return self._layout.conflicts(segment)
+
+    def _refresh(self, fleet: FleetSnapshot, layout: Layout) -> FleetIndex:
         if self._index is None:
-            self._index = _FleetIndex(layout)
+            self._layout = layout
+            self._index = FleetIndex(layout, self.ahead_legs)
+            self._lengths = {sid: segment.length for sid, segment in layout.segments.items()}
         self._index.refresh(fleet.plans)
         return self._index
 
@@ -149,18 +101,217 @@ class ReservingPlanner:
         return [FleetPlan(vehicle_id, (*fixed, *route))]
 
     def fix_legs(self, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
-        self._refresh(fleet, layout)
+        index = self._refresh(fleet, layout)
         vehicle_id = task.vehicle_id
         plan = fleet.plans[vehicle_id]
+        if self._haven.get(vehicle_id) == plan.legs[0].segment:
+            del self._haven[vehicle_id]  # it has arrived where it was sent to wait
         fixed_count = len(plan.fixed_legs)
+        response: list[FleetPlan] = self._clear_idle_ahead(vehicle_id, plan, fleet, layout, index)
         if fixed_count == len(plan.legs):
-            return []  # everything up to the goal is committed already
-        extended = self._fix(plan, layout)
-        if len(extended.fixed_legs) == fixed_count and self._should_look_around(vehicle_id, fleet):
+            return response  # everything up to the goal is committed already
+        extended = self._fix(plan, fleet, index)
+        if extended is not plan:
+            self._blocked.pop(vehicle_id, None)
+            return [*response, extended]
+        return response + self._unblock(task, plan, fleet, layout, index)
+
+    # -- ranks ---------------------------------------------------------------------------------------
+
+    def _rank(self, vehicle_id: int, fleet: FleetSnapshot) -> Rank:
+        """Lower is higher: (when its current task became its head task, id); no tasks: last."""
+        queue = fleet.tasks.get(vehicle_id, ())
+        if not queue:
+            return (math.inf, vehicle_id)
+        head = queue[0].id
+        since = self._since.get(vehicle_id)
+        if since is None or since[0] != head:
+            since = self._since[vehicle_id] = (head, fleet.time)
+        return (since[1], vehicle_id)
+
+    def _standing(self, vehicle_id: int, fleet: FleetSnapshot) -> bool:
+        """At rest at the end of what it may drive (only the leg it is on is fixed)."""
+        # (A vehicle that braked to a stop may keep a speed of a few 1e-15 m/s from rounding.)
+        return fleet.vehicles[vehicle_id].speed < 1e-9 and len(fleet.plans[vehicle_id].fixed_legs) == 1
+
+    # -- fixing --------------------------------------------------------------------------------------
+
+    def _fix(self, plan: FleetPlan, fleet: FleetSnapshot, index: FleetIndex) -> FleetPlan:
+        """Fix the longest run of free planned legs that ends at the goal or where waiting blocks no
+        higher-ranked vehicle's next legs."""
+        vehicle_id = plan.vehicle_id
+        legs = plan.legs
+        first = len(plan.fixed_legs)
+        take = first
+        while take < len(legs) and not index.others_fixed_near(vehicle_id, legs[take].segment):
+            take += 1
+        if take < len(legs):
+            mine = self._rank(vehicle_id, fleet)
+            exits = self._exits(vehicle_id, legs[take:], fleet, index)
+            while take > first and (
+                legs[take - 1].segment in exits or not self._may_wait(vehicle_id, mine, legs[take - 1].segment, fleet, index)
+            ):
+                take -= 1
+        if take == first:
+            return plan
+        committed = tuple(replace(leg, fixed=True) for leg in legs[first:take])
+        return FleetPlan(vehicle_id, (*legs[:first], *committed, *legs[take:]))
+
+    def _exits(self, vehicle_id: int, beyond: tuple[FleetLeg, ...], fleet: FleetSnapshot, index: FleetIndex) -> set[int]:
+        """Segments near the next legs of vehicles that stand (or will stand) in the way further along:
+        stopping there would shut them in, and they have to move before this vehicle can pass."""
+        exits: set[int] = set()
+        seen: set[int] = set()
+        for leg in beyond:
+            for other in index.holders(vehicle_id, leg.segment):
+                if other in seen:
+                    continue
+                seen.add(other)
+                their = fleet.plans[other]
+                if len(their.legs) > 1 and len(their.fixed_legs) == 1:  # it stands, or soon will, at its leg's end
+                    exits |= self._conflicts_of(their.legs[1].segment)
+        return exits
+
+    def _may_wait(self, vehicle_id: int, mine: Rank, segment: int, fleet: FleetSnapshot, index: FleetIndex) -> bool:
+        """No higher-ranked vehicle's next legs come near ``segment`` (one stepping aside does not count),
+        or it is the place this vehicle was sent to wait."""
+        if self._haven.get(vehicle_id) == segment:
+            return True
+        time = fleet.time
+        until, yielding_to = self._aside.get(vehicle_id, (-math.inf, ()))
+        near = index.ahead(segment)
+        if until > time and any(other in near for other in yielding_to):
+            return False  # it stepped aside for them: it waits off their way until they have passed
+        return not any(
+            other != vehicle_id and self._rank(other, fleet) < mine and self._aside.get(other, (-math.inf, ()))[0] <= time
+            for other in near
+        )
+
+    # -- when nothing can be fixed -------------------------------------------------------------------
+
+    def _unblock(self, task: Task, plan: FleetPlan, fleet: FleetSnapshot, layout: Layout, index: FleetIndex) -> list[FleetPlan]:
+        """Move lower-ranked standing blockers away, step aside for them, or look for another route."""
+        vehicle_id = task.vehicle_id
+        if not self._standing(vehicle_id, fleet):
+            self._next_look.pop(vehicle_id, None)
+            return []
+        since = self._blocked.setdefault(vehicle_id, fleet.time)
+        following = plan.legs[len(plan.fixed_legs)]
+        if fleet.time - since >= self.push_after - 1e-9:
+            mine = self._rank(vehicle_id, fleet)
+            lower = [other for other in index.holders(vehicle_id, following.segment) if self._rank(other, fleet) > mine]
+            moved: list[FleetPlan] = []
+            taken = {vehicle_id}
+            for other in lower:
+                plans = self._evacuate(other, self._near(plan, layout), mine, fleet, layout, index, taken, depth=2)
+                if plans:
+                    moved += plans
+                    taken |= {p.vehicle_id for p in plans}
+            if moved:
+                return self._committed(moved, fleet)
+            standing = [other for other in lower if self._standing(other, fleet)]
+            if standing:
+                # They cannot get out of its way (a dead end behind them, say): it gets out of theirs.
+                keep_clear = set().union(*(self._near(fleet.plans[other], layout) for other in standing))
+                plans = self._evacuate(vehicle_id, keep_clear, mine, fleet, layout, index, set(), depth=1)
+                if plans:
+                    self._aside[vehicle_id] = (fleet.time + self.aside_for, tuple(standing))
+                    return self._committed(plans, fleet)
+        if self._should_look_around(vehicle_id, fleet):
             detour = self._route(task, plan.fixed_legs[-1], fleet, layout, avoid_held=True)
-            if detour is not None and detour != plan.legs[fixed_count:]:
-                extended = self._fix(FleetPlan(vehicle_id, (*plan.fixed_legs, *detour)), layout)
-        return [extended] if extended != plan else []
+            if detour is not None and detour != plan.legs[len(plan.fixed_legs):]:
+                rerouted = FleetPlan(vehicle_id, (*plan.fixed_legs, *detour))
+                return [self._fix(rerouted, fleet, index)]
+        return []
+
+    def _committed(self, plans: list[FleetPlan], fleet: FleetSnapshot) -> list[FleetPlan]:
+        for plan in plans:
+            self._pushed[plan.vehicle_id] = fleet.time
+            self._next_look.pop(plan.vehicle_id, None)
+            self._blocked.pop(plan.vehicle_id, None)
+        return plans
+
+    @staticmethod
+    def _near(plan: FleetPlan, layout: Layout) -> set[int]:
+        return {near for leg in plan.legs for near in layout.conflicts(leg.segment)}
+
+    def _clear_idle_ahead(self, vehicle_id: int, plan: FleetPlan, fleet: FleetSnapshot, layout: Layout, index: FleetIndex) -> list[FleetPlan]:
+        """Vehicles with no tasks left standing near this vehicle's next legs are moved away early."""
+        moved: list[FleetPlan] = []
+        taken: set[int] = {vehicle_id}
+        for leg in plan.legs[1 : self.ahead_legs]:
+            for other in index.holders(vehicle_id, leg.segment):
+                if other in taken or fleet.tasks.get(other):
+                    continue
+                plans = self._evacuate(other, self._near(plan, layout), (math.inf, -1), fleet, layout, index, taken, depth=0)
+                if plans:
+                    moved += plans
+                    taken |= {p.vehicle_id for p in plans}
+        return self._committed(moved, fleet) if moved else moved
+
+    def _evacuate(
+        self,
+        vehicle_id: int,
+        avoid: set[int],
+        above: Rank,
+        fleet: FleetSnapshot,
+        layout: Layout,
+        index: FleetIndex,
+        taken: set[int],
+        *,
+        depth: int,
+    ) -> list[FleetPlan] | None:
+        """Plans that take standing ``vehicle_id`` out of ``avoid`` (and on to its goal), moving standing
+        vehicles ranked below ``above`` out of its way first (up to ``depth`` deep); None if it cannot."""
+        if vehicle_id in taken or not self._standing(vehicle_id, fleet) or self._recently_moved(vehicle_id, fleet):
+            return None
+        taken = {*taken, vehicle_id}
+
+        def movable(other: int) -> bool:
+            return (
+                depth > 0
+                and other not in taken
+                and self._standing(other, fleet)
+                and self._rank(other, fleet) > above
+                and not self._recently_moved(other, fleet)
+            )
+
+        current = fleet.plans[vehicle_id].legs[0]
+        start: State = (current.segment, current.traverse, current.progress)
+        capability = fleet.vehicles[vehicle_id].type.turn_capability
+        lengths, turnaround, limit = self._lengths, self.turnaround_penalty, self.search_limit
+        for way in ways_out(vehicle_id, start, capability, avoid, layout, index, lengths, movable, turnaround=turnaround, limit=limit):
+            others: list[FleetPlan] = []
+            region = avoid | {near for segment, _, _ in (start, *way.path) for near in layout.conflicts(segment)}
+            for other in way.crossing:
+                plans = self._evacuate(other, region, above, fleet, layout, index, taken, depth=depth - 1)
+                if plans is None:
+                    break
+                others += plans
+                taken |= {p.vehicle_id for p in plans}
+            else:
+                plan = self._away_plan(vehicle_id, current, way, fleet, layout)
+                if plan is not None:
+                    return [plan, *others]
+        return None
+
+    def _away_plan(self, vehicle_id: int, current: FleetLeg, way: WayOut, fleet: FleetSnapshot, layout: Layout) -> FleetPlan | None:
+        """The drive to the waiting place (fixed, unless others must move first), then on to the goal."""
+        free = not way.crossing
+        away = tuple(FleetLeg(segment, traverse, progress, fixed=free) for segment, traverse, progress in way.path)
+        onward: tuple[FleetLeg, ...] = ()
+        queue = fleet.tasks.get(vehicle_id, ())
+        if queue:
+            route = self._route(queue[0], away[-1], fleet, layout, avoid_held=False)
+            if route is None:
+                return None  # never strand a vehicle where its task cannot be reached
+            onward = route
+        if not free:
+            self._haven[vehicle_id] = way.path[-1][0]  # it may wait there, whoever's way it is in
+        return FleetPlan(vehicle_id, (current, *away, *onward))
+
+    def _recently_moved(self, vehicle_id: int, fleet: FleetSnapshot) -> bool:
+        return fleet.time - self._pushed.get(vehicle_id, -math.inf) < self.push_cooldown - 1e-9
 
     # -- routing -------------------------------------------------------------------------------------
 
@@ -173,26 +324,21 @@ class ReservingPlanner:
         for other, queue in fleet.tasks.items():
             if other != vehicle_id and not queue:
                 parked |= layout.conflicts(fleet.vehicles[other].segment)
-
-        lengths = {sid: segment.length for sid, segment in layout.segments.items()} if self._lengths is None else self._lengths
-        self._lengths = lengths
-        fixed_near, mine_fixed = index.fixed_near, index.mine(vehicle_id)[0]
-        drives, mine_drives = index.drives, index.mine(vehicle_id)[2]
-        opposite = {Traverse.FORWARD: Traverse.BACKWARD, Traverse.BACKWARD: Traverse.FORWARD}
+        lengths = self._lengths
         turnaround, oncoming, near_parked, held = (
             self.turnaround_penalty, self.oncoming_penalty, self.parked_penalty, self.held_penalty
         )
+        others_drive, others_fixed_near = index.others_drive, index.others_fixed_near
 
         def cost(segment: int, traverse: Traverse, joint: JointKind) -> float:
             total = lengths[segment]
             if joint is JointKind.OPPOSITE:
                 total += turnaround
-            against = (segment, opposite[traverse])
-            if drives.get(against, 0) > mine_drives.get(against, 0):
+            if others_drive(vehicle_id, segment, _OPPOSITE[traverse]):
                 total += oncoming
             if segment in parked:
                 total += near_parked
-            if avoid_held and fixed_near.get(segment, 0) > mine_fixed.get(segment, 0):
+            if avoid_held and others_fixed_near(vehicle_id, segment):
                 total += held
             return total
 
@@ -208,9 +354,6 @@ class ReservingPlanner:
         The wait between looks doubles (up to ``max_replan_interval``) while looking finds nothing
         better: a vehicle queued behind others should not search the map every few seconds.
         """
-        if fleet.vehicles[vehicle_id].speed > 0.0 or len(fleet.plans[vehicle_id].fixed_legs) > 1:
-            self._next_look.pop(vehicle_id, None)  # moving again: start over with a short wait
-            return False
         due, interval = self._next_look.get(vehicle_id, (fleet.time + self.replan_interval, self.replan_interval))
         if vehicle_id not in self._next_look:
             self._next_look[vehicle_id] = (due, interval)
@@ -219,33 +362,3 @@ class ReservingPlanner:
         interval = min(2.0 * interval, self.max_replan_interval)
         self._next_look[vehicle_id] = (fleet.time + interval, interval)
         return True
-
-    # -- fixing --------------------------------------------------------------------------------------
-
-    def _free(self, vehicle_id: int, leg: FleetLeg, layout: Layout) -> bool:
-        """No other vehicle has a fixed leg that conflicts with this leg's segment."""
-        assert self._index is not None
-        return not self._index.others_fix_near(vehicle_id, leg.segment)
-
-    def _clear(self, vehicle_id: int, leg: FleetLeg, layout: Layout) -> bool:
-        """No other vehicle's plan comes near this leg's segment: a place to wait without blocking."""
-        assert self._index is not None
-        return not self._index.others_drive_near(vehicle_id, leg.segment)
-
-    def _fix(self, plan: FleetPlan, layout: Layout) -> FleetPlan:
-        """Fix the longest run of free planned legs that ends at the goal or where the vehicle may wait."""
-        vehicle_id = plan.vehicle_id
-        fixed = plan.fixed_legs
-        planned = plan.legs[len(fixed):]
-        free = 0
-        while free < len(planned) and self._free(vehicle_id, planned[free], layout):
-            free += 1
-        take = free
-        if take < len(planned):
-            while take > 0 and not self._clear(vehicle_id, planned[take - 1], layout):
-                take -= 1
-        if take == 0:
-            return plan
-        committed = tuple(replace(leg, fixed=True) for leg in planned[:take])
-        return FleetPlan(vehicle_id, (*fixed, *committed, *planned[take:]))
-

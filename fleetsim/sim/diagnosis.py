@@ -39,8 +39,8 @@ REASONS: tuple[Reason, ...] = ("waits-for", "blocked-by-idle", "not-fixed", "no-
 _ROOT_ORDER: dict[RootKind, int] = {"cycle": 0, "idle": 1, "no-route": 2, "no-plan": 3, "not-fixed": 4, "moving": 5}
 # The headline's summary of further root causes of one kind: what one, and several, are called.
 _GROUPS: dict[RootKind, tuple[str, str]] = {
-    "cycle": ("more wait-for cycle", "more wait-for cycles"),
-    "idle": ("more vehicle with no tasks left in the way", "more vehicles with no tasks left in the way"),
+    "cycle": ("wait-for cycle", "wait-for cycles"),
+    "idle": ("vehicle with no tasks left in the way", "vehicles with no tasks left in the way"),
     "no-route": ("vehicle without a route", "vehicles without a route"),
     "no-plan": ("vehicle whose plan ends before the goal", "vehicles whose plans end before the goal"),
     "not-fixed": ("vehicle whose free next leg the planner does not fix", "vehicles whose free next leg the planner does not fix"),
@@ -226,7 +226,8 @@ class Diagnosis:
             others = self.roots[1:]
             if others:
                 groups = [
-                    f"{len(roots)} {_GROUPS[kind][len(roots) > 1]} ({', '.join(map(str, sorted(v for r in roots for v in r.vehicles)))})"
+                    f"{len(roots)} {'more ' if kind == first.kind else ''}{_GROUPS[kind][len(roots) > 1]} "
+                    f"({', '.join(map(str, sorted(v for r in roots for v in r.vehicles)))})"
                     for kind in _ROOT_ORDER
                     if (roots := [r for r in others if r.kind == kind])
                 ]

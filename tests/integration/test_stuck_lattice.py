@@ -1,4 +1,4 @@
-"""The README's stuck-fleet example: 30 vehicles on a 21 x 21 grid with the reference planner.
+"""The README's stuck-fleet example: 30 vehicles on a 21 x 21 grid with a greedy planner.
 
 Whatever the planner does about it, every vehicle that still has a task at the end must be explained:
 a reason, the vehicles and segments involved, a root cause in the headline, and all of it in the picture.
@@ -12,7 +12,6 @@ from pathlib import Path
 from types import ModuleType
 
 from fleetsim.load.scenario import load_scenario_dir
-from fleetsim.planners import ReservingPlanner
 from fleetsim.recording.artifacts import write_run_artifacts
 from fleetsim.scenario import ScenarioSettings
 from fleetsim.sim.diagnosis import REASONS
@@ -30,9 +29,10 @@ def lattice_module() -> ModuleType:
 
 
 def test_every_stuck_vehicle_of_the_dense_lattice_is_explained_and_drawn(tmp_path: Path) -> None:
-    folder = lattice_module().write_lattice_scenario(tmp_path / "lattice", 21, 30, seed=1)
+    lattice = lattice_module()
+    folder = lattice.write_lattice_scenario(tmp_path / "lattice", 21, 30, seed=1)
     scenario = load_scenario_dir(folder, settings=ScenarioSettings(time_limit=600.0))
-    result = run_scenario(scenario, ReservingPlanner())
+    result = run_scenario(scenario, lattice.GreedyPlanner())
     assert result.status == "failed" and result.ended in ("deadlock", "time-limit")
     paths = write_run_artifacts(tmp_path / "run", result, scenario=scenario)
     document = json.loads(Path(paths["result"]).read_text(encoding="utf-8"))

@@ -196,7 +196,7 @@ def test_the_headline_tells_one_root_cause_in_full_and_counts_the_others(tmp_pat
     scenario = make_scenario(tmp_path, line(5), "1,1,forward,,\n2,5,backward,,\n", "1,3,\n2,4,\n", deadlock_after=2.0)
     message = run_scenario(scenario, NeverFixes()).failures[0].message
     assert message.startswith("vehicle 1: its next leg (segment 2) is free, but the planner has not fixed it for 2.0 s")
-    assert message.endswith("; besides: 1 vehicle whose free next leg the planner does not fix (2)")
+    assert message.endswith("; besides: 1 more vehicle whose free next leg the planner does not fix (2)")
 
 
 def test_a_planner_that_fixes_the_free_leg_in_time_is_not_stuck(tmp_path: Path) -> None:
