@@ -52,12 +52,28 @@ class FleetIndex:
             return  # the same snapshot as last call: nothing can have changed
         self._plans = plans
         for vehicle_id, plan in plans.items():
-            old = self._seen.get(vehicle_id)
-            if old is not plan:
-                if old is not None:
-                    self._count(vehicle_id, old, -1)
-                self._count(vehicle_id, plan, 1)
-                self._seen[vehicle_id] = plan
+            self.assume(vehicle_id, plan)
+
+    def assume(self, vehicle: int, plan: FleetPlan) -> FleetPlan | None:
+        """Count ``plan`` as the vehicle's from now on (a plan about to be returned, so that what else the
+        same response decides sees it); the plan it replaces, for :meth:`restore`."""
+        old = self._seen.get(vehicle)
+        if old is not plan:
+            if old is not None:
+                self._count(vehicle, old, -1)
+            self._count(vehicle, plan, 1)
+            self._seen[vehicle] = plan
+        return old
+
+    def restore(self, vehicle: int, old: FleetPlan | None) -> None:
+        """Undo :meth:`assume`."""
+        current = self._seen.get(vehicle)
+        if current is not None and current is not old:
+            self._count(vehicle, current, -1)
+            del self._seen[vehicle]
+        if old is not None and current is not old:
+            self._count(vehicle, old, 1)
+            self._seen[vehicle] = old
 
     def _count(self, vehicle: int, plan: FleetPlan, amount: int) -> None:
         fixed = len(plan.fixed_legs)

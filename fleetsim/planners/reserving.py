@@ -32,6 +32,7 @@ from dataclasses import replace
 from fleetsim.enums import JointKind, Traverse
 from fleetsim.layout.layout import Layout
 from fleetsim.layout.reachability import State
+from fleetsim.planners.choreography import Dance, choreograph
 from fleetsim.planners.fleet_index import FleetIndex
 from fleetsim.planners.making_way import WayOut, ways_out
 from fleetsim.planners.routing import legs_along, mark_goal_on_fixed, shortest_route, straight_line_estimate
@@ -59,6 +60,10 @@ class ReservingPlanner:
     replan_interval = 2.0  # seconds a blocked, standing vehicle first waits before looking for another route
     max_replan_interval = 16.0  # the longest wait between looks
     search_limit = 4_000  # states a search for a place to make way in looks at, at most
+    dance_after = 6.0  # seconds a vehicle stands blocked before a few stuck vehicles are moved leg by leg
+    dance_group = 3  # vehicles moved together at most
+    dance_limit = 40_000  # joint positions the search for their moves looks at, at most
+    dance_patience = 20.0  # seconds without a move done before a dance is given up
 
     def __init__(self) -> None:
         self._index: FleetIndex | None = None
@@ -69,7 +74,11 @@ class ReservingPlanner:
         self._pushed: dict[int, float] = {}  # vehicle -> when it was last moved out of the way
         self._next_look: dict[int, tuple[float, float]] = {}  # vehicle -> (next look, current wait)
         self._haven: dict[int, int] = {}  # vehicle -> the segment it was sent to wait on
-        self._aside: dict[int, tuple[float, tuple[int, ...]]] = {}  # vehicle -> (until when, for whom) it steps aside
+        self._dance: Dance | None = None  # a few stuck vehicles being moved leg by leg, in order
+        self._group: frozenset[int] = frozenset()  # the dance's vehicles (also those that keep still)
+        self._dance_time = -1.0  # when the dance last took a step
+        # vehicle -> (until when, where not to stop, (whom, on which segment)) while it steps aside for others
+        self._aside: dict[int, tuple[float, frozenset[int], tuple[tuple[int, int], ...]]] = {}
 
     def _conflicts_of(self, segment: int) -> frozenset[int]:
         assert self._layout is not None
@@ -86,28 +95,34 @@ class ReservingPlanner:
     # -- the protocol --------------------------------------------------------------------------------
 
     def plan_routes(self, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
-        self._refresh(fleet, layout)
+        index = self._refresh(fleet, layout)
         vehicle_id = task.vehicle_id
+        danced = self._dance_step(fleet, index)
+        if vehicle_id in self._group:
+            return danced  # it keeps to the dance's moves until the dance is over
         fixed = fleet.plans[vehicle_id].fixed_legs
         marked = mark_goal_on_fixed(fixed, task, check_progress=True)
         if marked is not None:
-            return [FleetPlan(vehicle_id, marked)]
+            return [*danced, FleetPlan(vehicle_id, marked)]
         route = self._route(task, fixed[-1], fleet, layout, avoid_held=False)
         if route is None:
             last = fixed[-1]
             arrive = f" arriving {task.goal_progress.value}" if task.goal_progress is not None else ""
             msg = f"no route from segment {last.segment} ({last.traverse.value}) to segment {task.goal_segment}{arrive}"
-            return [RouteError(vehicle_id, msg)]
-        return [FleetPlan(vehicle_id, (*fixed, *route))]
+            return [*danced, RouteError(vehicle_id, msg)]
+        return [*danced, FleetPlan(vehicle_id, (*fixed, *route))]
 
     def fix_legs(self, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
         index = self._refresh(fleet, layout)
         vehicle_id = task.vehicle_id
+        danced = self._dance_step(fleet, index)
+        if vehicle_id in self._group:
+            return danced
         plan = fleet.plans[vehicle_id]
         if self._haven.get(vehicle_id) == plan.legs[0].segment:
             del self._haven[vehicle_id]  # it has arrived where it was sent to wait
         fixed_count = len(plan.fixed_legs)
-        response: list[FleetPlan] = self._clear_idle_ahead(vehicle_id, plan, fleet, layout, index)
+        response: list[FleetPlan] = [*danced, *self._clear_idle_ahead(vehicle_id, plan, fleet, layout, index)]
         if fixed_count == len(plan.legs):
             return response  # everything up to the goal is committed already
         extended = self._fix(plan, fleet, index)
@@ -177,15 +192,23 @@ class ReservingPlanner:
         or it is the place this vehicle was sent to wait."""
         if self._haven.get(vehicle_id) == segment:
             return True
-        time = fleet.time
-        until, yielding_to = self._aside.get(vehicle_id, (-math.inf, ()))
-        near = index.ahead(segment)
-        if until > time and any(other in near for other in yielding_to):
-            return False  # it stepped aside for them: it waits off their way until they have passed
+        if segment in self._keep_clear(vehicle_id, fleet):
+            return False  # it stepped aside for others: it waits off their way until they have moved
         return not any(
-            other != vehicle_id and self._rank(other, fleet) < mine and self._aside.get(other, (-math.inf, ()))[0] <= time
-            for other in near
+            other != vehicle_id and self._rank(other, fleet) < mine and not self._keep_clear(other, fleet)
+            for other in index.ahead(segment)
         )
+
+    def _keep_clear(self, vehicle_id: int, fleet: FleetSnapshot) -> frozenset[int]:
+        """Where a vehicle that stepped aside must not stop: until those it made way for have moved."""
+        aside = self._aside.get(vehicle_id)
+        if aside is None:
+            return frozenset()
+        until, region, where = aside
+        if fleet.time >= until or all(fleet.vehicles[other].segment != segment for other, segment in where):
+            del self._aside[vehicle_id]
+            return frozenset()
+        return region
 
     # -- when nothing can be fixed -------------------------------------------------------------------
 
@@ -205,24 +228,40 @@ class ReservingPlanner:
             for other in lower:
                 plans = self._evacuate(other, self._near(plan, layout), mine, fleet, layout, index, taken, depth=2)
                 if plans:
-                    moved += plans
+                    moved += self._assumed(plans, index)
                     taken |= {p.vehicle_id for p in plans}
             if moved:
                 return self._committed(moved, fleet)
             standing = [other for other in lower if self._standing(other, fleet)]
             if standing:
-                # They cannot get out of its way (a dead end behind them, say): it gets out of theirs.
+                # They cannot get out of its way (a dead end behind them, say): it gets out of theirs,
+                # off their routes and off the way they would take out of its way if it were not there.
                 keep_clear = set().union(*(self._near(fleet.plans[other], layout) for other in standing))
+                for other in standing:
+                    keep_clear |= self._way_out_past(other, vehicle_id, self._near(plan, layout), fleet, layout, index)
                 plans = self._evacuate(vehicle_id, keep_clear, mine, fleet, layout, index, set(), depth=1)
                 if plans:
-                    self._aside[vehicle_id] = (fleet.time + self.aside_for, tuple(standing))
+                    self._assumed(plans, index)
+                    where = tuple((other, fleet.vehicles[other].segment) for other in standing)
+                    self._aside[vehicle_id] = (fleet.time + self.aside_for, frozenset(keep_clear), where)
                     return self._committed(plans, fleet)
+        if fleet.time - since >= self.dance_after - 1e-9 and self._dance is None:
+            dance = self._start_dance(task, plan, fleet, layout, index)
+            if dance:
+                return dance
         if self._should_look_around(vehicle_id, fleet):
             detour = self._route(task, plan.fixed_legs[-1], fleet, layout, avoid_held=True)
             if detour is not None and detour != plan.legs[len(plan.fixed_legs):]:
                 rerouted = FleetPlan(vehicle_id, (*plan.fixed_legs, *detour))
                 return [self._fix(rerouted, fleet, index)]
         return []
+
+    @staticmethod
+    def _assumed(plans: list[FleetPlan], index: FleetIndex) -> list[FleetPlan]:
+        """Count ``plans`` in the index now, so that the rest of this response does not contradict them."""
+        for plan in plans:
+            index.assume(plan.vehicle_id, plan)
+        return plans
 
     def _committed(self, plans: list[FleetPlan], fleet: FleetSnapshot) -> list[FleetPlan]:
         for plan in plans:
@@ -245,7 +284,7 @@ class ReservingPlanner:
                     continue
                 plans = self._evacuate(other, self._near(plan, layout), (math.inf, -1), fleet, layout, index, taken, depth=0)
                 if plans:
-                    moved += plans
+                    moved += self._assumed(plans, index)
                     taken |= {p.vehicle_id for p in plans}
         return self._committed(moved, fleet) if moved else moved
 
@@ -263,7 +302,7 @@ class ReservingPlanner:
     ) -> list[FleetPlan] | None:
         """Plans that take standing ``vehicle_id`` out of ``avoid`` (and on to its goal), moving standing
         vehicles ranked below ``above`` out of its way first (up to ``depth`` deep); None if it cannot."""
-        if vehicle_id in taken or not self._standing(vehicle_id, fleet) or self._recently_moved(vehicle_id, fleet):
+        if vehicle_id in taken or vehicle_id in self._group or not self._standing(vehicle_id, fleet) or self._recently_moved(vehicle_id, fleet):
             return None
         taken = {*taken, vehicle_id}
 
@@ -271,6 +310,7 @@ class ReservingPlanner:
             return (
                 depth > 0
                 and other not in taken
+                and other not in self._group
                 and self._standing(other, fleet)
                 and self._rank(other, fleet) > above
                 and not self._recently_moved(other, fleet)
@@ -282,18 +322,35 @@ class ReservingPlanner:
         lengths, turnaround, limit = self._lengths, self.turnaround_penalty, self.search_limit
         for way in ways_out(vehicle_id, start, capability, avoid, layout, index, lengths, movable, turnaround=turnaround, limit=limit):
             others: list[FleetPlan] = []
+            replaced: list[tuple[int, FleetPlan | None]] = []  # what the index counted before, to undo
             region = avoid | {near for segment, _, _ in (start, *way.path) for near in layout.conflicts(segment)}
             for other in way.crossing:
                 plans = self._evacuate(other, region, above, fleet, layout, index, taken, depth=depth - 1)
                 if plans is None:
                     break
                 others += plans
+                replaced += [(p.vehicle_id, index.assume(p.vehicle_id, p)) for p in plans]
                 taken |= {p.vehicle_id for p in plans}
             else:
                 plan = self._away_plan(vehicle_id, current, way, fleet, layout)
                 if plan is not None:
+                    for other, old in reversed(replaced):  # the caller counts the whole set at once
+                        index.restore(other, old)
                     return [plan, *others]
+            for other, old in reversed(replaced):
+                index.restore(other, old)
         return None
+
+    def _way_out_past(self, vehicle_id: int, past: int, avoid: set[int], fleet: FleetSnapshot, layout: Layout, index: FleetIndex) -> set[int]:
+        """The segments near the way ``vehicle_id`` would take out of ``avoid`` if ``past`` were not there."""
+        current = fleet.plans[vehicle_id].legs[0]
+        start: State = (current.segment, current.traverse, current.progress)
+        capability = fleet.vehicles[vehicle_id].type.turn_capability
+        ways = ways_out(
+            vehicle_id, start, capability, avoid, layout, index, self._lengths, lambda other: other == past,
+            turnaround=self.turnaround_penalty, limit=self.search_limit, wanted=1,
+        )  # fmt: skip
+        return {near for segment, _, _ in ways[0].path for near in layout.conflicts(segment)} if ways else set()
 
     def _away_plan(self, vehicle_id: int, current: FleetLeg, way: WayOut, fleet: FleetSnapshot, layout: Layout) -> FleetPlan | None:
         """The drive to the waiting place (fixed, unless others must move first), then on to the goal."""
@@ -312,6 +369,81 @@ class ReservingPlanner:
 
     def _recently_moved(self, vehicle_id: int, fleet: FleetSnapshot) -> bool:
         return fleet.time - self._pushed.get(vehicle_id, -math.inf) < self.push_cooldown - 1e-9
+
+    # -- the last resort: a few vehicles moved leg by leg ----------------------------------------------
+
+    def _start_dance(self, task: Task, plan: FleetPlan, fleet: FleetSnapshot, layout: Layout, index: FleetIndex) -> list[FleetPlan]:
+        """Search joint moves that bring this vehicle to its goal, moving the standing vehicles that
+        block it (and theirs); the plans that start the dance, or nothing when no such moves are found."""
+        vehicle_id = task.vehicle_id
+        group = [vehicle_id]
+        for member in group:
+            member_plan = fleet.plans[member]
+            ahead = member_plan.legs[len(member_plan.fixed_legs) :][:1] or member_plan.legs[:1]
+            for leg in ahead:
+                for other in index.holders(member, leg.segment):
+                    if other not in group and len(group) < self.dance_group:
+                        group.append(other)
+        if len(group) < 2 or not all(self._standing(member, fleet) for member in group):
+            return []
+        members = sorted(group)
+        blocked = {near for other, other_plan in fleet.plans.items() if other not in group for leg in other_plan.fixed_legs for near in layout.conflicts(leg.segment)}
+        starts = {member: (leg.segment, leg.traverse, leg.progress) for member in members for leg in fleet.plans[member].legs[:1]}
+        capabilities = {member: fleet.vehicles[member].type.turn_capability for member in members}
+        moves = choreograph(layout, members, starts, capabilities, blocked, (vehicle_id, task.goal_segment, task.goal_progress), self.dance_limit)
+        if not moves:
+            return []
+        plans: list[FleetPlan] = []
+        for member in members:
+            states = [state for who, state in moves if who == member]
+            if not states:
+                continue
+            legs = [FleetLeg(segment, traverse, progress, fixed=False) for segment, traverse, progress in states]
+            current = fleet.plans[member].legs[0]
+            queue = fleet.tasks.get(member, ())
+            if member == vehicle_id:
+                legs[-1] = replace(legs[-1], goal_for_task=task.id, progress=task.goal_progress or legs[-1].progress)
+                last = max(k for k, (who, _) in enumerate(moves) if who == member)
+                moves[last] = (member, (legs[-1].segment, legs[-1].traverse, legs[-1].progress))
+                plans.append(FleetPlan(member, (current, *legs)))
+                continue
+            onward: tuple[FleetLeg, ...] = ()
+            if queue:
+                route = self._route(queue[0], legs[-1], fleet, layout, avoid_held=False)
+                if route is None:
+                    return []
+                onward = route
+            plans.append(FleetPlan(member, (current, *legs, *onward)))
+        self._dance = Dance(moves, fleet.time, progressed=fleet.time)
+        self._group = frozenset(members)
+        self._dance_time = fleet.time
+        return self._committed(self._assumed(plans, index), fleet)
+
+    def _dance_step(self, fleet: FleetSnapshot, index: FleetIndex) -> list[FleetPlan]:
+        """Once per moment: fix the next move of the dance when every move before it is done."""
+        dance = self._dance
+        if dance is None or self._dance_time == fleet.time:
+            return []
+        self._dance_time = fleet.time
+        current = {member: (leg.segment, leg.traverse, leg.progress) for member in self._group for leg in fleet.plans[member].legs[:1]}
+        dance.advance(current, fleet.time)
+        if dance.finished or fleet.time - dance.progressed > self.dance_patience:
+            self._dance, self._group = None, frozenset()
+            return []
+        member, state = dance.moves[dance.done]
+        plan = fleet.plans[member]
+        first = len(plan.fixed_legs)
+        if first >= len(plan.legs):
+            return []  # still driving its previous move
+        leg = plan.legs[first]
+        if (leg.segment, leg.traverse, leg.progress) != state:
+            self._dance, self._group = None, frozenset()  # its plan is no longer the dance's
+            return []
+        if first > 1 or index.others_fixed_near(member, leg.segment):
+            return []  # it has not reached its last move yet, or someone else is in the way
+        fixed = FleetPlan(member, (*plan.legs[:first], replace(leg, fixed=True), *plan.legs[first + 1 :]))
+        index.assume(member, fixed)
+        return [fixed]
 
     # -- routing -------------------------------------------------------------------------------------
 
