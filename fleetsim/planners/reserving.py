@@ -62,7 +62,14 @@ class ReservingPlanner:
     search_limit = 4_000  # states a search for a place to make way in looks at, at most
     dance_after = 6.0  # seconds a vehicle stands blocked before a few stuck vehicles are moved leg by leg
     dance_group = 3  # vehicles moved together at most
-    dance_limit = 40_000  # joint positions the search for their moves looks at, at most
+    dance_limit = 10_000  # joint positions the search for their moves looks at, at most
+    dance_retry = 30.0  # seconds before a vehicle whose dance could not be found looks for one again
+    detour_limit = 4_000  # states a search for a way round looks at, at most
+    detour_stretch, detour_slack = 1.5, 10.0  # a way round at most this much longer (x, + m) is taken
+    # A* weight on the straight-line estimate: above 1 a search looks at far fewer states in a busy fleet
+    # (the penalties make true costs exceed straight lines) for routes at most this much longer.
+    route_greed = 1.0
+    ignore_blocked_ahead = False
     dance_patience = 20.0  # seconds without a move done before a dance is given up
 
     def __init__(self) -> None:
@@ -77,6 +84,7 @@ class ReservingPlanner:
         self._dance: Dance | None = None  # a few stuck vehicles being moved leg by leg, in order
         self._group: frozenset[int] = frozenset()  # the dance's vehicles (also those that keep still)
         self._dance_time = -1.0  # when the dance last took a step
+        self._no_dance: dict[int, float] = {}  # vehicle -> when it may look for a dance again
         # vehicle -> (until when, where not to stop, (whom, on which segment)) while it steps aside for others
         self._aside: dict[int, tuple[float, frozenset[int], tuple[tuple[int, int], ...]]] = {}
 
@@ -195,7 +203,10 @@ class ReservingPlanner:
         if segment in self._keep_clear(vehicle_id, fleet):
             return False  # it stepped aside for others: it waits off their way until they have moved
         return not any(
-            other != vehicle_id and self._rank(other, fleet) < mine and not self._keep_clear(other, fleet)
+            other != vehicle_id
+            and self._rank(other, fleet) < mine
+            and not self._keep_clear(other, fleet)
+            and not (self.ignore_blocked_ahead and other in self._blocked and self._standing(other, fleet))
             for other in index.ahead(segment)
         )
 
@@ -245,13 +256,14 @@ class ReservingPlanner:
                     where = tuple((other, fleet.vehicles[other].segment) for other in standing)
                     self._aside[vehicle_id] = (fleet.time + self.aside_for, frozenset(keep_clear), where)
                     return self._committed(plans, fleet)
-        if fleet.time - since >= self.dance_after - 1e-9 and self._dance is None:
+        if fleet.time - since >= self.dance_after - 1e-9 and self._dance is None and fleet.time >= self._no_dance.get(vehicle_id, -math.inf):
             dance = self._start_dance(task, plan, fleet, layout, index)
             if dance:
                 return dance
+            self._no_dance[vehicle_id] = fleet.time + self.dance_retry
         if self._should_look_around(vehicle_id, fleet):
             detour = self._route(task, plan.fixed_legs[-1], fleet, layout, avoid_held=True)
-            if detour is not None and detour != plan.legs[len(plan.fixed_legs):]:
+            if detour is not None and detour != plan.legs[len(plan.fixed_legs) :] and self._worth_it(detour, plan):
                 rerouted = FleetPlan(vehicle_id, (*plan.fixed_legs, *detour))
                 return [self._fix(rerouted, fleet, index)]
         return []
@@ -262,6 +274,12 @@ class ReservingPlanner:
         for plan in plans:
             index.assume(plan.vehicle_id, plan)
         return plans
+
+    def _worth_it(self, detour: tuple[FleetLeg, ...], plan: FleetPlan) -> bool:
+        """A way round is taken only when it is not much longer than the way it replaces."""
+        lengths = self._lengths
+        now = sum(lengths[leg.segment] for leg in plan.legs[len(plan.fixed_legs) :])
+        return sum(lengths[leg.segment] for leg in detour) <= self.detour_stretch * now + self.detour_slack
 
     def _committed(self, plans: list[FleetPlan], fleet: FleetSnapshot) -> list[FleetPlan]:
         for plan in plans:
@@ -476,8 +494,14 @@ class ReservingPlanner:
 
         capability = fleet.vehicles[vehicle_id].type.turn_capability
         start = (last.segment, last.traverse, last.progress)
-        estimate = straight_line_estimate(layout, task.goal_segment)
-        path = shortest_route(layout, capability, start, task.goal_segment, task.goal_progress, cost, estimate)
+        straight = straight_line_estimate(layout, task.goal_segment)
+        greed = self.route_greed
+
+        def estimate(segment: int, traverse: Traverse) -> float:
+            return greed * straight(segment, traverse)
+
+        limit = self.detour_limit if avoid_held else None
+        path = shortest_route(layout, capability, start, task.goal_segment, task.goal_progress, cost, estimate, limit)
         return None if path is None else legs_along(path, task, task.goal_progress)
 
     def _should_look_around(self, vehicle_id: int, fleet: FleetSnapshot) -> bool:

@@ -90,6 +90,7 @@ def shortest_route(
     arrive: Progress | None,
     cost: Cost,
     estimate: Estimate | None = None,
+    limit: int | None = None,
 ) -> list[State] | None:
     """Least total ``cost`` from ``start`` to segment ``goal`` (``start`` itself excluded).
 
@@ -104,10 +105,14 @@ def shortest_route(
     came_from: dict[State, State] = {}
     heap: list[tuple[float, tuple[int, int, int], float, State]] = [(0.0, state_key(start), 0.0, start)]
     infinity = math.inf
+    budget = infinity if limit is None else limit
     while heap:
         _, _, spent, state = heapq.heappop(heap)
         if spent > best.get(state, infinity):
             continue
+        budget -= 1
+        if budget < 0:
+            return None
         if state != start and state[0] == goal and (not must_match or state[2] is arrive):
             return _rebuild(came_from, state)
         for following, joint in next_steps(layout, capability, state):
