@@ -31,7 +31,7 @@ from dataclasses import replace
 
 from fleetsim.enums import JointKind, Traverse
 from fleetsim.layout.layout import Layout
-from fleetsim.layout.reachability import State
+from fleetsim.layout.reachability import State, next_states
 from fleetsim.planners.choreography import Dance, choreograph
 from fleetsim.planners.fleet_index import FleetIndex
 from fleetsim.planners.making_way import WayOut, ways_out
@@ -55,14 +55,15 @@ class ReservingPlanner:
     held_penalty = 200.0  # metres added, when looking for a way round, near legs others have fixed
     ahead_legs = 6  # how many of a vehicle's next legs others keep clear of when they stop
     push_after = 1.0  # seconds a vehicle stands blocked before it moves a lower-ranked blocker away
+    stall_after = 5.0  # seconds a vehicle with a free way but nowhere to stop waits before it moves on anyway
     push_cooldown = 5.0  # seconds before a vehicle that was moved away is moved again
     aside_for = 30.0  # seconds a vehicle that stepped aside keeps off the way of those it stepped aside for
     replan_interval = 2.0  # seconds a blocked, standing vehicle first waits before looking for another route
     max_replan_interval = 16.0  # the longest wait between looks
     search_limit = 4_000  # states a search for a place to make way in looks at, at most
     dance_after = 6.0  # seconds a vehicle stands blocked before a few stuck vehicles are moved leg by leg
-    dance_group = 3  # vehicles moved together at most
-    dance_limit = 10_000  # joint positions the search for their moves looks at, at most
+    dance_group = 4  # vehicles moved together at most
+    dance_limit = 20_000  # joint positions the search for their moves looks at, at most
     dance_retry = 30.0  # seconds before a vehicle whose dance could not be found looks for one again
     detour_limit = 4_000  # states a search for a way round looks at, at most
     detour_stretch, detour_slack = 1.5, 10.0  # a way round at most this much longer (x, + m) is taken
@@ -159,16 +160,16 @@ class ReservingPlanner:
 
     # -- fixing --------------------------------------------------------------------------------------
 
-    def _fix(self, plan: FleetPlan, fleet: FleetSnapshot, index: FleetIndex) -> FleetPlan:
+    def _fix(self, plan: FleetPlan, fleet: FleetSnapshot, index: FleetIndex, *, anywhere: bool = False) -> FleetPlan:
         """Fix the longest run of free planned legs that ends at the goal or where waiting blocks no
-        higher-ranked vehicle's next legs."""
+        higher-ranked vehicle's next legs (``anywhere``: wherever the free run ends)."""
         vehicle_id = plan.vehicle_id
         legs = plan.legs
         first = len(plan.fixed_legs)
         take = first
         while take < len(legs) and not index.others_fixed_near(vehicle_id, legs[take].segment):
             take += 1
-        if take < len(legs):
+        if take < len(legs) and not anywhere:
             mine = self._rank(vehicle_id, fleet)
             exits = self._exits(vehicle_id, legs[take:], fleet, index)
             while take > first and (
@@ -231,6 +232,13 @@ class ReservingPlanner:
             return []
         since = self._blocked.setdefault(vehicle_id, fleet.time)
         following = plan.legs[len(plan.fixed_legs)]
+        if fleet.time - since >= self.stall_after - 1e-9 and not index.holders(vehicle_id, following.segment):
+            # Its way is free, but every place to stop is in someone's way, and they wait too (for it,
+            # say): better to move on into their way, where they can move it, than to wait for ever.
+            moved_on = self._fix(plan, fleet, index, anywhere=True)
+            if moved_on is not plan:
+                self._blocked.pop(vehicle_id, None)
+                return [moved_on]
         if fleet.time - since >= self.push_after - 1e-9:
             mine = self._rank(vehicle_id, fleet)
             lower = [other for other in index.holders(vehicle_id, following.segment) if self._rank(other, fleet) > mine]
@@ -250,7 +258,7 @@ class ReservingPlanner:
                 keep_clear = set().union(*(self._near(fleet.plans[other], layout) for other in standing))
                 for other in standing:
                     keep_clear |= self._way_out_past(other, vehicle_id, self._near(plan, layout), fleet, layout, index)
-                plans = self._evacuate(vehicle_id, keep_clear, mine, fleet, layout, index, set(), depth=1)
+                plans = self._evacuate(vehicle_id, keep_clear, mine, fleet, layout, index, set(standing), depth=2)
                 if plans:
                     self._assumed(plans, index)
                     where = tuple((other, fleet.vehicles[other].segment) for other in standing)
@@ -375,7 +383,7 @@ class ReservingPlanner:
         free = not way.crossing
         away = tuple(FleetLeg(segment, traverse, progress, fixed=free) for segment, traverse, progress in way.path)
         onward: tuple[FleetLeg, ...] = ()
-        queue = fleet.tasks.get(vehicle_id, ())
+        queue = self._open_tasks(vehicle_id, current, fleet)
         if queue:
             route = self._route(queue[0], away[-1], fleet, layout, avoid_held=False)
             if route is None:
@@ -384,6 +392,11 @@ class ReservingPlanner:
         if not free:
             self._haven[vehicle_id] = way.path[-1][0]  # it may wait there, whoever's way it is in
         return FleetPlan(vehicle_id, (current, *away, *onward))
+
+    @staticmethod
+    def _open_tasks(vehicle_id: int, current: FleetLeg, fleet: FleetSnapshot) -> tuple[Task, ...]:
+        """Its queue without a task whose goal it stands on already (done, though not yet counted)."""
+        return tuple(task for task in fleet.tasks.get(vehicle_id, ()) if task.id != current.goal_for_task)
 
     def _recently_moved(self, vehicle_id: int, fleet: FleetSnapshot) -> bool:
         return fleet.time - self._pushed.get(vehicle_id, -math.inf) < self.push_cooldown - 1e-9
@@ -395,11 +408,16 @@ class ReservingPlanner:
         block it (and theirs); the plans that start the dance, or nothing when no such moves are found."""
         vehicle_id = task.vehicle_id
         group = [vehicle_id]
-        for member in group:
+        for member in group:  # those in its way, then those in the way of any move of theirs
             member_plan = fleet.plans[member]
-            ahead = member_plan.legs[len(member_plan.fixed_legs) :][:1] or member_plan.legs[:1]
-            for leg in ahead:
-                for other in index.holders(member, leg.segment):
+            current = member_plan.legs[0]
+            capability = fleet.vehicles[member].type.turn_capability
+            reach = [leg.segment for leg in member_plan.legs[len(member_plan.fixed_legs) :][:1]]
+            near = list(next_states(layout, capability, (current.segment, current.traverse, current.progress)))
+            near += [after for state in near for after in next_states(layout, capability, state)]  # two moves on
+            reach += [state[0] for state in near]
+            for segment in reach:
+                for other in index.holders(member, segment):
                     if other not in group and len(group) < self.dance_group:
                         group.append(other)
         if len(group) < 2 or not all(self._standing(member, fleet) for member in group):
@@ -418,7 +436,7 @@ class ReservingPlanner:
                 continue
             legs = [FleetLeg(segment, traverse, progress, fixed=False) for segment, traverse, progress in states]
             current = fleet.plans[member].legs[0]
-            queue = fleet.tasks.get(member, ())
+            queue = self._open_tasks(member, current, fleet)
             if member == vehicle_id:
                 legs[-1] = replace(legs[-1], goal_for_task=task.id, progress=task.goal_progress or legs[-1].progress)
                 last = max(k for k, (who, _) in enumerate(moves) if who == member)
