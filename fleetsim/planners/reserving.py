@@ -269,7 +269,8 @@ class ReservingPlanner:
             if dance:
                 return dance
             self._no_dance[vehicle_id] = fleet.time + self.dance_retry
-        if self._should_look_around(vehicle_id, fleet):
+        if vehicle_id not in self._haven and not self._keep_clear(vehicle_id, fleet) and self._should_look_around(vehicle_id, fleet):
+            # (Not while it makes way for others: a way round would undo its move.)
             detour = self._route(task, plan.fixed_legs[-1], fleet, layout, avoid_held=True)
             if detour is not None and detour != plan.legs[len(plan.fixed_legs) :] and self._worth_it(detour, plan):
                 rerouted = FleetPlan(vehicle_id, (*plan.fixed_legs, *detour))
