@@ -7,7 +7,7 @@ Each vehicle starts on its own straight (no two starts conflict) and gets three 
 from the whole grid, then back to its start segment. The run prints its report (for a failed run, the
 why of a deadlock or a timeout); with ``--record DIR`` it writes the artifact folder too (failure
 picture, MCAP). ``--planner GreedyPlanner`` is a planner without any coordination: shortest routes, each
-next leg fixed as soon as it is free. It fills the grid with vehicles waiting for each other and for
+next leg fixed as soon as it is free (``fleetsim.planners:GreedyPlanner``). It fills the grid with vehicles waiting for each other and for
 vehicles that have finished their work: the README's example of a stuck-fleet report.
 """
 
@@ -27,39 +27,15 @@ from warehouse import spread_starts  # noqa: E402
 from fleetsim.layout import build_layout  # noqa: E402
 from fleetsim.load.scenario import load_scenario_dir  # noqa: E402
 from fleetsim.load.tiled_writer import write_map  # noqa: E402
-from fleetsim.planners import BFSPlanner, ReservingPlanner  # noqa: E402
-from fleetsim.layout.layout import Layout  # noqa: E402
-from fleetsim.planning.protocol import FleetPlan, Planner, Response  # noqa: E402
-from fleetsim.planning.snapshot import FleetSnapshot  # noqa: E402
+from fleetsim.planners import BFSPlanner, GreedyPlanner, ReservingPlanner  # noqa: E402
+from fleetsim.planning.protocol import Planner  # noqa: E402
 from fleetsim.recording.artifacts import write_run_artifacts  # noqa: E402
-from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, ScenarioSettings, Task  # noqa: E402
+from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, ScenarioSettings  # noqa: E402
 from fleetsim.sim.loop import run_scenario  # noqa: E402
 from fleetsim.sim.report import failure_report  # noqa: E402
 from fleetsim.strategies.geometry import grid  # noqa: E402
 
-__all__ = ["GreedyPlanner", "write_lattice_scenario"]
-
-class GreedyPlanner:
-    """Shortest routes (breadth-first), each next leg fixed as soon as no other vehicle holds it: safe,
-    and helpless when vehicles wait for each other."""
-
-    def __init__(self) -> None:
-        self._route = BFSPlanner()
-
-    def plan_routes(self, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
-        return self._route.plan_routes(task, fleet, layout)
-
-    def fix_legs(self, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
-        plan = fleet.plans[task.vehicle_id]
-        index = len(plan.fixed_legs)
-        if index >= len(plan.legs):
-            return []
-        held = {leg.segment for vid, other in fleet.plans.items() if vid != task.vehicle_id for leg in other.fixed_legs}
-        if layout.conflicts(plan.legs[index].segment) & held:
-            return []
-        legs = tuple(dataclasses.replace(leg, fixed=True) if i == index else leg for i, leg in enumerate(plan.legs))
-        return [FleetPlan(task.vehicle_id, legs)]
-
+__all__ = ["write_lattice_scenario"]
 
 PLANNERS: dict[str, type[Planner]] = {"BFSPlanner": BFSPlanner, "GreedyPlanner": GreedyPlanner, "ReservingPlanner": ReservingPlanner}
 

@@ -1,7 +1,9 @@
-"""Reference planners: ``fleetsim.planners:BFSPlanner`` (the thesis's, collides on purpose) and
-``fleetsim.planners:ReservingPlanner`` (conflict-free)."""
+"""Reference planners: ``fleetsim.planners:ReservingPlanner`` (conflict-free, finishes what is solvable),
+``fleetsim.planners:BFSPlanner`` (the thesis's, collides on purpose) and
+``fleetsim.planners:GreedyPlanner`` (safe, no coordination: gets stuck on purpose)."""
 
 from fleetsim.planners.bfs import BFSPlanner
+from fleetsim.planners.greedy import GreedyPlanner
 from fleetsim.planners.reserving import ReservingPlanner
 
-__all__ = ["BFSPlanner", "ReservingPlanner"]
+__all__ = ["BFSPlanner", "GreedyPlanner", "ReservingPlanner"]

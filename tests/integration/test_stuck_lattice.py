@@ -12,6 +12,7 @@ from pathlib import Path
 from types import ModuleType
 
 from fleetsim.load.scenario import load_scenario_dir
+from fleetsim.planners import GreedyPlanner
 from fleetsim.recording.artifacts import write_run_artifacts
 from fleetsim.scenario import ScenarioSettings
 from fleetsim.sim.diagnosis import REASONS
@@ -32,7 +33,7 @@ def test_every_stuck_vehicle_of_the_dense_lattice_is_explained_and_drawn(tmp_pat
     lattice = lattice_module()
     folder = lattice.write_lattice_scenario(tmp_path / "lattice", 21, 30, seed=1)
     scenario = load_scenario_dir(folder, settings=ScenarioSettings(time_limit=600.0))
-    result = run_scenario(scenario, lattice.GreedyPlanner())
+    result = run_scenario(scenario, GreedyPlanner())
     assert result.status == "failed" and result.ended in ("deadlock", "time-limit")
     paths = write_run_artifacts(tmp_path / "run", result, scenario=scenario)
     document = json.loads(Path(paths["result"]).read_text(encoding="utf-8"))

@@ -13,7 +13,7 @@ from scenario_factory import make_scenario
 
 from fleetsim.enums import Direction, Shape
 from fleetsim.layout import Layout, Segment
-from fleetsim.planners import BFSPlanner, ReservingPlanner
+from fleetsim.planners import BFSPlanner, GreedyPlanner, ReservingPlanner
 from fleetsim.planning.protocol import FleetPlan, Response, RouteError
 from fleetsim.planning.snapshot import FleetSnapshot
 from fleetsim.recording.artifacts import write_run_artifacts
@@ -33,22 +33,6 @@ def hexagon(side: float = 4.0) -> tuple[Segment, ...]:
     """A ring of six two-way straights round a block, ids 1..6 counter-clockwise."""
     corners = [(side * math.cos(math.radians(60 * k)), side * math.sin(math.radians(60 * k))) for k in range(6)]
     return tuple(Segment(k + 1, Shape.STRAIGHT, Direction.BOTH, (corners[k], corners[(k + 1) % 6])) for k in range(6))
-
-
-class FixWhenFree(BFSPlanner):
-    """Breadth-first routes, legs fixed one at a time and only when no other vehicle holds a conflicting
-    segment: safe, and helpless when vehicles wait for each other."""
-
-    def fix_legs(self, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
-        plan = fleet.plans[task.vehicle_id]
-        index = len(plan.fixed_legs)
-        if index >= len(plan.legs):
-            return []
-        held = {leg.segment for vid, other in fleet.plans.items() if vid != task.vehicle_id for leg in other.fixed_legs}
-        if layout.conflicts(plan.legs[index].segment) & held:
-            return []
-        legs = tuple(replace(leg, fixed=True) if i == index else leg for i, leg in enumerate(plan.legs))
-        return [FleetPlan(task.vehicle_id, legs)]
 
 
 class NeverFixes(BFSPlanner):
@@ -123,7 +107,7 @@ def test_two_vehicles_head_on_in_a_corridor_wait_for_each_other_in_a_cycle(tmp_p
 def test_three_vehicles_round_a_block_form_one_cycle_of_three(tmp_path: Path) -> None:
     # Each stands on every other side of the ring and is sent past the vehicle ahead of it.
     scenario = make_scenario(tmp_path, hexagon(), "1,1,forward,,\n2,3,forward,,\n3,5,forward,,\n", "1,4,\n2,6,\n3,2,\n", deadlock_after=2.0)
-    result = run_scenario(scenario, FixWhenFree())
+    result = run_scenario(scenario, GreedyPlanner())
     assert result.ended == "deadlock"
     found = findings(result)
     assert {v: (f["reason"], f["blocked_by"]) for v, f in found.items()} == {1: ("waits-for", [2]), 2: ("waits-for", [3]), 3: ("waits-for", [1])}
@@ -136,7 +120,7 @@ def test_three_vehicles_round_a_block_form_one_cycle_of_three(tmp_path: Path) ->
 def test_two_vehicles_on_a_ring_with_room_between_them_do_not_deadlock(tmp_path: Path) -> None:
     # Narrowly not a cycle: with one of the three gone, each next leg is free in turn.
     scenario = make_scenario(tmp_path, hexagon(), "1,1,forward,,\n2,3,forward,,\n", "1,4,\n2,6,\n", deadlock_after=2.0)
-    result = run_scenario(scenario, FixWhenFree())
+    result = run_scenario(scenario, GreedyPlanner())
     assert (result.status, result.ended, result.diagnosis) == ("passed", "completed", None)
 
 
@@ -151,7 +135,7 @@ def dead_end(tmp_path: Path, third: bool, idle_task: bool = False) -> Scenario:
 
 
 def test_a_vehicle_with_no_tasks_parked_on_the_only_way_is_the_root_cause(tmp_path: Path) -> None:
-    result = run_scenario(dead_end(tmp_path, third=True), FixWhenFree())
+    result = run_scenario(dead_end(tmp_path, third=True), GreedyPlanner())
     found = findings(result)
     assert (found[1]["reason"], found[1]["blocked_by"], found[1]["idle"], found[1]["contested"]) == ("blocked-by-idle", [2], [2], [5])
     assert (found[3]["reason"], found[3]["blocked_by"], found[3]["chain"]) == ("waits-for", [1], [3, 1, 2])
@@ -167,7 +151,7 @@ def test_a_blocker_that_still_has_tasks_is_waited_for_not_blamed_as_idle(tmp_pat
     # Narrowly not blocked-by-idle: vehicle 2's own task is to stay where it is, so it is not idle yet...
     # ...but its task completes at once, so give it one it cannot finish: the far side of vehicle 1.
     scenario = make_scenario(tmp_path, line(7), "1,3,forward,,\n2,5,backward,,\n", "1,7,\n2,1,\n", deadlock_after=2.0)
-    result = run_scenario(scenario, FixWhenFree())
+    result = run_scenario(scenario, GreedyPlanner())
     found = findings(result)
     assert (found[1]["reason"], found[2]["reason"]) == ("waits-for", "waits-for")
     assert "idle" not in found[1]
@@ -201,7 +185,7 @@ def test_the_headline_tells_one_root_cause_in_full_and_counts_the_others(tmp_pat
 
 def test_a_planner_that_fixes_the_free_leg_in_time_is_not_stuck(tmp_path: Path) -> None:
     scenario = make_scenario(tmp_path, line(5), "1,1,forward,,\n2,5,backward,,\n", "1,2,\n2,4,\n", deadlock_after=2.0)
-    assert run_scenario(scenario, FixWhenFree()).status == "passed"
+    assert run_scenario(scenario, GreedyPlanner()).status == "passed"
 
 
 def test_a_planner_that_answers_only_route_errors_says_so_in_the_headline(tmp_path: Path) -> None:
@@ -258,7 +242,7 @@ def test_a_timeout_with_a_vehicle_standing_still_is_not_called_moving(tmp_path: 
 
 
 def test_the_report_lists_root_causes_cycles_and_one_line_per_vehicle(tmp_path: Path) -> None:
-    result = run_scenario(dead_end(tmp_path, third=True), FixWhenFree())
+    result = run_scenario(dead_end(tmp_path, third=True), GreedyPlanner())
     report = failure_report(result, heading="dead end").splitlines()
     assert report[0].startswith("deadlock at t=") and "vehicle 2 (no tasks left) stands on segment 5" in report[0]
     assert "    root cause: vehicle 2 (no tasks left) stands on segment 5, which vehicle 1 needs" in report
@@ -269,7 +253,7 @@ def test_the_report_lists_root_causes_cycles_and_one_line_per_vehicle(tmp_path: 
 
 def test_the_failure_picture_draws_who_waits_for_whom(tmp_path: Path) -> None:
     scenario = make_scenario(tmp_path, hexagon(), "1,1,forward,,\n2,3,forward,,\n3,5,forward,,\n", "1,4,\n2,6,\n3,2,\n", deadlock_after=2.0)
-    result = run_scenario(scenario, FixWhenFree())
+    result = run_scenario(scenario, GreedyPlanner())
     picture = failure_picture(scenario, result)
     assert picture is not None
     svg = picture[1]
@@ -282,7 +266,7 @@ def test_the_failure_picture_draws_who_waits_for_whom(tmp_path: Path) -> None:
 
 def test_a_wait_outside_a_cycle_is_drawn_in_the_plain_colour(tmp_path: Path) -> None:
     scenario = dead_end(tmp_path, third=True)
-    result = run_scenario(scenario, FixWhenFree())
+    result = run_scenario(scenario, GreedyPlanner())
     picture = failure_picture(scenario, result)
     assert picture is not None
     assert '<g class="wait-for" data-from="3" data-to="1">' in picture[1]
@@ -302,7 +286,7 @@ def test_the_recording_shows_the_wait_for_relations_at_the_failure_time(tmp_path
     from mcap_ros2.reader import read_ros2_messages
 
     scenario = make_scenario(tmp_path / "s", hexagon(), "1,1,forward,,\n2,3,forward,,\n3,5,forward,,\n", "1,4,\n2,6,\n3,2,\n", deadlock_after=2.0)
-    result = run_scenario(scenario, FixWhenFree())
+    result = run_scenario(scenario, GreedyPlanner())
     paths = write_run_artifacts(tmp_path / "run", result, scenario=scenario)
     markers = [(m.log_time_ns, marker) for m in read_ros2_messages(paths["mcap"], topics=["/fleetsim/stuck"]) for marker in m.ros_msg.markers]
     assert {time for time, _ in markers} == {round(result.sim_time * 1e9)}

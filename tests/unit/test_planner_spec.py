@@ -200,7 +200,7 @@ def test_a_missing_attribute_lists_public_names_of_the_module() -> None:
     message = spec_error("fleetsim.planners:ReservingPlaner")
     assert "'fleetsim.planners' has no attribute 'ReservingPlaner'" in message
     assert "did you mean 'ReservingPlanner'?" in message
-    assert "it has BFSPlanner, ReservingPlanner" in message
+    assert "it has BFSPlanner, GreedyPlanner, ReservingPlanner" in message
 
 
 def test_a_missing_attribute_inside_a_class_names_the_class(project: WriteModule) -> None:
