@@ -336,7 +336,7 @@ def test_long_bad_value_is_shortened(tmp_path: Path) -> None:
     with pytest.raises(LockFileError) as caught:
         HashLock.load(path)
     assert "hashes = [0, 1, 2" in str(caught.value) and " ... must be a JSON object" in str(caught.value)
-    assert "99" not in str(caught.value)
+    assert "99" not in str(caught.value).removeprefix(str(path))  # (the temporary path may hold a 99)
 
 
 # --- comparing runs --------------------------------------------------------------------------------
