@@ -7,19 +7,23 @@ conflict set holds no other vehicle's fixed leg, so the reservation check never 
 
 Progress comes from priorities. A vehicle with a task ranks by how long it has worked on its current
 task (the longest first; ties by id, so at the start the order is the vehicles' ids); a vehicle with no
-tasks left ranks last. Three rules use the ranking:
+tasks left ranks last. The rules, in the order a blocked vehicle tries them:
 
 - *Stop only where you do not block.* Legs fixed in one go end at the goal or on a leg that no
-  higher-ranked vehicle's next legs come near; a vehicle never commits to wait where a higher-ranked one
-  is about to drive. A lower-ranked vehicle's plans are no reason to stop short.
-- *Make way.* A vehicle that stands blocked by a lower-ranked vehicle standing still (or by one with no
-  tasks left) moves it away: the planner returns a plan for the blocker too, whose fixed legs take it to
-  the nearest place off the blocked vehicle's route (a passing place, a side aisle, the other way round a
-  loop), and then on to its own goal. Idle vehicles near a route are moved before anyone arrives.
-- *Look for a way round.* A vehicle that still cannot fix anything looks for another route after 2 s,
-  then at doubling intervals (up to 16 s), counting the segments others hold as nearly impassable.
+  higher-ranked vehicle's next legs come near, and never next to the exit of a vehicle that stands
+  further along the route (it would be shut in). A lower-ranked vehicle's plans are no reason to stop.
+- *Make way.* A vehicle that stands blocked by lower-ranked vehicles standing still moves them away:
+  the planner returns plans for them too, whose fixed legs take them to the nearest place off its route
+  (moving the vehicles in their way first, two deep), and then on to their goals. Idle vehicles near a
+  route are moved before anyone arrives. When the blockers cannot move (a dead end behind them), the
+  vehicle steps aside itself and waits off their way until they have moved.
+- *Move on.* A vehicle whose way is free but that has nowhere to stop moves on anyway after 5 s.
+- *Look for a way round* after 2 s, then at doubling intervals (up to 16 s), counting the segments
+  others hold as nearly impassable; taken only when at most 1.5 times (+10 m) the way it replaces.
+- *Dance.* When a few vehicles stay stuck in each other's way, a joint search finds single-leg moves
+  that bring one of them to its goal, and they drive them in order (:mod:`fleetsim.planners.choreography`).
 
-The highest-ranked vehicle therefore always moves, makes another move, or finds a way round; when it
+The highest-ranked vehicle therefore always moves, makes others move, or finds a way round; when it
 reaches its goal it drops in rank and the next one is highest. Searches are deterministic (ties broken
 by state, never by hashing).
 """
@@ -67,10 +71,6 @@ class ReservingPlanner:
     dance_retry = 30.0  # seconds before a vehicle whose dance could not be found looks for one again
     detour_limit = 4_000  # states a search for a way round looks at, at most
     detour_stretch, detour_slack = 1.5, 10.0  # a way round at most this much longer (x, + m) is taken
-    # A* weight on the straight-line estimate: above 1 a search looks at far fewer states in a busy fleet
-    # (the penalties make true costs exceed straight lines) for routes at most this much longer.
-    route_greed = 1.0
-    ignore_blocked_ahead = False
     dance_patience = 20.0  # seconds without a move done before a dance is given up
 
     def __init__(self) -> None:
@@ -207,7 +207,6 @@ class ReservingPlanner:
             other != vehicle_id
             and self._rank(other, fleet) < mine
             and not self._keep_clear(other, fleet)
-            and not (self.ignore_blocked_ahead and other in self._blocked and self._standing(other, fleet))
             for other in index.ahead(segment)
         )
 
@@ -513,12 +512,7 @@ class ReservingPlanner:
 
         capability = fleet.vehicles[vehicle_id].type.turn_capability
         start = (last.segment, last.traverse, last.progress)
-        straight = straight_line_estimate(layout, task.goal_segment)
-        greed = self.route_greed
-
-        def estimate(segment: int, traverse: Traverse) -> float:
-            return greed * straight(segment, traverse)
-
+        estimate = straight_line_estimate(layout, task.goal_segment)
         limit = self.detour_limit if avoid_held else None
         path = shortest_route(layout, capability, start, task.goal_segment, task.goal_progress, cost, estimate, limit)
         return None if path is None else legs_along(path, task, task.goal_progress)
