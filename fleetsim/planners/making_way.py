@@ -18,6 +18,7 @@ from fleetsim.enums import JointKind, TurnCapability
 from fleetsim.layout.layout import Layout
 from fleetsim.layout.reachability import State, next_steps, state_key
 from fleetsim.planners.fleet_index import FleetIndex
+from fleetsim.planners.routing import rebuild_path
 
 __all__ = ["WayOut", "ways_out"]
 
@@ -60,7 +61,7 @@ def ways_out(
             continue
         looked += 1
         if state != start and state[0] not in avoid and not index.holders(vehicle, state[0]):
-            path = _path(came_from, state)
+            path = rebuild_path(came_from, state)
             crossing = sorted({other for s, _, _ in path for other in index.holders(vehicle, s)})
             found.append(WayOut(tuple(path), tuple(crossing), index.routes_near(vehicle, state[0]), spent))
             continue  # a place to wait: no need to drive on through it
@@ -77,10 +78,3 @@ def ways_out(
                 heapq.heappush(heap, (total, state_key(following), following))
     return sorted(found, key=lambda way: (bool(way.crossing), way.routes_near, way.cost, state_key(way.path[-1])))
 
-
-def _path(came_from: dict[State, State], end: State) -> list[State]:
-    path = [end]
-    while path[-1] in came_from:
-        path.append(came_from[path[-1]])
-    path.reverse()
-    return path[1:]

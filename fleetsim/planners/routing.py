@@ -25,6 +25,7 @@ __all__ = [
     "breadth_first_route",
     "legs_along",
     "mark_goal_on_fixed",
+    "rebuild_path",
     "next_states",
     "next_steps",
     "shortest_route",
@@ -35,7 +36,8 @@ Cost = Callable[[int, Traverse, JointKind], float]  # (segment entered, its trav
 Estimate = Callable[[int, Traverse], float]  # a lower bound of the cost from a state to the goal
 
 
-def _rebuild(came_from: dict[State, State], end: State) -> list[State]:
+def rebuild_path(came_from: dict[State, State], end: State) -> list[State]:
+    """The states from the search's start (excluded) to ``end``, following ``came_from`` back."""
     path = [end]
     while path[-1] in came_from:
         path.append(came_from[path[-1]])
@@ -56,7 +58,7 @@ def breadth_first_route(layout: Layout, capability: TurnCapability, start: State
             seen.add(following)
             came_from[following] = state
             if following[0] == goal:
-                return _rebuild(came_from, following)
+                return rebuild_path(came_from, following)
             frontier.append(following)
     return None
 
@@ -114,7 +116,7 @@ def shortest_route(
         if budget < 0:
             return None
         if state != start and state[0] == goal and (not must_match or state[2] is arrive):
-            return _rebuild(came_from, state)
+            return rebuild_path(came_from, state)
         for following, joint in next_steps(layout, capability, state):
             total = spent + cost(following[0], following[1], joint)
             if total < best.get(following, infinity):
