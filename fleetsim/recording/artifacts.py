@@ -20,7 +20,8 @@ from typing import Any
 
 from fleetsim.load.text import write_text_atomically
 from fleetsim.recording.picture import failure_picture, stuck_details
-from fleetsim.recording.recorder import record_mcap, rviz_config
+from fleetsim.recording.recorder import record_mcap
+from fleetsim.recording.rviz import rviz_config
 from fleetsim.scenario import Scenario
 from fleetsim.sim.result import RunResult
 

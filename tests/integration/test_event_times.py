@@ -24,7 +24,7 @@ from fleetsim.planners import BFSPlanner
 from fleetsim.planning.protocol import FleetLeg, FleetPlan, Response, RouteError
 from fleetsim.planning.snapshot import FleetSnapshot
 from fleetsim.recording.artifacts import write_run_artifacts
-from fleetsim.recording.recorder import framed_view
+from fleetsim.recording.rviz import framed_view
 from fleetsim.scenario import Scenario, Task
 from fleetsim.sim.loop import run_scenario
 
