@@ -9,7 +9,8 @@ and only the vehicles whose plans changed are counted again.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections import Counter
+from collections.abc import Iterable, Mapping, Sequence
 
 from fleetsim.enums import Traverse
 from fleetsim.layout.layout import Layout
@@ -32,6 +33,15 @@ def _add(table: dict[object, Counts], key: object, vehicle: int, amount: int) ->
         del counts[vehicle]
         if not counts:
             del table[key]
+
+
+def _parts(plan: FleetPlan, ahead: int) -> tuple[Sequence[object], ...]:
+    """What a plan counts: its fixed legs', its next ``ahead`` legs' and all its legs' segments, and its
+    drives (segment, traverse)."""
+    segments = [leg.segment for leg in plan.legs]
+    fixed = len(plan.fixed_legs)
+    drives = [(leg.segment, leg.traverse) for leg in plan.legs]
+    return (segments[:fixed], segments[:ahead], segments, drives)
 
 
 class FleetIndex:
@@ -59,33 +69,61 @@ class FleetIndex:
         same response decides sees it); the plan it replaces, for :meth:`restore`."""
         old = self._seen.get(vehicle)
         if old is not plan:
-            if old is not None:
-                self._count(vehicle, old, -1)
-            self._count(vehicle, plan, 1)
+            if old is None:
+                self._count(vehicle, plan, 1)
+            else:
+                self._recount(vehicle, old, plan)
             self._seen[vehicle] = plan
         return old
 
     def restore(self, vehicle: int, old: FleetPlan | None) -> None:
         """Undo :meth:`assume`."""
         current = self._seen.get(vehicle)
-        if current is not None and current is not old:
-            self._count(vehicle, current, -1)
-            del self._seen[vehicle]
-        if old is not None and current is not old:
+        if current is old:
+            return
+        if current is None:
+            assert old is not None
             self._count(vehicle, old, 1)
+        elif old is None:
+            self._count(vehicle, current, -1)
+        else:
+            self._recount(vehicle, current, old)
+        if old is None:
+            self._seen.pop(vehicle, None)
+        else:
             self._seen[vehicle] = old
 
     def _count(self, vehicle: int, plan: FleetPlan, amount: int) -> None:
-        fixed = len(plan.fixed_legs)
-        tables: tuple[dict[object, Counts], ...] = (self.fixed_near, self.ahead_near, self.route_near)  # type: ignore[assignment]
-        for index, leg in enumerate(plan.legs):
-            _add(self.drives, (leg.segment, leg.traverse), vehicle, amount)  # type: ignore[arg-type]
-            for near in self._conflicts[leg.segment]:
-                if index < fixed:
-                    _add(tables[0], near, vehicle, amount)
-                if index < self._ahead:
-                    _add(tables[1], near, vehicle, amount)
-                _add(tables[2], near, vehicle, amount)
+        self._apply(vehicle, _parts(plan, self._ahead), amount)
+
+    def _recount(self, vehicle: int, old: FleetPlan, new: FleetPlan) -> None:
+        """Count ``new`` instead of ``old``: only the legs that differ (a plan mostly changes by a leg
+        fixed or a leg driven)."""
+        ahead = self._ahead
+        for table, before, after in zip(self._tables(), _parts(old, ahead), _parts(new, ahead)):
+            if before == after:
+                continue
+            delta = Counter(after)
+            delta.subtract(before)
+            self._add_all(table, vehicle, delta.items(), near=table is not self.drives)
+
+    def _apply(self, vehicle: int, parts: tuple[Sequence[object], ...], amount: int) -> None:
+        for table, keys in zip(self._tables(), parts):
+            self._add_all(table, vehicle, ((key, amount) for key in keys), near=table is not self.drives)
+
+    def _tables(self) -> tuple[dict[object, Counts], ...]:
+        return (self.fixed_near, self.ahead_near, self.route_near, self.drives)  # type: ignore[return-value]
+
+    def _add_all(self, table: dict[object, Counts], vehicle: int, changes: Iterable[tuple[object, int]], *, near: bool) -> None:
+        conflicts = self._conflicts
+        for key, amount in changes:
+            if not amount:
+                continue
+            if near:
+                for segment in conflicts[key]:  # type: ignore[index]
+                    _add(table, segment, vehicle, amount)
+            else:
+                _add(table, key, vehicle, amount)
 
     # -- questions -----------------------------------------------------------------------------------
 
@@ -96,7 +134,12 @@ class FleetIndex:
 
     def holders(self, vehicle: int, segment: int) -> list[int]:
         """The other vehicles whose fixed legs conflict with ``segment``, by id."""
-        return sorted(other for other in self.fixed_near.get(segment, ()) if other != vehicle)
+        counts = self.fixed_near.get(segment)
+        if not counts:
+            return []
+        if len(counts) == 1:
+            return [] if vehicle in counts else list(counts)
+        return sorted(other for other in counts if other != vehicle)
 
     def ahead(self, segment: int) -> Counts:
         """Vehicles whose next legs come near ``segment`` (read only)."""
