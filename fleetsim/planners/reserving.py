@@ -56,13 +56,12 @@ class ReservingPlanner:
     turnaround_penalty = 10.0  # metres added for a cusp: stopping to reverse or turn round takes time
     oncoming_penalty = 50.0  # metres added for driving a segment that another plan drives the other way
     parked_penalty = 1_000.0  # metres added near a vehicle with no tasks left
-    held_penalty = 200.0  # metres added, when looking for a way round, near legs others have fixed
     ahead_legs = 6  # how many of a vehicle's next legs others keep clear of when they stop
     push_after = 1.0  # seconds a vehicle stands blocked before it moves a lower-ranked blocker away
     stall_after = 5.0  # seconds a vehicle with a free way but nowhere to stop waits before it moves on anyway
     push_cooldown = 5.0  # seconds before a vehicle that was moved away is moved again
     aside_for = 30.0  # seconds a vehicle that stepped aside keeps off the way of those it stepped aside for
-    replan_interval = 2.0  # seconds a blocked, standing vehicle first waits before looking for another route
+    replan_interval = 3.0  # seconds a blocked, standing vehicle first waits before looking for another route
     max_replan_interval = 16.0  # the longest wait between looks
     search_limit = 4_000  # states a search for a place to make way in looks at, at most
     dance_after = 6.0  # seconds a vehicle stands blocked before a few stuck vehicles are moved leg by leg
@@ -70,7 +69,8 @@ class ReservingPlanner:
     dance_limit = 20_000  # joint positions the search for their moves looks at, at most
     dance_retry = 30.0  # seconds before a vehicle whose dance could not be found looks for one again
     detour_limit = 4_000  # states a search for a way round looks at, at most
-    detour_stretch, detour_slack = 1.5, 10.0  # a way round at most this much longer (x, + m) is taken
+    detour_stretch, detour_slack = 1.1, 2.0  # a way round at most this much longer (x, + m) is taken
+    fix_ahead = 4.0  # metres beyond its braking distance a vehicle fixes its way, at most
     dance_patience = 20.0  # seconds without a move done before a dance is given up
 
     def __init__(self) -> None:
@@ -86,8 +86,9 @@ class ReservingPlanner:
         self._group: frozenset[int] = frozenset()  # the dance's vehicles (also those that keep still)
         self._dance_time = -1.0  # when the dance last took a step
         self._no_dance: dict[int, float] = {}  # vehicle -> when it may look for a dance again
-        # vehicle -> (until when, where not to stop, (whom, on which segment)) while it steps aside for others
-        self._aside: dict[int, tuple[float, frozenset[int], tuple[tuple[int, int], ...]]] = {}
+        # vehicle -> (until when, where not to stop, (whom, on which segment), near its way) while it steps
+        # aside for others
+        self._aside: dict[int, tuple[float, frozenset[int], tuple[tuple[int, int], ...], frozenset[int]]] = {}
 
     def _conflicts_of(self, segment: int) -> frozenset[int]:
         assert self._layout is not None
@@ -113,7 +114,7 @@ class ReservingPlanner:
         marked = mark_goal_on_fixed(fixed, task, check_progress=True)
         if marked is not None:
             return [*danced, FleetPlan(vehicle_id, marked)]
-        route = self._route(task, fixed[-1], fleet, layout, avoid_held=False)
+        route = self._route(task, fixed[-1], fleet, layout)
         if route is None:
             last = fixed[-1]
             arrive = f" arriving {task.goal_progress.value}" if task.goal_progress is not None else ""
@@ -161,25 +162,47 @@ class ReservingPlanner:
     # -- fixing --------------------------------------------------------------------------------------
 
     def _fix(self, plan: FleetPlan, fleet: FleetSnapshot, index: FleetIndex, *, anywhere: bool = False) -> FleetPlan:
-        """Fix the longest run of free planned legs that ends at the goal or where waiting blocks no
-        higher-ranked vehicle's next legs (``anywhere``: wherever the free run ends)."""
+        """Fix the free planned legs up to the first place past the horizon where waiting blocks no
+        higher-ranked vehicle's next legs, else the longest free run that ends at the goal or at such a
+        place (``anywhere``: wherever the free run ends)."""
         vehicle_id = plan.vehicle_id
         legs = plan.legs
         first = len(plan.fixed_legs)
-        take = first
-        while take < len(legs) and not index.others_fixed_near(vehicle_id, legs[take].segment):
-            take += 1
-        if take < len(legs) and not anywhere:
+        lengths = self._lengths
+        ahead = sum(lengths[leg.segment] for leg in legs[1:first])
+        horizon = self._horizon(vehicle_id, fleet)
+        if ahead >= horizon:
+            return plan  # it has enough fixed before it to drive on at speed
+        end = first
+        while end < len(legs) and not index.others_fixed_near(vehicle_id, legs[end].segment):
+            end += 1
+        take = end
+        if not anywhere:
             mine = self._rank(vehicle_id, fleet)
-            exits = self._exits(vehicle_id, legs[take:], fleet, index)
-            while take > first and (
-                legs[take - 1].segment in exits or not self._may_wait(vehicle_id, mine, legs[take - 1].segment, fleet, index)
-            ):
-                take -= 1
+
+            def may_stop(after: int) -> bool:
+                exits = self._exits(vehicle_id, legs[after : after + self.ahead_legs], fleet, index)
+                segment = legs[after - 1].segment
+                return segment not in exits and self._may_wait(vehicle_id, mine, segment, fleet, index)
+
+            for k in range(first, end):
+                ahead += lengths[legs[k].segment]
+                if ahead >= horizon and k + 1 < end and may_stop(k + 1):
+                    take = k + 1
+                    break
+            else:
+                if take < len(legs):
+                    while take > first and not may_stop(take):
+                        take -= 1
         if take == first:
             return plan
         committed = tuple(replace(leg, fixed=True) for leg in legs[first:take])
         return FleetPlan(vehicle_id, (*legs[:first], *committed, *legs[take:]))
+
+    def _horizon(self, vehicle_id: int, fleet: FleetSnapshot) -> float:
+        """How far ahead a vehicle fixes its way: its braking distance from full speed and a margin."""
+        kind = fleet.vehicles[vehicle_id].type
+        return kind.max_speed**2 / (2.0 * kind.acceleration) + self.fix_ahead
 
     def _exits(self, vehicle_id: int, beyond: tuple[FleetLeg, ...], fleet: FleetSnapshot, index: FleetIndex) -> set[int]:
         """Segments near the next legs of vehicles that stand (or will stand) in the way further along:
@@ -215,7 +238,7 @@ class ReservingPlanner:
         aside = self._aside.get(vehicle_id)
         if aside is None:
             return frozenset()
-        until, region, where = aside
+        until, region, where, _ = aside
         if fleet.time >= until or all(fleet.vehicles[other].segment != segment for other, segment in where):
             del self._aside[vehicle_id]
             return frozenset()
@@ -261,7 +284,8 @@ class ReservingPlanner:
                 if plans:
                     self._assumed(plans, index)
                     where = tuple((other, fleet.vehicles[other].segment) for other in standing)
-                    self._aside[vehicle_id] = (fleet.time + self.aside_for, frozenset(keep_clear), where)
+                    way = frozenset(self._near(plan, layout))
+                    self._aside[vehicle_id] = (fleet.time + self.aside_for, frozenset(keep_clear), where, way)
                     return self._committed(plans, fleet)
         if fleet.time - since >= self.dance_after - 1e-9 and self._dance is None and fleet.time >= self._no_dance.get(vehicle_id, -math.inf):
             dance = self._start_dance(task, plan, fleet, layout, index)
@@ -270,8 +294,8 @@ class ReservingPlanner:
             self._no_dance[vehicle_id] = fleet.time + self.dance_retry
         if vehicle_id not in self._haven and not self._keep_clear(vehicle_id, fleet) and self._should_look_around(vehicle_id, fleet):
             # (Not while it makes way for others: a way round would undo its move.)
-            detour = self._route(task, plan.fixed_legs[-1], fleet, layout, avoid_held=True)
-            if detour is not None and detour != plan.legs[len(plan.fixed_legs) :] and self._worth_it(detour, plan):
+            detour = self._route(task, plan.fixed_legs[-1], fleet, layout, within=self._worth(plan))
+            if detour is not None and detour != plan.legs[len(plan.fixed_legs) :]:
                 rerouted = FleetPlan(vehicle_id, (*plan.fixed_legs, *detour))
                 return [self._fix(rerouted, fleet, index)]
         return []
@@ -283,11 +307,11 @@ class ReservingPlanner:
             index.assume(plan.vehicle_id, plan)
         return plans
 
-    def _worth_it(self, detour: tuple[FleetLeg, ...], plan: FleetPlan) -> bool:
-        """A way round is taken only when it is not much longer than the way it replaces."""
+    def _worth(self, plan: FleetPlan) -> float:
+        """What a way round may cost at most: not much more than the way it replaces."""
         lengths = self._lengths
         now = sum(lengths[leg.segment] for leg in plan.legs[len(plan.fixed_legs) :])
-        return sum(lengths[leg.segment] for leg in detour) <= self.detour_stretch * now + self.detour_slack
+        return self.detour_stretch * now + self.detour_slack
 
     def _committed(self, plans: list[FleetPlan], fleet: FleetSnapshot) -> list[FleetPlan]:
         for plan in plans:
@@ -301,17 +325,23 @@ class ReservingPlanner:
         return {near for leg in plan.legs for near in layout.conflicts(leg.segment)}
 
     def _clear_idle_ahead(self, vehicle_id: int, plan: FleetPlan, fleet: FleetSnapshot, layout: Layout, index: FleetIndex) -> list[FleetPlan]:
-        """Vehicles with no tasks left standing near this vehicle's next legs are moved away early."""
+        """Vehicles with no tasks left standing near this vehicle's next legs are moved away early, and
+        those it stepped aside for (they do not move by themselves once it is out of their way)."""
         moved: list[FleetPlan] = []
         taken: set[int] = {vehicle_id}
-        for leg in plan.legs[1 : self.ahead_legs]:
-            for other in index.holders(vehicle_id, leg.segment):
-                if other in taken or fleet.tasks.get(other):
-                    continue
-                plans = self._evacuate(other, self._near(plan, layout), (math.inf, -1), fleet, layout, index, taken, depth=0)
-                if plans:
-                    moved += self._assumed(plans, index)
-                    taken |= {p.vehicle_id for p in plans}
+        ahead = [other for leg in plan.legs[1 : self.ahead_legs] for other in index.holders(vehicle_id, leg.segment) if not fleet.tasks.get(other)]
+        near = self._near(plan, layout) if ahead else set()
+        idle = [(other, near) for other in ahead]
+        aside = self._aside.get(vehicle_id)
+        if aside is not None:
+            idle += [(other, set(aside[3])) for other, _ in aside[2] if not fleet.tasks.get(other)]
+        for other, avoid in idle:
+            if other in taken:
+                continue
+            plans = self._evacuate(other, avoid, (math.inf, -1), fleet, layout, index, taken, depth=0)
+            if plans:
+                moved += self._assumed(plans, index)
+                taken |= {p.vehicle_id for p in plans}
         return self._committed(moved, fleet) if moved else moved
 
     def _evacuate(
@@ -385,7 +415,7 @@ class ReservingPlanner:
         onward: tuple[FleetLeg, ...] = ()
         queue = self._open_tasks(vehicle_id, current, fleet)
         if queue:
-            route = self._route(queue[0], away[-1], fleet, layout, avoid_held=False)
+            route = self._route(queue[0], away[-1], fleet, layout)
             if route is None:
                 return None  # never strand a vehicle where its task cannot be reached
             onward = route
@@ -445,7 +475,7 @@ class ReservingPlanner:
                 continue
             onward: tuple[FleetLeg, ...] = ()
             if queue:
-                route = self._route(queue[0], legs[-1], fleet, layout, avoid_held=False)
+                route = self._route(queue[0], legs[-1], fleet, layout)
                 if route is None:
                     return []
                 onward = route
@@ -484,8 +514,10 @@ class ReservingPlanner:
     # -- routing -------------------------------------------------------------------------------------
 
     def _route(
-        self, task: Task, last: FleetLeg, fleet: FleetSnapshot, layout: Layout, *, avoid_held: bool
+        self, task: Task, last: FleetLeg, fleet: FleetSnapshot, layout: Layout, *, within: float | None = None
     ) -> tuple[FleetLeg, ...] | None:
+        """The cheapest route to the task's goal; ``within`` a cost, as a way round (off every segment
+        near legs others have fixed), else by any segment."""
         vehicle_id = task.vehicle_id
         index = self._refresh(fleet, layout)
         parked: set[int] = set()
@@ -493,9 +525,8 @@ class ReservingPlanner:
             if other != vehicle_id and not queue:
                 parked |= layout.conflicts(fleet.vehicles[other].segment)
         lengths = self._lengths
-        turnaround, oncoming, near_parked, held = (
-            self.turnaround_penalty, self.oncoming_penalty, self.parked_penalty, self.held_penalty
-        )
+        turnaround, oncoming, near_parked = self.turnaround_penalty, self.oncoming_penalty, self.parked_penalty
+        avoid_held = within is not None
         others_drive, others_fixed_near = index.others_drive, index.others_fixed_near
 
         def cost(segment: int, traverse: Traverse, joint: JointKind) -> float:
@@ -507,14 +538,14 @@ class ReservingPlanner:
             if segment in parked:
                 total += near_parked
             if avoid_held and others_fixed_near(vehicle_id, segment):
-                total += held
+                return math.inf
             return total
 
         capability = fleet.vehicles[vehicle_id].type.turn_capability
         start = (last.segment, last.traverse, last.progress)
         estimate = straight_line_estimate(layout, task.goal_segment)
         limit = self.detour_limit if avoid_held else None
-        path = shortest_route(layout, capability, start, task.goal_segment, task.goal_progress, cost, estimate, limit)
+        path = shortest_route(layout, capability, start, task.goal_segment, task.goal_progress, cost, estimate, limit, within)
         return None if path is None else legs_along(path, task, task.goal_progress)
 
     def _should_look_around(self, vehicle_id: int, fleet: FleetSnapshot) -> bool:

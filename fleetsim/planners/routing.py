@@ -93,6 +93,7 @@ def shortest_route(
     cost: Cost,
     estimate: Estimate | None = None,
     limit: int | None = None,
+    bound: float | None = None,
 ) -> list[State] | None:
     """Least total ``cost`` from ``start`` to segment ``goal`` (``start`` itself excluded).
 
@@ -100,7 +101,9 @@ def shortest_route(
     ``estimate(segment, traverse)``, if given, a consistent lower bound of the cost still to come (A*;
     see :func:`straight_line_estimate`), else 0 (Dijkstra). ``arrive`` is the required progress on the
     goal segment; a vehicle that turns in place can always meet it on the last leg, so only a curve-only
-    vehicle's progress is constrained.
+    vehicle's progress is constrained. A segment whose cost is infinite is never driven. The search
+    gives up (``None``) after looking at ``limit`` states, or once every route left would cost more than
+    ``bound``.
     """
     must_match = arrive is not None and capability is TurnCapability.CURVE
     best: dict[State, float] = {start: 0.0}
@@ -108,8 +111,11 @@ def shortest_route(
     heap: list[tuple[float, tuple[int, int, int], float, State]] = [(0.0, state_key(start), 0.0, start)]
     infinity = math.inf
     budget = infinity if limit is None else limit
+    ceiling = infinity if bound is None else bound
     while heap:
-        _, _, spent, state = heapq.heappop(heap)
+        least, _, spent, state = heapq.heappop(heap)
+        if least > ceiling:
+            return None
         if spent > best.get(state, infinity):
             continue
         budget -= 1

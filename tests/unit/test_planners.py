@@ -8,6 +8,7 @@ leads every vehicle to its goals.
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 from pathlib import Path
 
@@ -165,9 +166,15 @@ def test_reserving_planner_sends_the_second_vehicle_through_the_passing_bay() ->
     assert [leg.segment for leg in controller.plans[2].legs] == [9, 14, 13, 12, 11, 10, 3, 2, 1]
 
 
+class FarSighted(ReservingPlanner):
+    """Fixes as far as the way is free (no horizon), so that the rule of where to stop shows alone."""
+
+    fix_ahead = math.inf
+
+
 def test_reserving_planner_only_stops_where_no_other_plan_comes_near() -> None:
     controller = FleetController(example("corridor-passing-bay"))
-    planner = ReservingPlanner()
+    planner = FarSighted()
     controller.planning_round(planner, 0.0)
     controller.planning_round(planner, 0.1)
     # Vehicle 1 could fix up to segment 7, but 7 lies next to the bay that vehicle 2 will drive: it
@@ -178,10 +185,29 @@ def test_reserving_planner_only_stops_where_no_other_plan_comes_near() -> None:
 
 def test_reserving_planner_waits_while_another_vehicle_holds_the_junction() -> None:
     controller = FleetController(example("crossing"))
-    planner = ReservingPlanner()
+    planner = FarSighted()
     controller.planning_round(planner, 0.0)
     controller.planning_round(planner, 0.1)
     assert [len(plan.fixed_legs) for plan in controller.plans.values()] == [4, 1]
+
+
+@pytest.mark.parametrize("fix_ahead", [0.5, 4.0, 12.0])
+def test_reserving_planner_fixes_its_way_only_a_little_past_its_braking_distance(fix_ahead: float) -> None:
+    """A vehicle that holds its way far ahead makes others wait for reservations it does not need yet:
+    it fixes legs until the first place past its braking distance + ``fix_ahead`` where it may stop."""
+    whole = example("loop-one-way")  # vehicle 1 alone: every place is one where it may stop
+    scenario = replace(whole, vehicles=whole.vehicles[:1], tasks=tuple(t for t in whole.tasks if t.vehicle_id == 1))
+    controller = FleetController(scenario)
+    planner = type("Planner", (ReservingPlanner,), {"fix_ahead": fix_ahead})()
+    controller.planning_round(planner, 0.0)
+    controller.planning_round(planner, 0.1)
+    lengths = {sid: segment.length for sid, segment in scenario.layout.segments.items()}
+    for vehicle_id, plan in controller.plans.items():
+        kind = next(vehicle.type for vehicle in scenario.vehicles if vehicle.id == vehicle_id)
+        horizon = kind.max_speed**2 / (2 * kind.acceleration) + fix_ahead
+        ahead = [lengths[leg.segment] for leg in plan.fixed_legs[1:]]
+        assert sum(ahead[:-1]) < horizon <= sum(ahead), (vehicle_id, ahead, horizon)
+        assert len(plan.fixed_legs) < len(plan.legs)  # the goal is further than the horizon
 
 
 @pytest.mark.parametrize("planner_class", [BFSPlanner, ReservingPlanner])
