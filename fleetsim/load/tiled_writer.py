@@ -138,7 +138,7 @@ def _json_open(value: dict[str, object]) -> str:
 def _json_object(segment: Segment, frame: _Frame) -> dict[str, object]:
     (x, y), points = _pixel_polyline(segment, frame)
     return {
-        "id": segment.id, "name": "", "type": segment.shape.value, "visible": True, "rotation": 0,
+        "id": segment.id, "name": segment.name or "", "type": segment.shape.value, "visible": True, "rotation": 0,
         "width": 0, "height": 0, "x": x, "y": y,
         "polyline": [{"x": px, "y": py} for px, py in points],
         "properties": [{"name": "direction", "propertytype": "direction", "type": "string",
@@ -171,7 +171,8 @@ def _tmx_number(value: Number) -> str:
 def _tmx_object(segment: Segment, frame: _Frame) -> str:
     (x, y), points = _pixel_polyline(segment, frame)
     point_text = " ".join(f"{_tmx_number(px)},{_tmx_number(py)}" for px, py in points)
-    return (f'  <object id="{segment.id}" type={quoteattr(segment.shape.value)} '
+    name = f"name={quoteattr(segment.name)} " if segment.name else ""
+    return (f'  <object id="{segment.id}" {name}type={quoteattr(segment.shape.value)} '
             f'x="{_tmx_number(x)}" y="{_tmx_number(y)}">\n'
             "   <properties>\n"
             f'    <property name="direction" propertytype="direction" '
