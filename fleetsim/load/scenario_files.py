@@ -43,7 +43,7 @@ __all__ = [
     "read_vehicles_with_lines",
 ]
 
-MAP_FILE_NAMES = ("map.json", "map.tmj", "map.tmx")
+MAP_FILE_NAMES = ("map.json", "map.tmj", "map.tmx", "map.lif.json", "map.building.yaml")
 VEHICLES_FILE_NAME = "vehicles.csv"
 TASKS_FILE_NAME = "tasks.csv"
 
