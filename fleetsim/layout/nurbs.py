@@ -64,7 +64,7 @@ class Nurbs:
         if len(weight_array) != count:
             raise ValueError(f"{len(weight_array)} weights for {count} control points")
         if not np.all(np.isfinite(weight_array)) or np.any(weight_array <= 0):
-            raise ValueError(f"weights={list(weight_array)!r} must be finite and > 0")
+            raise ValueError(f"weights={[float(w) for w in weight_array]!r} must be finite and > 0")
         if not np.all(np.isfinite(points)):
             raise ValueError("control points must be finite")
         return cls(degree, knot_array, points, weight_array)

@@ -50,6 +50,9 @@ _SILENT = {  # descriptive members: nothing to model, nothing to warn about
     "edge property": {"vehicleTypeId", "mobileRobotTypes", "trajectory"},
     "node position": {"x", "y"},
 }
+# Values that restrict nothing (LIF's own defaults, or "anything goes"): fleetsim loses nothing by them.
+_HARMLESS: dict[str, object] = {"rotationAllowed": True, "reentryAllowed": True, "rotationAtStartNodeAllowed": "BOTH",
+                                "rotationAtEndNodeAllowed": "BOTH"}
 
 
 def is_lif_document(document: object) -> bool:
@@ -269,8 +272,9 @@ def _sampled(trajectory: JsonAt) -> tuple[Point, ...]:
 
 
 def _note_unknown(at: JsonAt, kind: str, notes: ImportNotes) -> None:
+    members = at.object_value()
     for key in at.keys():
-        if key not in _SILENT[kind]:
+        if key not in _SILENT[kind] and not (key in _HARMLESS and members[key] == _HARMLESS[key]):
             notes.note("not-modelled", f"{kind} attribute {key!r}", f"{at.pointer}/{key}")
 
 
