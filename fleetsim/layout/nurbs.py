@@ -115,11 +115,14 @@ def sample_nurbs(curve: Nurbs, tolerance: float = CHORD_TOLERANCE) -> tuple[tupl
 
     Every non-empty knot span starts as a few pieces; a piece whose curve, tested at a quarter, half and
     three quarters of its parameter range, strays farther than half ``tolerance`` from its chord is halved,
-    until none does. Repeated points, and points on the straight line between their neighbours (a
-    degree-1 curve's pieces), are dropped.
+    until none does. Repeated points, and points on the straight line between their neighbours, are
+    dropped. A degree-1 curve is exactly the polyline through its control points (weights do not bend
+    it), which is returned as it is, repeated points dropped.
     """
     if not (math.isfinite(tolerance) and tolerance > 0):
         raise ValueError(f"tolerance={tolerance!r} must be a positive number of metres")
+    if curve.degree == 1:
+        return _degree_one(curve)
     low, high = curve.domain
     breaks = np.unique(curve.knots[(curve.knots >= low) & (curve.knots <= high)])
     pieces = _START_PIECES_PER_DEGREE * curve.degree
@@ -149,4 +152,16 @@ def sample_nurbs(curve: Nurbs, tolerance: float = CHORD_TOLERANCE) -> tuple[tupl
         # A point whose neighbours' chord passes through it adds nothing (1 µm: float noise).
         inner = point_segment_distances(points[1:-1], points[:-2], points[2:]) > 1e-6
         points = points[np.concatenate([[True], inner, [True]])]
+    return tuple((float(x), float(y)) for x, y in points)
+
+
+def _degree_one(curve: Nurbs) -> tuple[tuple[float, float], ...]:
+    """The control points of a degree-1 curve that its domain reaches, repeated ones dropped."""
+    low, high = curve.domain
+    # Control point i is reached at knot i + 1; those whose knot lies outside the domain are not.
+    reached = curve.evaluate(curve.knots[1:-1].clip(low, high))
+    points = [reached[0]]
+    for point in reached[1:]:
+        if np.any(point != points[-1]):
+            points.append(point)
     return tuple((float(x), float(y)) for x, y in points)

@@ -296,7 +296,10 @@ def _segment(fields: ObjectFields, shape: Shape, placed: _Placed, header: _Heade
         msg = f"polyline has zero length (all {len(polyline)} points at {polyline[0]!r})"
         raise MapError(msg, where)
     direction = parse_direction(fields.properties.get("direction"), where)
-    names = (fields.name.strip(),) if fields.name and fields.name.strip() else ()
+    names: tuple[str, ...] = (fields.name.strip(),) if fields.name and fields.name.strip() else ()
+    other = fields.properties.get("other_name")  # the second name of a merged two-way LIF edge pair
+    if names and isinstance(other, str) and other.strip():
+        names += (other.strip(),)
     return Segment(fields.id, shape, direction,
                    _world_points(polyline, fields, placed.offset, header), names)
 

@@ -142,8 +142,15 @@ def _json_object(segment: Segment, frame: _Frame) -> dict[str, object]:
         "width": 0, "height": 0, "x": x, "y": y,
         "polyline": [{"x": px, "y": py} for px, py in points],
         "properties": [{"name": "direction", "propertytype": "direction", "type": "string",
-                        "value": segment.direction.value}],
+                        "value": segment.direction.value}, *_other_name(segment)],
     }
+
+
+def _other_name(segment: Segment) -> list[dict[str, str]]:
+    """A second name (the opposite LIF edge of a two-way segment) as the string property ``other_name``."""
+    if len(segment.names) < 2:
+        return []
+    return [{"name": "other_name", "type": "string", "value": segment.names[1]}]
 
 
 def _json_text(segments: list[Segment], frame: _Frame, explicit_scale: bool) -> str:
@@ -177,7 +184,8 @@ def _tmx_object(segment: Segment, frame: _Frame) -> str:
             "   <properties>\n"
             f'    <property name="direction" propertytype="direction" '
             f"value={quoteattr(segment.direction.value)}/>\n"
-            "   </properties>\n"
+            + "".join(f'    <property name="other_name" value={quoteattr(p["value"])}/>\n' for p in _other_name(segment))
+            + "   </properties>\n"
             f'   <polyline points="{point_text}"/>\n'
             "  </object>\n")
 
