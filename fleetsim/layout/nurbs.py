@@ -26,8 +26,8 @@ CHORD_TOLERANCE = 0.01  # metres: the farthest a sampled polyline may stray from
 # whose curve bends back on itself is not mistaken for a straight one by the chord test).
 _START_PIECES_PER_DEGREE = 2
 _MAX_REFINEMENTS = 40  # halvings of one piece; 2⁻⁴⁰ of a span is far below any tolerance
-_TEST_FRACTIONS = np.array([0.25, 0.5, 0.75])
-# The probes see a piece's curve at three points only; holding them to half the tolerance keeps the
+_TEST_FRACTIONS = np.arange(1, 8) / 8.0
+# The probes see a piece's curve at seven points only; holding them to half the tolerance keeps the
 # whole curve within it (the property test checks this against dense evaluation of random curves).
 _PROBE_SHARE = 0.5
 
@@ -113,8 +113,8 @@ def _basis(knots: FloatArray, p: int, span: np.ndarray, u: FloatArray) -> FloatA
 def sample_nurbs(curve: Nurbs, tolerance: float = CHORD_TOLERANCE) -> tuple[tuple[float, float], ...]:
     """A polyline along ``curve`` from its start to its end whose chords stay within ``tolerance``.
 
-    Every non-empty knot span starts as a few pieces; a piece whose curve, tested at a quarter, half and
-    three quarters of its parameter range, strays farther than half ``tolerance`` from its chord is halved,
+    Every non-empty knot span starts as a few pieces; a piece whose curve, tested at every eighth of its
+    parameter range, strays farther than half ``tolerance`` from its chord is halved,
     until none does. Repeated points, and points on the straight line between their neighbours, are
     dropped. A degree-1 curve is exactly the polyline through its control points (weights do not bend
     it), which is returned as it is, repeated points dropped.

@@ -112,7 +112,7 @@ def test_reversing_knots_and_control_points_traces_the_same_curve_backwards() ->
     assert np.allclose(forward.evaluate(u), backward.evaluate(1 - u)[:, :], atol=1e-12)
 
 
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=300, deadline=None)
 @given(
     degree=st.integers(1, 3),
     extra=st.integers(0, 3),
