@@ -71,6 +71,7 @@ class Shape(str, Enum):
     STRAIGHT = "straight"
     CURVE = "curve"
     S_CURVE = "s_curve"
+    PATH = "path"  # a free-form polyline: drawn freely, or imported (LIF edges, RMF lanes)
 
     def __str__(self) -> str:
         return self.value

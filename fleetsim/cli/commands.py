@@ -16,7 +16,8 @@ from fleetsim.load.scenario import load_scenario
 from fleetsim.load.scenario_files import did_you_mean
 from fleetsim.load.suite import discover_suites, load_suite
 from fleetsim.load.text import json_problem, write_text_atomically
-from fleetsim.load.tiled import TiledMap, load_map
+from fleetsim.load.map_options import MapOptions, SiteMap
+from fleetsim.load.site_map import load_site_map
 from fleetsim.recording.artifacts import RESULT_FILE, TRACE_FILE
 from fleetsim.recording.picture import failure_caption, failure_step, picture_overlays, render_frame_svg
 from fleetsim.recording.replay import Frame, TraceError, frame_at
@@ -24,7 +25,7 @@ from fleetsim.recording.svg import render_layout_svg
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Scenario
 from fleetsim.sim.result import Failure
 
-__all__ = ["inspect", "render", "validate"]
+__all__ = ["convert", "inspect", "render", "validate"]
 
 
 def validate(args: argparse.Namespace) -> int:
@@ -84,8 +85,13 @@ def _lint_notes(layout: Layout, vehicle_length: float) -> list[str]:
     return [f"{f.severity} {f.code}: {f.message}" for f in layout.lint(vehicle_length)]
 
 
-def _layout_from_args(args: argparse.Namespace) -> tuple[TiledMap, Layout]:
-    tiled_map = load_map(args.map)
+def map_options(args: argparse.Namespace) -> MapOptions:
+    """The map options given on the command line (``--layout``, ``--robot-type``, ``--level``, ``--graph``)."""
+    return MapOptions(layout=args.layout, robot_type=args.robot_type, level=args.level, graph=args.graph)
+
+
+def _layout_from_args(args: argparse.Namespace) -> tuple[SiteMap, Layout]:
+    tiled_map = load_site_map(args.map, map_options(args))
     layout = build_layout(
         tiled_map.segments,
         vehicle_radius=args.radius,
@@ -98,12 +104,17 @@ def _layout_from_args(args: argparse.Namespace) -> tuple[TiledMap, Layout]:
     return tiled_map, layout
 
 
-def layout_document(tiled_map: TiledMap, layout: Layout) -> dict[str, Any]:
+def layout_document(tiled_map: SiteMap, layout: Layout) -> dict[str, Any]:
     """The ``inspect --json`` document: segments, connections, conflicts per segment, lint (SPEC §14)."""
+    encoded = encode_layout(layout)  # the layout part of a planner process's init message, too
+    for segment in encoded["segments"]:  # plus what the site calls each segment
+        segment["names"] = list(layout.segments[segment["id"]].names)
     return {
         "map": str(tiled_map.path),
+        "format": tiled_map.format,
+        "part": tiled_map.part,
         "meters_per_pixel": tiled_map.meters_per_pixel,
-        **encode_layout(layout),  # the layout part of a planner process's init message, too
+        **encoded,
         "lint": [
             {"code": f.code, "severity": f.severity, "segments": list(f.segments), "message": f.message}
             for f in layout.lint(DEFAULT_VEHICLE_TYPE.length)
@@ -112,20 +123,24 @@ def layout_document(tiled_map: TiledMap, layout: Layout) -> dict[str, Any]:
     }
 
 
-def _print_layout(tiled_map: TiledMap, layout: Layout) -> None:
+def _print_layout(tiled_map: SiteMap, layout: Layout) -> None:
+    part = f" ({tiled_map.part})" if tiled_map.part else ""
     print(
-        f"{tiled_map.path}: {len(layout.segments)} segments, {len(layout.connections)} connections "
+        f"{tiled_map.path}{part}: {len(layout.segments)} segments, {len(layout.connections)} connections "
         f"(connection tolerance {layout.connection_tolerance:g} m, joint angle tolerance {layout.joint_angle_tolerance:g}°)"
     )
     print(
         f"conflicts: {layout.conflict_model.value} model, vehicle radius {layout.vehicle_radius:.3f} m, "
         f"safety margin {layout.safety_margin:g} m"
     )
-    print("\nsegments\n  id  shape     direction  length  from -> to (points)")
+    width = max((len(" / ".join(seg.names)) for seg in layout.segments.values()), default=0)
+    width = max(width, len("name"))
+    print(f"\nsegments\n  id  {'name':<{width}}  shape     direction  length  from -> to (points)")
     for seg in layout.segments.values():
         (x0, y0), (x1, y1) = seg.first, seg.last
+        name = " / ".join(seg.names) or "-"
         print(
-            f"{seg.id:>4}  {seg.shape.value:<8}  {seg.direction.value:<9} {seg.length:>7.3f}  "
+            f"{seg.id:>4}  {name:<{width}}  {seg.shape.value:<8}  {seg.direction.value:<9} {seg.length:>7.3f}  "
             f"({x0:.3f}, {y0:.3f}) -> ({x1:.3f}, {y1:.3f}) ({len(seg.waypoints)})"
         )
     print("\nconnections")
@@ -148,6 +163,23 @@ def inspect(args: argparse.Namespace) -> int:
         print(json.dumps(layout_document(tiled_map, layout), indent=2))
     else:
         _print_layout(tiled_map, layout)
+    return 0
+
+
+def convert(args: argparse.Namespace) -> int:
+    """Write any map fleetsim loads as a Tiled map or as a LIF 1.0 file; the format follows OUT's name.
+
+    OUT ending in .lif.json is LIF 1.0 (one layout; two-way segments as an edge each way); .json, .tmj or
+    .tmx is a Tiled map (free-form segments as polylines of class path) that the Tiled editor opens.
+    """
+    from fleetsim.load.convert import convert_map  # only this command writes maps
+
+    site, written = convert_map(Path(args.map), Path(args.output), map_options(args),
+                                connection_tolerance=args.connection_tolerance)
+    for warning in site.warnings:
+        print(warning)
+    part = f" ({site.part})" if site.part else ""
+    print(f"wrote {written} ({len(site.segments)} segments from {site.path}{part})")
     return 0
 
 

@@ -75,6 +75,14 @@ def _add_layout_options(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def _add_map_options(parser: argparse.ArgumentParser) -> None:
+    group = parser.add_argument_group("map options", "which part of a LIF or Open-RMF map to read (as map_options in a suite)")
+    group.add_argument("--layout", metavar="ID", help="LIF: the layoutId (required when the file has several)")
+    group.add_argument("--robot-type", metavar="TYPE", help="LIF: manufacturer/seriesName (or a 1.0 vehicleTypeId) whose edges form the map")
+    group.add_argument("--level", metavar="NAME", help="RMF: the level (default: the first)")
+    group.add_argument("--graph", type=int, metavar="N", help="RMF: the lane graph_idx (default: 0)")
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="fleetsim",
@@ -88,9 +96,10 @@ def build_parser() -> argparse.ArgumentParser:
     validate.set_defaults(run=commands.validate)
 
     inspect = sub.add_parser("inspect", help="segments, connections and conflicts of a map", description=commands.inspect.__doc__)
-    inspect.add_argument("map", metavar="MAP", help="a Tiled map (.json, .tmj or .tmx)")
+    inspect.add_argument("map", metavar="MAP", help="a Tiled map (.json, .tmj, .tmx), LIF file (.lif.json) or RMF building map (.building.yaml)")
     inspect.add_argument("--json", action="store_true", help="print one JSON document instead of text")
     _add_layout_options(inspect)
+    _add_map_options(inspect)
     inspect.set_defaults(run=commands.inspect)
 
     render = sub.add_parser(
@@ -115,7 +124,18 @@ def build_parser() -> argparse.ArgumentParser:
         help="with --trace: the scenario the run was of (default: the suite and scenario named in result.json)",
     )
     _add_layout_options(render)
+    _add_map_options(render)
     render.set_defaults(run=commands.render)
+
+    convert = sub.add_parser("convert", help="write a map as Tiled JSON/TMX or LIF 1.0", description=commands.convert.__doc__)
+    convert.add_argument("map", metavar="IN", help="any map fleetsim loads (Tiled, LIF, RMF building map)")
+    convert.add_argument("output", metavar="OUT", help="OUT.lif.json for LIF 1.0; OUT.json, OUT.tmj or OUT.tmx for Tiled")
+    convert.add_argument(
+        "--connection-tolerance", type=_positive, default=_DEFAULTS.connection_tolerance,
+        help="LIF: segment ends this close (metres) share a node (default: %(default)s)",
+    )
+    _add_map_options(convert)
+    convert.set_defaults(run=commands.convert)
 
     run_parser = sub.add_parser("run", help="simulate scenarios with a planner and judge the runs", description=run.__doc__)
     run_parser.add_argument(

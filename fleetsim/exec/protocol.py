@@ -37,7 +37,7 @@ are in ``schemas/planner-*.schema.json``.
 
 Blank lines are ignored on both sides. Numbers are plain JSON (never NaN or infinite). Enum words:
 traverse ``forward|backward``, progress ``forward|reverse``, joint ``same|opposite|turn_in_place``,
-shape ``straight|curve|s_curve``, direction ``both|forward|backward``, turn capability
+shape ``straight|curve|s_curve|path``, direction ``both|forward|backward``, turn capability
 ``curve|in_place``, conflict model ``swept|bbox``.
 """
 

@@ -20,12 +20,18 @@ def polyline_length(waypoints: tuple[Point, ...]) -> float:
 
 @dataclass(frozen=True, slots=True)
 class Segment:
-    """An immutable segment: Tiled object id, world waypoints in metres, shape and allowed direction."""
+    """An immutable segment: Tiled object id, world waypoints in metres, shape and allowed direction.
+
+    ``names`` are what the site calls it (a Tiled object's name, a LIF edge id, an RMF lane's waypoints):
+    the first is its name, a second one the id of the opposite LIF edge merged into a two-way segment.
+    ``vehicles.csv`` and ``tasks.csv`` may name a segment by any of them.
+    """
 
     id: int
     shape: Shape
     direction: Direction
     waypoints: tuple[Point, ...]
+    names: tuple[str, ...] = ()
     length: float = field(init=False, compare=False)
     # Distance along the polyline at each waypoint, for locating a point by its distance.
     _along: tuple[float, ...] = field(init=False, compare=False, repr=False)
@@ -60,6 +66,11 @@ class Segment:
         if traverse is Traverse.BACKWARD:
             heading = math.atan2(ay - by, ax - bx)
         return ax + t * (bx - ax), ay + t * (by - ay), heading
+
+    @property
+    def name(self) -> str | None:
+        """The segment's name in the site's own files, or ``None``."""
+        return self.names[0] if self.names else None
 
     @property
     def along(self) -> tuple[float, ...]:

@@ -22,9 +22,10 @@ from fleetsim.load.scenario_files import (
     read_tasks_with_lines,
     read_vehicles_with_lines,
 )
+from fleetsim.load.map_options import MapOptions
+from fleetsim.load.site_map import load_site_map
 from fleetsim.load.suite import ScenarioSpec, Suite
 from fleetsim.load.task_reach import check_tasks_reachable
-from fleetsim.load.tiled import load_map
 from fleetsim.scenario import (
     DEFAULT_VEHICLE_TYPE,
     Expectations,
@@ -47,6 +48,7 @@ def load_scenario(spec: ScenarioSpec, suite: Suite) -> Scenario:
         spec.settings,
         spec.expect,
         Location(spec.suite_path, line=spec.line),
+        spec.map_options,
     )
 
 
@@ -55,11 +57,13 @@ def load_scenario_dir(
     *,
     vehicle_types: Mapping[str, VehicleType] | None = None,
     settings: ScenarioSettings | None = None,
+    map_options: MapOptions | None = None,
 ) -> Scenario:
-    """Load a scenario folder (map.json|map.tmj|map.tmx, vehicles.csv, tasks.csv) without a suite.
+    """Load a scenario folder (one map file of :data:`MAP_FILE_NAMES`, vehicles.csv, tasks.csv) without a suite.
 
     The scenario is named after the folder. Without ``vehicle_types`` every vehicle is the built-in
     default type; expectations are the defaults (all tasks, no collisions, no rejections).
+    ``map_options`` choose the part of a LIF or RMF map to drive on.
     """
     directory = Path(directory)
     if not directory.is_dir():
@@ -77,6 +81,7 @@ def load_scenario_dir(
         settings if settings is not None else ScenarioSettings(),
         Expectations(),
         Location(directory),
+        map_options if map_options is not None else MapOptions(),
     )
 
 
@@ -101,9 +106,10 @@ def _assemble(
     settings: ScenarioSettings,
     expect: Expectations,
     origin: Location,
+    map_options: MapOptions,
 ) -> Scenario:
     map_path, vehicles_path, tasks_path = paths
-    tiled = load_map(map_path)
+    tiled = load_site_map(map_path, map_options)
     segments = {segment.id: segment for segment in tiled.segments}
     default_type = default_vehicle_type(vehicle_types, settings, origin)
     located = read_vehicles_with_lines(

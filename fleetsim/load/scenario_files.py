@@ -43,7 +43,7 @@ __all__ = [
     "read_vehicles_with_lines",
 ]
 
-MAP_FILE_NAMES = ("map.json", "map.tmj", "map.tmx")
+MAP_FILE_NAMES = ("map.json", "map.tmj", "map.tmx", "map.lif.json", "map.building.yaml")
 VEHICLES_FILE_NAME = "vehicles.csv"
 TASKS_FILE_NAME = "tasks.csv"
 
@@ -179,11 +179,72 @@ def _choice(row: _Row, column: str, enum: type[E]) -> E | None:
         raise row.error(column, f"{value!r} is not {allowed}") from None
 
 
-def _segment(row: _Row, column: str, segments: Mapping[int, Segment], map_name: str) -> Segment:
-    segment_id = _whole_number(row, column)
-    if segment_id not in segments:
-        raise row.error(column, f"segment {segment_id} is not in {map_name}")
-    return segments[segment_id]
+def _names(segments: Mapping[int, Segment]) -> dict[str, tuple[int, ...]]:
+    """Every segment name → the ids of the segments that carry it (more than one: ambiguous)."""
+    holders: dict[str, list[int]] = {}
+    for segment in segments.values():
+        for name in segment.names:
+            ids = holders.setdefault(name, [])
+            if segment.id not in ids:
+                ids.append(segment.id)
+    return {name: tuple(sorted(ids)) for name, ids in holders.items()}
+
+
+class _SegmentCells:
+    """Reads a segment cell: a segment's id, or one of its names (a LIF edge id, an RMF lane, a Tiled name).
+
+    ``id:N`` and ``name:TEXT`` force one reading when a number is both an id and another segment's name.
+    """
+
+    def __init__(self, segments: Mapping[int, Segment], map_name: str) -> None:
+        self.segments = segments
+        self.map_name = map_name
+        self.names = _names(segments)
+        self.folded: dict[str, set[int]] = {}
+        for name, ids in self.names.items():
+            self.folded.setdefault(name.casefold(), set()).update(ids)
+
+    def _by_name(self, row: _Row, column: str, name: str) -> Segment | None:
+        ids = self.names.get(name) or tuple(sorted(self.folded.get(name.casefold(), ())))
+        if len(ids) > 1:
+            listed = ", ".join(map(str, ids))
+            raise row.error(column, f"{name!r} names segments {listed} of {self.map_name}; use the segment id instead")
+        return self.segments[ids[0]] if ids else None
+
+    def read(self, row: _Row, column: str) -> Segment:
+        value = row.get(column)
+        if value.startswith("id:"):
+            digits = value[3:].strip()
+            if not _WHOLE_NUMBER.fullmatch(digits):
+                raise row.error(column, f"{value!r}: after 'id:' comes a whole number >= 0")
+            return self._by_id(row, column, int(digits))
+        if value.startswith("name:"):
+            found = self._by_name(row, column, value[5:].strip())
+            if found is None:
+                raise row.error(column, f"no segment of {self.map_name} is named {value[5:].strip()!r}")
+            return found
+        if not self.names:  # a map without names: the cell must be an id
+            return self._by_id(row, column, _whole_number(row, column))
+        if not value:
+            raise row.error(column, "missing: a segment id or name is required")
+        named = self._by_name(row, column, value)
+        if _WHOLE_NUMBER.fullmatch(value):
+            number = int(value)
+            if named is not None and named.id != number and number in self.segments:
+                msg = (f"{value!r} is both the id of segment {number} and the name of segment {named.id}; "
+                       f"write 'id:{number}' or 'name:{value}'")
+                raise row.error(column, msg)
+            if number in self.segments or named is None:
+                return self._by_id(row, column, number)
+        if named is None:
+            hint = did_you_mean(value, self.names)
+            raise row.error(column, f"segment {value!r} is not in {self.map_name} (neither an id nor a name){hint}")
+        return named
+
+    def _by_id(self, row: _Row, column: str, segment_id: int) -> Segment:
+        if segment_id not in self.segments:
+            raise row.error(column, f"segment {segment_id} is not in {self.map_name}")
+        return self.segments[segment_id]
 
 
 # -- vehicles.csv ---------------------------------------------------------------------------------
@@ -211,13 +272,12 @@ def _vehicle_type(
 
 def _vehicle(
     row: _Row,
-    segments: Mapping[int, Segment],
+    segments: _SegmentCells,
     types_by_key: Mapping[str, VehicleType],
     default_type: VehicleType | None,
-    map_name: str,
 ) -> Vehicle:
     vehicle_id = _whole_number(row, "vehicle_id")
-    segment = _segment(row, "start_segment_id", segments, map_name)
+    segment = segments.read(row, "start_segment_id")
     traverse = _choice(row, "segment_orientation", Traverse)
     if traverse is None:
         raise row.error("segment_orientation", "missing: must be 'forward' or 'backward'")
@@ -245,8 +305,9 @@ def read_vehicles_with_lines(
     types_by_key = {name.casefold(): vehicle_type for name, vehicle_type in vehicle_types.items()}
     lines: dict[int, int] = {}
     result = []
+    cells = _SegmentCells(segments, map_name)
     for row in _read_rows(path, VEHICLE_COLUMNS):
-        vehicle = _vehicle(row, segments, types_by_key, default_type, map_name)
+        vehicle = _vehicle(row, cells, types_by_key, default_type)
         if vehicle.id in lines:
             msg = f"vehicle id {vehicle.id} is already used on line {lines[vehicle.id]}"
             raise row.error("vehicle_id", msg)
@@ -287,11 +348,12 @@ def read_tasks_with_lines(
     path = Path(path)
     known = set(vehicles) if isinstance(vehicles, Mapping) else {vehicle.id for vehicle in vehicles}
     tasks = []
+    cells = _SegmentCells(segments, map_name)
     for number, row in enumerate(_read_rows(path, TASK_COLUMNS), start=1):
         vehicle_id = _whole_number(row, "vehicle_id")
         if vehicle_id not in known:
             raise row.error("vehicle_id", f"vehicle {vehicle_id} is not in {vehicles_name}")
-        segment = _segment(row, "goal_segment_id", segments, map_name)
+        segment = cells.read(row, "goal_segment_id")
         progress = _choice(row, "goal_progress_direction", Progress)
         tasks.append((Task(number, vehicle_id, segment.id, progress), row.line))
     return tuple(tasks)

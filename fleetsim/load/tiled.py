@@ -5,7 +5,8 @@ templates. The pipeline: read the document → walk (nested) object layers summi
 object against its template → keep visible polylines whose class is a shape → transform to the world
 frame (origin at the map centre, y up, so RViz shows what Tiled shows).
 
-A polyline whose class names no shape is an error (with a "did you mean"): a typo must not silently drop
+A polyline of class ``path`` is a free-form segment of any number of points. A polyline whose class
+names no shape is an error (with a "did you mean"): a typo must not silently drop
 a segment. A polyline with no class at all, and every other object, is ignored.
 """
 
@@ -43,7 +44,7 @@ __all__ = ["MAP_SUFFIXES", "TiledMap", "load_map", "parse_direction", "parse_sha
 MAP_SUFFIXES = (".json", ".tmj", ".tmx")
 
 _SHAPES = {"straight": Shape.STRAIGHT, "curve": Shape.CURVE, "s_curve": Shape.S_CURVE,
-           "scurve": Shape.S_CURVE}
+           "scurve": Shape.S_CURVE, "path": Shape.PATH}
 _DIRECTIONS = {"both": Direction.BOTH, "bidirectional": Direction.BOTH, "two_way": Direction.BOTH,
                "forward": Direction.FORWARD, "backward": Direction.BACKWARD}
 # The order of the values of the `direction` enum in fleetsim.tiled-project (int storage = index).
@@ -295,8 +296,12 @@ def _segment(fields: ObjectFields, shape: Shape, placed: _Placed, header: _Heade
         msg = f"polyline has zero length (all {len(polyline)} points at {polyline[0]!r})"
         raise MapError(msg, where)
     direction = parse_direction(fields.properties.get("direction"), where)
+    names: tuple[str, ...] = (fields.name.strip(),) if fields.name and fields.name.strip() else ()
+    other = fields.properties.get("other_name")  # the second name of a merged two-way LIF edge pair
+    if names and isinstance(other, str) and other.strip():
+        names += (other.strip(),)
     return Segment(fields.id, shape, direction,
-                   _world_points(polyline, fields, placed.offset, header))
+                   _world_points(polyline, fields, placed.offset, header), names)
 
 
 def _unknown_class(fields: ObjectFields, placed: _Placed, path: Path) -> MapError:
@@ -305,7 +310,7 @@ def _unknown_class(fields: ObjectFields, placed: _Placed, path: Path) -> MapErro
     hint = did_you_mean(_word(shape_class), [shape.value for shape in Shape])
     what = "" if fields.id is not None else f"{_describe(placed)}: "  # the location names the id
     msg = (f"{what}unknown class {shape_class!r} on a polyline{hint} (segments are polylines of class "
-           "straight, curve or s_curve; clear the class to have fleetsim ignore this polyline)")
+           "straight, curve, s_curve or path; clear the class to have fleetsim ignore this polyline)")
     return MapError(msg, Location(path, object_id=fields.id))
 
 
@@ -333,7 +338,7 @@ def _segments(placed: list[_Placed], header: _Header,
             continue  # a polyline without a class is a drawing aid, not a segment
         segments.append(_segment(fields, shape, item, header, path))
     if not segments:
-        msg = "the map has no segments (visible polyline objects of class straight, curve or s_curve)"
+        msg = "the map has no segments (visible polyline objects of class straight, curve, s_curve or path)"
         raise MapError(msg, Location(path))
     segments.sort(key=lambda segment: segment.id)
     return tuple(segments), tuple(warnings)

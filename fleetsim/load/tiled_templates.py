@@ -58,6 +58,7 @@ class ObjectFields:
     polyline: tuple[Point, ...] | None = None  # only set together with geometry "polyline"
     properties: Mapping[str, PropertyValue] = field(default_factory=lambda: _NO_PROPERTIES)
     template: str | None = None
+    name: str | None = None  # the object's name; Tiled writes "" for none, read as not stated
 
     def over(self, template: ObjectFields) -> ObjectFields:
         """This instance resolved against ``template``: each key stated here wins; properties merge."""
@@ -75,6 +76,7 @@ class ObjectFields:
             polyline=shape.polyline,
             properties=MappingProxyType({**template.properties, **self.properties}),
             template=self.template,
+            name=_first(self.name, template.name),
         )
 
 
@@ -269,6 +271,7 @@ def read_xml_object(element: ET.Element, path: Path, owner_id: int | None = None
         polyline=polyline,
         properties=MappingProxyType(xml_properties(element, where)),
         template=element.get("template"),
+        name=element.get("name") or None,
     )
 
 
@@ -324,6 +327,7 @@ def read_json_object(obj: object, path: Path, owner_id: int | None = None) -> Ob
         polyline=_json_points(obj["polyline"], where) if geometry == "polyline" else None,
         properties=MappingProxyType(json_properties(obj.get("properties"), where)),
         template=_optional(obj.get("template"), _as_str, "template", where),
+        name=_optional(obj.get("name"), _as_str, "name", where) or None,
     )
 
 

@@ -138,12 +138,19 @@ def _json_open(value: dict[str, object]) -> str:
 def _json_object(segment: Segment, frame: _Frame) -> dict[str, object]:
     (x, y), points = _pixel_polyline(segment, frame)
     return {
-        "id": segment.id, "name": "", "type": segment.shape.value, "visible": True, "rotation": 0,
+        "id": segment.id, "name": segment.name or "", "type": segment.shape.value, "visible": True, "rotation": 0,
         "width": 0, "height": 0, "x": x, "y": y,
         "polyline": [{"x": px, "y": py} for px, py in points],
         "properties": [{"name": "direction", "propertytype": "direction", "type": "string",
-                        "value": segment.direction.value}],
+                        "value": segment.direction.value}, *_other_name(segment)],
     }
+
+
+def _other_name(segment: Segment) -> list[dict[str, str]]:
+    """A second name (the opposite LIF edge of a two-way segment) as the string property ``other_name``."""
+    if len(segment.names) < 2:
+        return []
+    return [{"name": "other_name", "type": "string", "value": segment.names[1]}]
 
 
 def _json_text(segments: list[Segment], frame: _Frame, explicit_scale: bool) -> str:
@@ -171,12 +178,14 @@ def _tmx_number(value: Number) -> str:
 def _tmx_object(segment: Segment, frame: _Frame) -> str:
     (x, y), points = _pixel_polyline(segment, frame)
     point_text = " ".join(f"{_tmx_number(px)},{_tmx_number(py)}" for px, py in points)
-    return (f'  <object id="{segment.id}" type={quoteattr(segment.shape.value)} '
+    name = f"name={quoteattr(segment.name)} " if segment.name else ""
+    return (f'  <object id="{segment.id}" {name}type={quoteattr(segment.shape.value)} '
             f'x="{_tmx_number(x)}" y="{_tmx_number(y)}">\n'
             "   <properties>\n"
             f'    <property name="direction" propertytype="direction" '
             f"value={quoteattr(segment.direction.value)}/>\n"
-            "   </properties>\n"
+            + "".join(f'    <property name="other_name" value={quoteattr(p["value"])}/>\n' for p in _other_name(segment))
+            + "   </properties>\n"
             f'   <polyline points="{point_text}"/>\n'
             "  </object>\n")
 

@@ -33,7 +33,7 @@ def test_trace_hashes_are_the_same_under_different_hash_seeds() -> None:
     first = run_suites("0")
     second = run_suites("12345")
     assert sorted(first) == [
-        "corridor-head-on", "corridor-passing-bay", "crossing", "crossing-collides", "generated-layouts", "loop-one-way",
-        "mixed-shapes",
+        "clinic-rmf", "corridor-head-on", "corridor-passing-bay", "crossing", "crossing-collides", "generated-layouts",
+        "loop-one-way", "mixed-shapes", "packing-hall-lif",
     ]  # fmt: skip
     assert first == second

@@ -116,4 +116,4 @@ def test_a_map_of_another_file_type_is_named_in_words(tmp_path: Path, capsys: py
     path.write_text("vehicle_id\n", encoding="utf-8")
     assert main(["inspect", str(path)]) == 1
     err = capsys.readouterr().err
-    assert err == f"fleetsim: error: {path}: this is not a Tiled map file: a map is saved as .json, .tmj or .tmx, and this file ends in '.csv'\n"
+    assert err == f"fleetsim: error: {path}: this is not a map file: a map is a Tiled map (.json, .tmj, .tmx), a LIF file (.lif.json) or an RMF building map (.building.yaml), and this file ends in '.csv'\n"

@@ -93,7 +93,7 @@ def test_the_shipped_suites_pass_with_the_reserving_planner(
     assert [[cell for cell in row.split() if not cell.lstrip("(").isdigit()][: len(want)] for row, want in zip(rows, expected, strict=True)] == expected
     assert (tmp_path / "fleetsim-results" / "caught-bugs" / "generated-layouts" / "counterexample" / "map.json").is_file()
     # The caught-bugs suite is pinned to BFSPlanner, whatever --planner says.
-    assert f"7 scenario(s) with fleetsim.planners:BFSPlanner, {RESERVING}: 6 passed, 1 xfailed" in out
+    assert f"9 scenario(s) with fleetsim.planners:BFSPlanner, {RESERVING}: 8 passed, 1 xfailed" in out
     assert "FAILED" not in out
 
 
@@ -162,7 +162,7 @@ def test_a_scenario_named_twice_runs_once_in_the_order_given(capsys: pytest.Capt
     names = [r["scenario"] for r in json_lines(out)]
     assert names == [
         "mixed-shapes", "crossing-collides", "corridor-head-on", "generated-layouts", "crossing", "loop-one-way",
-        "corridor-passing-bay",
+        "corridor-passing-bay", "packing-hall-lif", "clinic-rmf",
     ]  # fmt: skip
 
 

@@ -102,7 +102,7 @@ def test_without_vehicles_the_default_type_sets_the_radius(tmp_path: Path) -> No
     ("files", "problem"),
     [
         pytest.param(("vehicles.csv", "tasks.csv"),
-                     "needs exactly one of map.json, map.tmj, map.tmx; found none", id="no-map"),
+                     "needs exactly one of map.json, map.tmj, map.tmx, map.lif.json, map.building.yaml; found none", id="no-map"),
         pytest.param(("map.json", "map.tmj", "vehicles.csv", "tasks.csv"), "found map.json and map.tmj",
                      id="two-maps"),
     ],

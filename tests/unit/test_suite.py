@@ -198,7 +198,7 @@ def test_suite_mistakes_give_one_error_at_the_offending_value(
 @pytest.mark.parametrize(
     ("files", "problem"),
     [
-        pytest.param(FILES[1:], "has no map.json, map.tmj or map.tmx", id="no-map-in-dir"),
+        pytest.param(FILES[1:], "has no map.json, map.tmj, map.tmx, map.lif.json or map.building.yaml", id="no-map-in-dir"),
         pytest.param(FILES + ("crossing/map.tmx",), "has both map.json and map.tmx", id="two-maps-in-dir"),
         pytest.param(FILES[:1] + FILES[2:], "has no vehicles.csv", id="no-vehicles-in-dir"),
     ],

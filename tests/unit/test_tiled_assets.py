@@ -45,7 +45,7 @@ def test_project_declares_the_direction_enum_in_the_loaders_index_order() -> Non
     assert project["folders"] == ["."]
 
 
-@pytest.mark.parametrize("template", ["straight.tx", "curve.tx", "s_curve.tx"])
+@pytest.mark.parametrize("template", ["straight.tx", "curve.tx", "s_curve.tx", "path.tx"])
 def test_templates_use_type_and_the_direction_enum(template: str) -> None:
     obj = ET.parse(ASSETS / template).getroot().find("object")
     assert obj is not None and obj.get("type") == template.removesuffix(".tx")

@@ -243,7 +243,7 @@ def test_unknown_class_on_a_polyline_is_an_error_naming_file_object_and_class(tm
         load(tmp_path, suffix, document)
     assert str(caught.value) == (
         f"{tmp_path / ('map' + suffix)}: object 7: unknown class 'wall' on a polyline (segments are "
-        "polylines of class straight, curve or s_curve; clear the class to have fleetsim ignore this polyline)"
+        "polylines of class straight, curve, s_curve or path; clear the class to have fleetsim ignore this polyline)"
     )
     assert caught.value.location is not None and caught.value.location.object_id == 7
 
