@@ -158,8 +158,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         where = f"{error.filename}: " if error.filename is not None else ""
         print(f"fleetsim: error: {where}{error.strerror or error}", file=sys.stderr)
         return 1
-    except KeyboardInterrupt:
-        return 130
+    except KeyboardInterrupt as interrupt:  # Ctrl-C outside a run, or a second stop signal (RunAborted)
+        return 128 + getattr(interrupt, "signum", signal.SIGINT)
 
 
 def _reader_gone() -> int:

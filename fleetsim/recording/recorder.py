@@ -22,7 +22,8 @@ Topics:
   for whom (namespace ``wait_for``, arrows; ``wait_for_cycle`` red; ``planned_near`` thin), the root-cause
   vehicles (``root_cause``, red discs), the contested segments (``contested``, purple) and the headline
   (``stuck_text``).
-- ``/rosout``: rejections, route errors and alerts (warnings), planner errors (errors), completed tasks.
+- ``/rosout``: rejections, route errors, alerts and an interruption (warnings), planner errors (errors),
+  completed tasks.
 
 The file is written under a temporary name and renamed when complete, so an interrupted recording never
 leaves a half-written file where a reviewer looks.
@@ -330,6 +331,8 @@ def _log_lines(event: Sequence[Any]) -> tuple[int, str] | None:
         return _WARN, alert.text()
     if kind == "planner-error":
         return _ERROR, f"planner error for vehicle {event[1]}"
+    if kind == "interrupted":
+        return _WARN, f"run interrupted by {event[1]}: it ends here"
     return None
 
 
