@@ -21,7 +21,7 @@ from __future__ import annotations
 import json
 import re
 import shutil
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -30,7 +30,7 @@ from fleetsim.recording.picture import failure_picture, stuck_details
 from fleetsim.recording.recorder import record_mcap
 from fleetsim.recording.rviz import rviz_config
 from fleetsim.scenario import Scenario
-from fleetsim.sim.result import RunResult
+from fleetsim.sim.result import Failure, RunResult
 
 __all__ = [
     "MCAP_FILE",
@@ -43,6 +43,7 @@ __all__ = [
     "artifact_folder",
     "discard_run_folder",
     "start_run_folder",
+    "stuck_overlay",
     "write_run_artifacts",
 ]
 
@@ -68,9 +69,10 @@ def artifact_folder(root: Path, suite_path: Path, scenario: str) -> Path:
     return root / _safe(stem) / _safe(scenario)
 
 
-def _stuck(result: RunResult) -> dict[str, Any] | None:
-    """The details of the run's deadlock or timeout failure with its headline, for the recording."""
-    for failure in result.failures:
+def stuck_overlay(failures: Sequence[Failure]) -> dict[str, Any] | None:
+    """The details of a run's deadlock, timeout or interruption that explains who waits for whom, with its
+    headline, for the recording; None when no failure does."""
+    for failure in failures:
         details = stuck_details(failure)
         if details is not None:
             return {**details, "headline": f"{failure.kind}: {failure.message}"}
@@ -132,7 +134,7 @@ def write_run_artifacts(
             write_text_atomically(folder / PICTURE_FILE, picture[1])
             paths["picture"] = str(folder / PICTURE_FILE)
         _write_result(folder, result, paths, extra)  # in case the recording is cut short
-        paths["mcap"] = str(record_mcap(folder / MCAP_FILE, scenario, lines, every=record_every, stuck=_stuck(result)).path)
+        paths["mcap"] = str(record_mcap(folder / MCAP_FILE, scenario, lines, every=record_every, stuck=stuck_overlay(result.failures)).path)
         write_text_atomically(folder / RVIZ_FILE, rviz_config(scenario, RVIZ_CONFIG.read_text(encoding="utf-8")))
         paths["rviz"] = str(folder / RVIZ_FILE)
     _write_result(folder, result, paths, extra)

@@ -60,6 +60,7 @@ __all__ = [
     "Recording",
     "alert_label",
     "fleet_urdf",
+    "partial_path",
     "record_mcap",
 ]
 
@@ -401,6 +402,12 @@ def _write_frame(bag: _Bag, scene: _Scene, frame: Frame, *, first: bool, tick: b
             bag.write("/rosout", time_ns, m.log(time, line[0], line[1]))
 
 
+def partial_path(path: Path) -> Path:
+    """Where the recording for ``path`` is written until it is complete: ``.run.mcap.partial`` beside it.
+    A writer killed outright leaves it; ``fleetsim record --trace`` replaces it with a complete file."""
+    return path.with_name(f".{path.name}.partial")
+
+
 def record_mcap(
     path: Path, scenario: Scenario, trace_lines: Sequence[str], *, every: int = 1, stuck: Mapping[str, Any] | None = None
 ) -> Recording:
@@ -415,7 +422,7 @@ def record_mcap(
         msg = f"every={every!r} must be a whole number of steps >= 1"
         raise ValueError(msg)
     path.parent.mkdir(parents=True, exist_ok=True)
-    partial = path.with_name(f".{path.name}.partial")
+    partial = partial_path(path)
     try:
         with partial.open("wb") as stream:
             bag = _Bag(stream)

@@ -99,7 +99,7 @@ class TraceFile:
         self.path = path
         self._file: IO[str] = path.open("w", encoding="utf-8", newline="\n")
         self._pending: list[str] = []
-        self._flushed = self._synced = time.monotonic()
+        self._flushed = self._synced = -self.FLUSH_SECONDS  # the first step is written at once
 
     def add(self, line: str) -> None:
         self._pending.append(line)
