@@ -141,3 +141,14 @@ def test_expectations_of_what_did_not_happen_yet_are_not_judged_when_interrupted
     with StopSignals() as stop:
         result = run_scenario(scenario, SignalAt(10), stop=stop)
     assert [f.kind for f in result.failures] == ["interrupted"]
+
+
+def test_a_stop_signal_ends_a_hunt_without_shrinking_anything() -> None:
+    from fleetsim.gating.generated import hunt
+
+    suite = load_suite(SUITE.with_name("caught-bugs.fleetsim.yaml"))
+    spec = next(spec for spec in suite.scenarios if spec.generate is not None)
+    with StopSignals() as stop:
+        found = hunt(spec, suite, lambda: SignalAt(3), identity="p:Q", planner_timeout=None, stop=stop, derandomize=True)
+    assert found.counterexample is None and found.shrink_runs == 0 and found.generated >= 1
+    assert found.result is not None and found.result.ended == "interrupted"
