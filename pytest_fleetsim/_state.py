@@ -4,6 +4,10 @@ Workers and a serial session run scenarios (:meth:`FleetsimState.run_item`). Onl
 process (the serial session, or pytest-xdist's controller) receives every report, and only it writes lock
 files and the metrics document and decides on regressions, so nothing is written twice and nothing
 depends on how tests were spread over workers.
+
+While a scenario runs, SIGINT and SIGTERM stop it cleanly (:mod:`fleetsim.sim.interrupt`): it ends at the
+end of its step, fails as ``interrupted`` with its artifacts written, and the session then stops as
+pytest does on Ctrl-C (``stopped_by`` tells the plugin's hook to end it).
 """
 
 from __future__ import annotations
@@ -29,6 +33,7 @@ from fleetsim.gating.baseline import (
 from fleetsim.gating.lockfile import HashLock, LockEntry, LockFileError, lock_path_for
 from fleetsim.gating.generated import (
     counterexample_entry,
+    counts_story,
     counterexample_story,
     hunt,
     hunt_facts,
@@ -38,8 +43,9 @@ from fleetsim.gating.generated import (
 from fleetsim.gating.verify import run_checked
 from fleetsim.load.scenario import load_scenario
 from fleetsim.load.suite import load_suite
-from fleetsim.recording.artifacts import artifact_folder, write_run_artifacts
+from fleetsim.recording.artifacts import artifact_folder, discard_run_folder, start_run_folder, write_run_artifacts
 from fleetsim.scenario import Scenario
+from fleetsim.sim.interrupt import StopSignals
 from fleetsim.sim.planner_spec import PlannerFactory, PlannerSpecError, load_planner_factory
 from fleetsim.sim.report import failure_report, format_table, summary_cells
 from fleetsim.sim.result import RunResult
@@ -88,6 +94,7 @@ class FleetsimState:
     outcomes: dict[str, _Outcome] = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
     comparison: Comparison | None = None
+    stopped_by: int | None = None  # the stop signal that ended a scenario; the session ends after its report
 
     # -- set-up -------------------------------------------------------------------------------------
 
@@ -140,7 +147,16 @@ class FleetsimState:
     # -- one scenario -------------------------------------------------------------------------------
 
     def run_item(self, item: ScenarioItem, fixture_value: object) -> None:
-        """Run the item's scenario; raise :class:`ScenarioFailed` with the whole story if it failed."""
+        """Run the item's scenario; raise :class:`ScenarioFailed` with the whole story if it failed.
+
+        A stop signal while it runs ends it early (``interrupted``) and sets :attr:`stopped_by`."""
+        with StopSignals() as stop:
+            try:
+                self._run_item(item, fixture_value, stop)
+            finally:
+                self.stopped_by = stop.signum
+
+    def _run_item(self, item: ScenarioItem, fixture_value: object, stop: StopSignals) -> None:
         heading = f"fleetsim scenario {item.spec.name!r} ({_relative(self.config, item.path)}:{item.spec.line})"
         try:
             if item.suite.planner is not None:  # the suite documents this planner, whatever was asked
@@ -153,7 +169,7 @@ class FleetsimState:
             raise ScenarioFailed(_story(str(error), heading)) from None
         heading += f" with planner {source.identity}"
         if item.spec.generate is not None:
-            self._hunt(item, source.make, source.identity, heading)
+            self._hunt(item, source.make, source.identity, heading, stop)
             return
         try:
             scenario = load_scenario(item.spec, item.suite)
@@ -165,6 +181,11 @@ class FleetsimState:
         hint = f"pytest {shlex.quote(f'{here}::{item.name}')} --fleetsim-update-hashes"
         if source.from_option and item.suite.planner is None:
             hint += f" --planner {shlex.quote(source.identity)}"
+        # Any run may fail, so a kept trace goes into the artifact folder while the run goes (a run killed
+        # outright leaves it); the folder is removed again when the run passes and only failures are kept.
+        folder = artifact_folder(self.artifacts, item.path, item.spec.name)
+        about = {"suite": str(item.path), "nodeid": item.nodeid, "line": item.spec.line, "scenario": item.spec.name}
+        trace_file = start_run_folder(folder, {**about, "planner": source.identity}) if self.record != "none" else None
         try:
             checked = run_checked(
                 scenario,
@@ -175,21 +196,29 @@ class FleetsimState:
                 record_hint=hint,
                 planner_timeout=self.timeout,
                 keep_trace=self.record != "none",
+                stop=stop,
+                trace_file=trace_file,
             )
         except PlannerSpecError as error:  # the planner could not even be made
+            if trace_file is not None:
+                discard_run_folder(folder, self.artifacts)
             raise ScenarioFailed(_story(f"planner-error: {error}", heading, error.details)) from None
         result = checked.result
         if self.record == "all" or (self.record == "failed" and not result.passed):
-            result = self._write_artifacts(item, scenario, result)
+            result = self._write_artifacts(item, scenario, result, streamed=trace_file is not None)
+        elif trace_file is not None:
+            discard_run_folder(folder, self.artifacts)
         self._describe(item, result, checked.record, source.identity)
         if not result.passed:
             raise ScenarioFailed(failure_report(result, heading=heading))
 
-    def _hunt(self, item: ScenarioItem, make: Any, identity: str, heading: str) -> None:
+    def _hunt(self, item: ScenarioItem, make: Any, identity: str, heading: str, stop: StopSignals) -> None:
         """A generated entry: Hypothesis hunts for a failing scenario; a shrunk one is saved and reported."""
         assert item.spec.generate is not None
+        folder = artifact_folder(self.artifacts, item.path, item.spec.name)
+        about = {"suite": str(item.path), "nodeid": item.nodeid, "line": item.spec.line, "scenario": item.spec.name, "planner": identity}
         try:
-            found = hunt(item.spec, item.suite, make, identity=identity, planner_timeout=self.timeout)
+            found = hunt(item.spec, item.suite, make, identity=identity, planner_timeout=self.timeout, stop=stop, record_to=(folder, about))
         except LoadError as error:  # a generate block no layout has room for
             raise ScenarioFailed(_story(str(error), heading)) from None
         except PlannerSpecError as error:
@@ -199,10 +228,11 @@ class FleetsimState:
         if found.counterexample is None or found.result is None:
             if found.result is not None:
                 self._describe(item, found.result, None, identity, label=label, generated=True)
+                if found.result.ended == "interrupted":
+                    raise ScenarioFailed(failure_report(found.result, heading=heading) + "\n\n" + counts_story(found, item.spec.generate.examples))
             return
-        folder = artifact_folder(self.artifacts, item.path, item.spec.name)
         extra = {"suite": str(item.path), "nodeid": item.nodeid, "line": item.spec.line, **hunt_facts(found)}
-        paths = record_counterexample(found, folder, extra, record_every=self.record_every)
+        paths = record_counterexample(found, folder, extra, record_every=self.record_every, streamed=True)
         shown = {kind: _relative(self.config, Path(path)) for kind, path in paths.items()}
         result = replace(found.result, artifacts={**found.result.artifacts, **shown})
         self._describe(item, result, None, identity, label=label, generated=True)
@@ -217,10 +247,10 @@ class FleetsimState:
             self._locks[path] = HashLock.load(path)
         return self._locks[path]
 
-    def _write_artifacts(self, item: ScenarioItem, scenario: Scenario, result: RunResult) -> RunResult:
+    def _write_artifacts(self, item: ScenarioItem, scenario: Scenario, result: RunResult, *, streamed: bool) -> RunResult:
         folder = artifact_folder(self.artifacts, item.path, item.spec.name)
         extra = {"suite": str(item.path), "nodeid": item.nodeid, "line": item.spec.line}
-        paths = write_run_artifacts(folder, result, extra, scenario=scenario, record_every=self.record_every)
+        paths = write_run_artifacts(folder, result, extra, scenario=scenario, record_every=self.record_every, streamed=streamed)
         shown = {kind: _relative(self.config, Path(path)) for kind, path in paths.items()}
         return replace(result, artifacts={**result.artifacts, **shown})
 
@@ -251,6 +281,7 @@ class FleetsimState:
             "metrics": ScenarioMetrics.from_result(item.nodeid, "failed", result).to_dict(),  # outcome: see _metrics
             "cells": list(summary_cells(label or item.spec.name, "", result)),
             "generated": generated,
+            "interrupted": result.ended == "interrupted",
             "record": None if record is None else {"hash": record.hash, "steps": record.steps, "checkpoints": list(record.checkpoints)},
         }
 
@@ -262,7 +293,9 @@ class FleetsimState:
         if not isinstance(payload, dict) or report.when != "call":
             return
         wasxfail = hasattr(report, "wasxfail")
-        if report.skipped and wasxfail:
+        if payload.get("interrupted"):
+            outcome = "interrupted"
+        elif report.skipped and wasxfail:
             outcome = "xfailed"
         elif report.passed:
             outcome = "xpassed" if wasxfail else "passed"
@@ -279,7 +312,9 @@ class FleetsimState:
             self._record_hashes(ordered)
         else:
             self._note_stale_entries(ordered)
-        rows = [self._metrics(o) for o in ordered if not o.payload.get("generated")]
+        # Generated entries run other scenarios every time; an interrupted run did not finish: neither has
+        # metrics to compare.
+        rows = [self._metrics(o) for o in ordered if not o.payload.get("generated") and o.outcome != "interrupted"]
         if self.metrics_json is not None:
             write_metrics(self.metrics_json, rows)
             self.notes.append(f"metrics of {len(rows)} scenario(s) written to {self.metrics_json}")

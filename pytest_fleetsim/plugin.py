@@ -141,10 +141,39 @@ def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]) ->
     return report
 
 
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_protocol(item: pytest.Item, nextitem: pytest.Item | None) -> Generator[None, object, object]:
+    """After a scenario a stop signal ended (reported as interrupted, its artifacts written), the session
+    stops as on Ctrl-C: pytest's interrupt summary follows, and the exit status is 128 + the signal's
+    number (130, 143; see :func:`pytest_sessionfinish`)."""
+    outcome = yield
+    from pytest_fleetsim._state import state_of
+
+    stopped_by = state_of(item.config).stopped_by
+    if stopped_by is not None:
+        from fleetsim.sim.interrupt import signal_name
+
+        item.session.shouldstop = f"{signal_name(stopped_by)} stopped the session during {item.nodeid}"
+    return outcome
+
+
+def pytest_report_teststatus(report: pytest.TestReport) -> tuple[str, str, str] | None:
+    """A scenario a stop signal cut short is a failure, shown as INTERRUPTED."""
+    payload = getattr(report, "fleetsim", None)
+    if report.when == "call" and report.failed and isinstance(payload, dict) and payload.get("interrupted"):
+        return "failed", "!", "INTERRUPTED"
+    return None
+
+
 def pytest_sessionfinish(session: pytest.Session) -> None:
     from pytest_fleetsim._state import state_of
 
-    state_of(session.config).finish(session)
+    state = state_of(session.config)
+    state.finish(session)
+    if state.stopped_by is not None and session.exitstatus == pytest.ExitCode.INTERRUPTED:
+        # pytest has printed its interrupt summary for INTERRUPTED (2); the session ends with the status of
+        # the signal that stopped it, as the process would without the plugin's clean stop.
+        session.exitstatus = 128 + state.stopped_by
 
 
 def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter, config: pytest.Config) -> None:

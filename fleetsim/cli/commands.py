@@ -7,6 +7,7 @@ import json
 from pathlib import Path
 from typing import Any
 
+from fleetsim.cli.recorded import render_step
 from fleetsim.cli.run import UsageError
 from fleetsim.enums import ConflictModel
 from fleetsim.errors import LoadError, UnreachableTaskError
@@ -15,15 +16,11 @@ from fleetsim.layout.layout import Layout, build_layout
 from fleetsim.load.scenario import load_scenario
 from fleetsim.load.scenario_files import did_you_mean
 from fleetsim.load.suite import discover_suites, load_suite
-from fleetsim.load.text import json_problem, write_text_atomically
 from fleetsim.load.map_options import MapOptions, SiteMap
 from fleetsim.load.site_map import load_site_map
-from fleetsim.recording.artifacts import RESULT_FILE, TRACE_FILE
-from fleetsim.recording.picture import failure_caption, failure_step, picture_overlays, render_frame_svg
-from fleetsim.recording.replay import Frame, TraceError, frame_at
+from fleetsim.load.text import write_text_atomically
 from fleetsim.recording.svg import render_layout_svg
-from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Scenario
-from fleetsim.sim.result import Failure
+from fleetsim.scenario import DEFAULT_VEHICLE_TYPE
 
 __all__ = ["convert", "inspect", "render", "validate"]
 
@@ -198,7 +195,7 @@ def render(args: argparse.Namespace) -> int:
         if args.map is not None or args.highlight is not None:
             msg = f"--trace={args.trace!r} draws a recorded run; leave out MAP and --highlight (they draw a map)"
             raise UsageError(msg)
-        return _render_step(args)
+        return render_step(args)
     if args.map is None:
         raise UsageError("render needs a MAP to draw, or --trace RUN_FOLDER to draw a step of a recorded run")
     if args.step is not None or args.suite is not None:
@@ -209,124 +206,3 @@ def render(args: argparse.Namespace) -> int:
     write_text_atomically(output, svg)
     print(f"wrote {output} ({len(layout.segments)} segments)")
     return 0
-
-
-# -- render --trace: one step of a recorded run ---------------------------------------------------
-
-
-def _render_step(args: argparse.Namespace) -> int:
-    trace_path, result_path = _run_files(Path(args.trace))
-    document = _read_result(result_path) if result_path is not None else {}
-    scenario = _recorded_scenario(args.suite, document, result_path or trace_path)
-    lines = _read_text(trace_path).splitlines()
-    last_step = len(lines) - 2  # a header line, then one line per step
-    if last_step < 0:
-        raise UsageError(f"{trace_path}: the trace has no steps")
-    found = None
-    failures: list[Failure] = []
-    if document.get("status") == "failed":
-        failures = _failures(document, result_path)
-        found = failure_step(failures, scenario.settings.time_step, last_step)
-    if args.step is None:
-        step = found[0] if found is not None else last_step
-    elif 0 <= args.step <= last_step:
-        step = args.step
-    else:
-        raise UsageError(f"{trace_path}: --step={args.step!r} must be between 0 and {last_step} (the run's last step)")
-    try:
-        frame = frame_at(scenario, lines, step)
-        _check_segments(scenario, frame)
-    except TraceError as error:  # a trace of another scenario, or not a trace at all
-        raise UsageError(f"{trace_path}: {error}") from None
-    except KeyError as error:  # an id the scenario does not have: the trace is of another scenario
-        msg = (
-            f"{trace_path}: the trace names id {error.args[0]!r}, which scenario {scenario.name!r} does not have; "
-            "name the run's scenario with --suite SUITE::SCENARIO"
-        )
-        raise UsageError(msg) from None
-    stuck = rejected = None
-    if found is not None and found[0] == step:
-        caption = failure_caption(found[1], failures, at=frame.time)
-        stuck, rejected = picture_overlays(found[1])
-    else:
-        caption = f"t = {frame.time:.2f} s \u2014 {scenario.name}, step {step} of {last_step}"
-    output = Path(args.output)
-    write_text_atomically(output, render_frame_svg(scenario, frame, caption=caption, stuck=stuck, rejected=rejected))
-    print(f"wrote {output} ({scenario.name}, step {step} of {last_step}, t = {frame.time:.2f} s)")
-    return 0
-
-
-def _check_segments(scenario: Scenario, frame: Frame) -> None:
-    """Raise KeyError for the first segment of a pose or plan that the scenario's map lacks."""
-    segments = scenario.layout.segments
-    used = {pose.segment for pose in frame.poses.values()}
-    used.update(leg.segment for plan in frame.plans.values() for leg in plan.legs)
-    for sid in sorted(used):
-        if sid not in segments:
-            raise KeyError(sid)
-
-
-def _run_files(path: Path) -> tuple[Path, Path | None]:
-    """The trace and, when there is one beside it, the result.json of a run folder or trace file."""
-    if not path.exists():
-        raise UsageError(f"{path}: no such file or directory")
-    if path.is_dir():
-        trace = path / TRACE_FILE
-        if not trace.is_file():
-            raise UsageError(f"{path}: no {TRACE_FILE} in this folder (the run did not keep its trace)")
-    else:
-        trace = path
-    result = trace.parent / RESULT_FILE
-    return trace, result if result.is_file() else None
-
-
-def _read_text(path: Path) -> str:
-    try:
-        return path.read_text(encoding="utf-8")
-    except UnicodeDecodeError as error:
-        raise UsageError(f"{path}: not a text file (byte {error.start} is not UTF-8)") from None
-
-
-def _read_result(path: Path) -> dict[str, Any]:
-    try:
-        document = json.loads(_read_text(path))
-    except json.JSONDecodeError as error:
-        raise UsageError(f"{path}:{error.lineno}:{error.colno}: {json_problem(error)}") from None
-    if not isinstance(document, dict):
-        raise UsageError(f"{path}: must hold a JSON object (a run's result), not {type(document).__name__}")
-    return document
-
-
-def _failures(document: dict[str, Any], path: Path | None) -> list[Failure]:
-    try:
-        return [
-            Failure(str(f["kind"]), float(f["time"]), str(f["message"]), {k: v for k, v in f.items() if k not in ("kind", "time", "message")})
-            for f in document.get("failures", [])
-        ]
-    except (KeyError, TypeError, ValueError):
-        msg = f"{path}: failures={document.get('failures')!r} must be a list of {{kind, time, message}} objects"
-        raise UsageError(msg) from None
-
-
-def _recorded_scenario(selector: str | None, document: dict[str, Any], source: Path) -> Scenario:
-    """The scenario the run was of: ``--suite SUITE::SCENARIO`` if given, else what result.json names."""
-    if selector is not None:
-        suite_text, separator, name = selector.rpartition("::")
-        if not (separator and suite_text and name):
-            raise UsageError(f"--suite={selector!r} must be SUITE::SCENARIO, e.g. suites/demo.fleetsim.yaml::crossing")
-        where = "--suite"
-    else:
-        recorded_suite, recorded_name = document.get("suite"), document.get("scenario")
-        if not isinstance(recorded_suite, str) or not isinstance(recorded_name, str):
-            raise UsageError(f"{source}: does not name the run's suite and scenario; name them with --suite SUITE::SCENARIO")
-        suite_text, name, where = recorded_suite, recorded_name, str(source)
-    suite_path = Path(suite_text)
-    if not suite_path.is_file():
-        raise UsageError(f"{suite_path}: no such suite file (named by {where})")
-    suite = load_suite(suite_path)
-    spec = next((spec for spec in suite.scenarios if spec.name == name), None)
-    if spec is None:
-        names = [spec.name for spec in suite.scenarios]
-        msg = f"{suite_path} has no scenario {name!r} (named by {where}; its scenarios: {', '.join(names)}){did_you_mean(name, names)}"
-        raise UsageError(msg)
-    return load_scenario(spec, suite)

@@ -14,7 +14,7 @@ import sys
 from collections.abc import Sequence
 
 from fleetsim import __version__
-from fleetsim.cli import commands
+from fleetsim.cli import commands, recorded
 from fleetsim.cli.run import UsageError, run
 from fleetsim.enums import ConflictModel
 from fleetsim.errors import FleetsimError
@@ -137,6 +137,26 @@ def build_parser() -> argparse.ArgumentParser:
     _add_map_options(convert)
     convert.set_defaults(run=commands.convert)
 
+    record_parser = sub.add_parser(
+        "record",
+        help="rebuild a run's MCAP recording from its trace (a run killed outright, say)",
+        description=recorded.record.__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    record_parser.add_argument("--trace", required=True, metavar="PATH", help="the run's artifact folder or its trace.jsonl")
+    record_parser.add_argument(
+        "-o", "--output", metavar="OUT.mcap", help="where to write the recording (default: run.mcap beside the trace)"
+    )
+    record_parser.add_argument(
+        "--suite", metavar="SUITE::SCENARIO",
+        help="the scenario the run was of (default: the suite and scenario named in result.json or run.json)",
+    )
+    record_parser.add_argument(
+        "--record-every", type=_steps, default=1, metavar="N",
+        help="record every N-th step in full (steps with new plans, alerts or events always; default: 1)",
+    )
+    record_parser.set_defaults(run=recorded.record)
+
     run_parser = sub.add_parser("run", help="simulate scenarios with a planner and judge the runs", description=run.__doc__)
     run_parser.add_argument(
         "suites", nargs="+", metavar="SUITE[::SCENARIO]", help="*.fleetsim.yaml files or folders; FILE::NAME runs one scenario"
@@ -178,8 +198,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         where = f"{error.filename}: " if error.filename is not None else ""
         print(f"fleetsim: error: {where}{error.strerror or error}", file=sys.stderr)
         return 1
-    except KeyboardInterrupt:
-        return 130
+    except KeyboardInterrupt as interrupt:  # Ctrl-C outside a run, or a second stop signal (RunAborted)
+        return 128 + getattr(interrupt, "signum", signal.SIGINT)
 
 
 def _reader_gone() -> int:

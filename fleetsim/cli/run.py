@@ -5,6 +5,10 @@ first run, so a typo costs no waiting. Then each scenario, in file order, is loa
 that scenario only), given a fresh planner and run. Progress goes to stderr; the summary table goes to
 stdout, or to stderr with ``--json``, where stdout carries one result object (SPEC §10) per line.
 Exit status: 0 when every scenario passed, 1 when any failed, 2 for a usage error.
+
+SIGINT (Ctrl-C) or SIGTERM ends the scenario that is running at the end of its step (``interrupted``),
+writes its artifacts like any failed run's, runs no further scenario, prints the summary of what ran and
+exits with 128 + the signal's number (130, 143). A second signal aborts the clean-up at once.
 """
 
 from __future__ import annotations
@@ -32,7 +36,8 @@ from fleetsim.gating.generated import (
     hunt_label,
     record_counterexample,
 )
-from fleetsim.recording.artifacts import artifact_folder, write_run_artifacts
+from fleetsim.recording.artifacts import artifact_folder, start_run_folder, write_run_artifacts
+from fleetsim.sim.interrupt import StopSignals, signal_name
 from fleetsim.sim.loop import RunProgress, run_scenario
 from fleetsim.sim.planner_spec import PlannerFactory, PlannerSpecError, load_planner_factory
 from fleetsim.sim.report import failure_lines, format_table, summary_cells
@@ -76,22 +81,32 @@ class _Outcome:
 
     @property
     def word(self) -> str:
-        """passed, failed, or pytest's xfailed/xpassed for scenarios marked ``xfail`` that loaded."""
+        """passed, failed, interrupted, or pytest's xfailed/xpassed for scenarios marked ``xfail`` that
+        loaded and ran to their end."""
+        if self.result.ended == "interrupted":
+            return "interrupted"
         if self.xfail is not None and self.loaded:
             return "xpassed" if self.result.passed else "xfailed"
         return self.result.status
 
     @property
     def counts_as_failure(self) -> bool:
-        return self.word == "failed"
+        return self.word in ("failed", "interrupted")
 
 
 def run(args: argparse.Namespace) -> int:
     """Run every scenario of the given suites with a fresh planner each and print a summary table.
 
     SUITE is a *.fleetsim.yaml file or a folder holding them; SUITE::NAME selects one scenario of a
-    file. Exit status 0 when every scenario passed (an xfail scenario may fail), 1 when any failed.
+    file. Exit status 0 when every scenario passed (an xfail scenario may fail), 1 when any failed;
+    after Ctrl-C or SIGTERM (the running scenario ends at the end of its step and is written like any
+    failed run; no further scenario runs) 130 or 143.
     """
+    with StopSignals() as stop:
+        return _run_all(args, stop)
+
+
+def _run_all(args: argparse.Namespace, stop: StopSignals) -> int:
     timeout = args.planner_timeout or None  # 0 switches the timeout off
     factory = load_planner_factory(args.planner, call_timeout=timeout)
     targets = _targets(args.suites)
@@ -101,15 +116,22 @@ def run(args: argparse.Namespace) -> int:
     progress = _Progress(sys.stderr, len(targets))
     outcomes = []
     for index, target in enumerate(targets, 1):
+        if stop.requested:
+            break
         with progress.scenario(index, target.label):
-            outcome = _run_target(target, factory, timeout, progress.update, record, counterexamples)
+            outcome = _run_target(target, factory, timeout, progress.update, record, counterexamples, stop)
         progress.done(outcome)
         outcomes.append(outcome)
         if args.json:
             print(json.dumps(_document(outcome)), flush=True)
     _print_summary(outcomes, table)
-    if record is not None:
+    if record is not None and outcomes:
         print(f"artifacts: {record[0]}/<suite>/<scenario>/ (run.mcap with fleetsim.rviz, failure.svg, trace.jsonl, result.json)", file=table)
+    if stop.signum is not None:
+        left = len(targets) - len(outcomes)
+        not_run = f"; {left} scenario(s) not run" if left else ""
+        print(f"\ninterrupted by {signal_name(stop.signum)}{not_run}", file=table, flush=True)
+        return stop.exit_status
     return 1 if any(o.counts_as_failure for o in outcomes) else 0
 
 
@@ -169,6 +191,7 @@ def _run_target(
     on_progress: Callable[[RunProgress], None],
     record: tuple[Path, int] | None = None,
     counterexamples: tuple[Path, int] = (DEFAULT_ARTIFACTS, 1),
+    stop: StopSignals | None = None,
 ) -> _Outcome:
     if target.error is not None:
         return _Outcome(target, _load_failure(target.label, factory.spec, target.error), loaded=False)
@@ -177,36 +200,42 @@ def _run_target(
         if target.suite.planner is not None:  # the suite documents this planner, whatever was asked
             factory = load_planner_factory(target.suite.planner, call_timeout=timeout)
         if target.spec.generate is not None:
-            return _hunt_target(target, factory, timeout, counterexamples)
+            return _hunt_target(target, factory, timeout, counterexamples, stop)
         scenario = load_scenario(target.spec, target.suite)
     except (LoadError, PlannerSpecError) as error:
         return _Outcome(target, _load_failure(target.spec.name, factory.spec, error), loaded=False)
+    extra = {"suite": str(target.suite_path), "line": target.spec.line}
+    folder = artifact_folder(record[0], target.suite_path, target.spec.name) if record is not None else None
+    # The trace goes into the artifact folder while the run goes: a run killed outright leaves it.
+    trace_file = start_run_folder(folder, {**extra, "scenario": target.spec.name, "planner": factory.spec}) if folder else None
     result = run_scenario(
         scenario, factory(), planner_name=factory.spec, planner_timeout=timeout, on_progress=on_progress,
-        keep_trace=record is not None,
+        keep_trace=record is not None, stop=stop, trace_file=trace_file,
     )  # fmt: skip
-    if record is not None:
-        root, every = record
-        folder = artifact_folder(root, target.suite_path, target.spec.name)
-        extra = {"suite": str(target.suite_path), "line": target.spec.line}
-        paths = write_run_artifacts(folder, result, extra, scenario=scenario, record_every=every)
+    if record is not None and folder is not None:
+        paths = write_run_artifacts(folder, result, extra, scenario=scenario, record_every=record[1], streamed=True)
         result = replace(result, artifacts={**result.artifacts, **paths})
     return _Outcome(target, result, loaded=True)
 
 
-def _hunt_target(target: _Target, factory: PlannerFactory, timeout: float | None, counterexamples: tuple[Path, int]) -> _Outcome:
+def _hunt_target(
+    target: _Target, factory: PlannerFactory, timeout: float | None, counterexamples: tuple[Path, int], stop: StopSignals | None
+) -> _Outcome:
     """A generated entry: hunt for a failing scenario; a shrunk counterexample is always saved (under
     ``--record``'s folder, else the default artifact folder) and its suite entry printed."""
     assert target.suite is not None and target.spec is not None and target.spec.generate is not None
-    found = hunt(target.spec, target.suite, factory, identity=factory.spec, planner_timeout=timeout)
+    root, every = counterexamples
+    folder = artifact_folder(root, target.suite_path, target.spec.name)
+    about = {"suite": str(target.suite_path), "line": target.spec.line, "scenario": target.spec.name, "planner": factory.spec}
+    found = hunt(
+        target.spec, target.suite, factory, identity=factory.spec, planner_timeout=timeout, stop=stop, record_to=(folder, about)
+    )
     if found.result is None:  # examples: 0
         return _Outcome(target, _unrun(target.spec.name, factory.spec, "passed", "no-counterexample", ()), loaded=True, hunt=found)
     result = found.result
     if found.counterexample is not None:
-        root, every = counterexamples
-        folder = artifact_folder(root, target.suite_path, target.spec.name)
         extra = {"suite": str(target.suite_path), "line": target.spec.line, **hunt_facts(found)}
-        paths = record_counterexample(found, folder, extra, record_every=every)
+        paths = record_counterexample(found, folder, extra, record_every=every, streamed=True)
         result = replace(result, artifacts={**result.artifacts, **paths})
         entry = counterexample_entry(target.spec, Path(paths["scenario"]), target.suite_path)
         story = counterexample_story(found, target.spec.generate.examples, paths["scenario"], str(target.suite_path), entry)
@@ -293,6 +322,8 @@ class _Progress:
             return
         r = outcome.result
         facts = f"tasks {r.tasks_completed}/{r.tasks_total}, t={r.sim_time:.1f} s" if outcome.loaded else "not loaded"
+        if outcome.word == "interrupted":
+            facts += f", stopped by {r.failures[0].details.get('signal', 'a signal')}" if r.failures else ""
         print(f"{self._prefix}: {outcome.word} ({facts})", file=self.stream, flush=True)
 
 
@@ -307,15 +338,18 @@ def _isatty(stream: TextIO) -> bool:
 
 
 def _print_summary(outcomes: list[_Outcome], stream: TextIO) -> None:
+    if not outcomes:
+        print("no scenario ran", file=stream)
+        return
     rows = [summary_cells(o.label, o.word, o.result if o.loaded else None) for o in outcomes]
     for line in format_table(rows):
         print(line, file=stream)
     words = [o.word for o in outcomes]
-    counts = ", ".join(f"{words.count(w)} {w}" for w in ("passed", "failed", "xfailed", "xpassed") if w in words)
+    counts = ", ".join(f"{words.count(w)} {w}" for w in ("passed", "failed", "interrupted", "xfailed", "xpassed") if w in words)
     planners = ", ".join(dict.fromkeys(o.result.planner for o in outcomes))  # first-seen order
     print(f"\n{len(outcomes)} scenario(s) with {planners}: {counts}", file=stream)
     for outcome in outcomes:
         if outcome.counts_as_failure:
-            print(f"\nFAILED {outcome.target.label}", file=stream)
+            print(f"\n{outcome.word.upper()} {outcome.target.label}", file=stream)
             for line in failure_lines(outcome.result, FAILURES_SHOWN, "--json lists them all"):
                 print("  " + line, file=stream)

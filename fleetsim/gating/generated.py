@@ -32,8 +32,9 @@ from fleetsim.errors import Location, SuiteError
 from fleetsim.load.scenario import default_vehicle_type
 from fleetsim.load.suite import ScenarioSpec, Suite
 from fleetsim.planning.protocol import Planner
-from fleetsim.recording.artifacts import write_run_artifacts
+from fleetsim.recording.artifacts import start_run_folder, write_run_artifacts
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Expectations, Scenario
+from fleetsim.sim.interrupt import StopSignals
 from fleetsim.sim.loop import run_scenario
 from fleetsim.sim.result import RunResult
 from fleetsim.strategies import GenerationSpec, NoRoomError, save_scenario, scenarios
@@ -52,7 +53,8 @@ class Hunt:
     ``examples``; when one failed, it is the last of them). ``shrink_runs``: runs of smaller variants
     of the failing one while Hypothesis shrank it, its final replay of the shrunk one included.
     ``counterexample`` and ``result``: the shrunk scenario and one more run of it that keeps the trace
-    for the recording; without a counterexample, ``result`` is the last generated scenario's run.
+    for the recording; without a counterexample, ``result`` is the last generated scenario's run (an
+    ``interrupted`` one when a stop signal ended the hunt: nothing is shrunk then).
     """
 
     generated: int
@@ -106,6 +108,11 @@ def _strategy(spec: ScenarioSpec, suite: Suite) -> SearchStrategy[Scenario]:
         raise SuiteError(f"scenario {spec.name!r}: {problem}", Location(spec.suite_path, spec.line, field="generate")) from None
 
 
+class _Stopped(BaseException):
+    """A stop signal ended a run of the hunt: Hypothesis must not take it for a failure to shrink (it
+    lets a BaseException through)."""
+
+
 @contextmanager
 def _hypothesis_storage_elsewhere() -> Iterator[None]:
     """Hypothesis's caches in a temporary folder for the hunt, not ``.hypothesis/`` in the working
@@ -127,10 +134,15 @@ def hunt(
     identity: str,
     planner_timeout: float | None = 10.0,
     derandomize: bool | None = None,
+    stop: StopSignals | None = None,
+    record_to: tuple[Path, Mapping[str, Any]] | None = None,
 ) -> Hunt:
     """Run generated scenarios of ``spec`` until one fails its ``expect``; shrink it and run it again.
 
     A generate block no layout of its size has room for is a :class:`SuiteError` before anything runs.
+    ``stop``: the active stop signals; a run they interrupt ends the hunt. ``record_to``: the artifact
+    folder of the counterexample and its ``run.json`` content; its last run streams its trace there
+    (:func:`record_counterexample` with ``streamed=True`` completes the folder).
     """
     assert spec.generate is not None
     strategy = _strategy(spec, suite)
@@ -149,7 +161,11 @@ def hunt(
             shrink_runs += 1
         else:
             generated += 1
-        last = run_scenario(judged(scenario), make_planner(), planner_name=identity, planner_timeout=planner_timeout, keep_trace=False)
+        last = run_scenario(
+            judged(scenario), make_planner(), planner_name=identity, planner_timeout=planner_timeout, keep_trace=False, stop=stop
+        )
+        if last.ended == "interrupted":
+            raise _Stopped
         shrinking = shrinking or not last.passed
         return not last.passed
 
@@ -169,8 +185,14 @@ def hunt(
             found = find(strategy, fails, settings=search)
     except NoSuchExample:
         return Hunt(generated, result=last)
+    except _Stopped:
+        return Hunt(generated, shrink_runs, result=last)
     counterexample = judged(found)
-    result = run_scenario(counterexample, make_planner(), planner_name=identity, planner_timeout=planner_timeout, keep_trace=True)
+    trace_file = start_run_folder(*record_to) if record_to is not None else None
+    result = run_scenario(
+        counterexample, make_planner(), planner_name=identity, planner_timeout=planner_timeout, keep_trace=True, stop=stop,
+        trace_file=trace_file,
+    )  # fmt: skip
     return Hunt(generated, shrink_runs, counterexample, result)
 
 
@@ -197,11 +219,16 @@ def counterexample_entry(spec: ScenarioSpec, folder: Path, suite_path: Path) -> 
     return "\n".join(lines) + "\n"
 
 
-def record_counterexample(found: Hunt, folder: Path, extra: Mapping[str, Any], *, record_every: int = 1) -> dict[str, str]:
+def record_counterexample(
+    found: Hunt, folder: Path, extra: Mapping[str, Any], *, record_every: int = 1, streamed: bool = False
+) -> dict[str, str]:
     """The shrunk counterexample's run artifacts in ``folder`` and the scenario itself as a folder
-    (map, vehicles.csv, tasks.csv) under it; their paths by kind, the scenario folder as ``scenario``."""
+    (map, vehicles.csv, tasks.csv) under it; their paths by kind, the scenario folder as ``scenario``.
+    ``streamed``: its run streamed its trace into ``folder`` (``hunt``'s ``record_to``)."""
     assert found.counterexample is not None and found.result is not None
-    paths = write_run_artifacts(folder, found.result, extra, scenario=found.counterexample, record_every=record_every)
+    paths = write_run_artifacts(
+        folder, found.result, extra, scenario=found.counterexample, record_every=record_every, streamed=streamed
+    )
     paths["scenario"] = str(save_scenario(found.counterexample, folder / COUNTEREXAMPLE_FOLDER))
     return paths
 

@@ -4,7 +4,8 @@ In *check* mode a run's hash must equal the hash recorded for its planner and sc
 different hash is a failure that says how to record it or from when on the behaviour changed. In
 *update* mode the scenario runs twice with fresh planners; equal hashes give a lock entry to record,
 different ones are a ``nondeterministic`` failure naming the first diverging step, and nothing is
-recorded.
+recorded. An interrupted run (a stop signal) is never gated nor recorded: its trace ends early, so its
+hash says nothing about the planner's behaviour.
 """
 
 from __future__ import annotations
@@ -13,9 +14,12 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import Literal
 
+from pathlib import Path
+
 from fleetsim.gating.lockfile import LockEntry, compare_run
 from fleetsim.planning.protocol import Planner
 from fleetsim.scenario import Scenario
+from fleetsim.sim.interrupt import StopSignals
 from fleetsim.sim.loop import run_scenario
 from fleetsim.sim.result import Failure, RunResult
 from fleetsim.sim.trace import first_divergence
@@ -43,21 +47,28 @@ def run_checked(  # noqa: PLR0913 - the facts of a gated run, named
     record_hint: str,
     planner_timeout: float | None,
     keep_trace: bool = False,
+    stop: StopSignals | None = None,
+    trace_file: Path | None = None,
 ) -> CheckedRun:
     """Run ``scenario`` with a planner from ``make_planner`` and gate its hash as ``mode`` says.
 
-    ``record_hint`` completes "record it with ..." in the message for a missing hash.
+    ``record_hint`` completes "record it with ..." in the message for a missing hash. ``stop`` and
+    ``trace_file`` are :func:`run_scenario`'s (the trace file is the first run's).
     """
 
-    def run() -> RunResult:
+    def run(trace: Path | None = None) -> RunResult:
         keep = keep_trace or mode == "update"  # a second run is compared line by line
-        return run_scenario(scenario, make_planner(), planner_name=identity, planner_timeout=planner_timeout, keep_trace=keep)
+        return run_scenario(
+            scenario, make_planner(), planner_name=identity, planner_timeout=planner_timeout, keep_trace=keep, stop=stop, trace_file=trace
+        )
 
-    result = run()
-    if mode == "ignore" or result.ended == "planner-error":
-        return CheckedRun(result)  # a broken run has no behaviour worth pinning
+    result = run(trace_file)
+    if mode == "ignore" or result.ended in ("planner-error", "interrupted"):
+        return CheckedRun(result)  # a broken or cut-short run has no behaviour worth pinning
     if mode == "update":
         again = run()
+        if again.ended == "interrupted":
+            return CheckedRun(replace(result, status="failed", failures=(*again.failures, *result.failures), ended="interrupted"))
         if again.trace_hash != result.trace_hash:
             return CheckedRun(_failed(result, _nondeterministic(result, again, scenario.settings.time_step)))
         return CheckedRun(result, LockEntry.from_run(result.trace_hash, result.steps, result.checkpoints))

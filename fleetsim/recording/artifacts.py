@@ -7,6 +7,13 @@ the folder also gets ``run.mcap`` (the run for RViz 2 and Foxglove), ``fleetsim.
 layout for it) and, for a failed run, ``failure.svg`` (the fleet at the first failure). A folder is rewritten
 as a whole, so stale files from an earlier run never sit next to new ones. Files are written under a
 temporary name and renamed, so an interrupted run never leaves a half-written file behind.
+
+A run whose artifacts are kept streams its trace into the folder while it goes
+(:func:`start_run_folder`, :class:`fleetsim.sim.trace.TraceFile`), beside ``run.json``, which names the
+suite, scenario and planner; so a run killed outright still leaves what ``fleetsim record --trace``
+needs to rebuild its picture and recording. When the run ends, the files are written quickest and most
+useful first — the picture, ``result.json``, then the recording (slow for a long run) and ``result.json``
+again with its path — and ``run.json`` goes, so a second Ctrl-C during the clean-up leaves complete files.
 """
 
 from __future__ import annotations
@@ -14,7 +21,7 @@ from __future__ import annotations
 import json
 import re
 import shutil
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -23,11 +30,25 @@ from fleetsim.recording.picture import failure_picture, stuck_details
 from fleetsim.recording.recorder import record_mcap
 from fleetsim.recording.rviz import rviz_config
 from fleetsim.scenario import Scenario
-from fleetsim.sim.result import RunResult
+from fleetsim.sim.result import Failure, RunResult
 
-__all__ = ["MCAP_FILE", "PICTURE_FILE", "RESULT_FILE", "RVIZ_CONFIG", "RVIZ_FILE", "TRACE_FILE", "artifact_folder", "write_run_artifacts"]
+__all__ = [
+    "MCAP_FILE",
+    "PICTURE_FILE",
+    "RESULT_FILE",
+    "RUN_FILE",
+    "RVIZ_CONFIG",
+    "RVIZ_FILE",
+    "TRACE_FILE",
+    "artifact_folder",
+    "discard_run_folder",
+    "start_run_folder",
+    "stuck_overlay",
+    "write_run_artifacts",
+]
 
 RESULT_FILE = "result.json"
+RUN_FILE = "run.json"  # what a run in progress is of; replaced by result.json when it ends
 TRACE_FILE = "trace.jsonl"
 MCAP_FILE = "run.mcap"
 PICTURE_FILE = "failure.svg"
@@ -48,13 +69,37 @@ def artifact_folder(root: Path, suite_path: Path, scenario: str) -> Path:
     return root / _safe(stem) / _safe(scenario)
 
 
-def _stuck(result: RunResult) -> dict[str, Any] | None:
-    """The details of the run's deadlock or timeout failure with its headline, for the recording."""
-    for failure in result.failures:
+def stuck_overlay(failures: Sequence[Failure]) -> dict[str, Any] | None:
+    """The details of a run's deadlock, timeout or interruption that explains who waits for whom, with its
+    headline, for the recording; None when no failure does."""
+    for failure in failures:
         details = stuck_details(failure)
         if details is not None:
             return {**details, "headline": f"{failure.kind}: {failure.message}"}
     return None
+
+
+def start_run_folder(folder: Path, about: Mapping[str, Any]) -> Path:
+    """Empty ``folder`` for a run about to start and write its ``run.json`` (``about``: the suite,
+    scenario, planner, ...); the path its trace is to be streamed to."""
+    if folder.exists():
+        shutil.rmtree(folder)
+    folder.mkdir(parents=True)
+    write_text_atomically(folder / RUN_FILE, json.dumps(dict(about), indent=2, sort_keys=True) + "\n")
+    return folder / TRACE_FILE
+
+
+def discard_run_folder(folder: Path, root: Path) -> None:
+    """Remove the folder of a run whose artifacts are not kept (it passed), and the folders above it up to
+    ``root`` that it leaves empty."""
+    shutil.rmtree(folder, ignore_errors=True)
+    for parent in folder.parents:
+        if parent == root.parent or not parent.is_relative_to(root):
+            break
+        try:
+            parent.rmdir()
+        except OSError:  # not empty (other runs' folders), or gone
+            break
 
 
 def write_run_artifacts(
@@ -64,31 +109,41 @@ def write_run_artifacts(
     *,
     scenario: Scenario | None = None,
     record_every: int = 1,
+    streamed: bool = False,
 ) -> dict[str, str]:
     """Write the run's files into ``folder`` (replacing what was there); their paths by kind.
 
     ``extra`` adds keys to ``result.json`` (the suite file, the pytest node id, ...). With the run's
     ``scenario`` and a kept trace, the recording (every ``record_every``-th step) and, for a failed run,
-    the failure picture are written too.
+    the failure picture are written too. ``streamed``: the folder was made by :func:`start_run_folder`
+    and holds the run's trace already; it is kept.
     """
-    if folder.exists():
-        shutil.rmtree(folder)
-    folder.mkdir(parents=True)
+    if not streamed:
+        if folder.exists():
+            shutil.rmtree(folder)
+        folder.mkdir(parents=True)
     paths = {"folder": str(folder), "result": str(folder / RESULT_FILE)}
     lines = result.trace.lines if result.trace is not None else []
     if lines:
         paths["trace"] = str(folder / TRACE_FILE)
-        write_text_atomically(folder / TRACE_FILE, "\n".join(lines) + "\n")
+        if not streamed:
+            write_text_atomically(folder / TRACE_FILE, "\n".join(lines) + "\n")
     if lines and scenario is not None:
-        paths["mcap"] = str(record_mcap(folder / MCAP_FILE, scenario, lines, every=record_every, stuck=_stuck(result)).path)
-        write_text_atomically(folder / RVIZ_FILE, rviz_config(scenario, RVIZ_CONFIG.read_text(encoding="utf-8")))
-        paths["rviz"] = str(folder / RVIZ_FILE)
         picture = failure_picture(scenario, result)
         if picture is not None:
             write_text_atomically(folder / PICTURE_FILE, picture[1])
             paths["picture"] = str(folder / PICTURE_FILE)
+        _write_result(folder, result, paths, extra)  # in case the recording is cut short
+        paths["mcap"] = str(record_mcap(folder / MCAP_FILE, scenario, lines, every=record_every, stuck=stuck_overlay(result.failures)).path)
+        write_text_atomically(folder / RVIZ_FILE, rviz_config(scenario, RVIZ_CONFIG.read_text(encoding="utf-8")))
+        paths["rviz"] = str(folder / RVIZ_FILE)
+    _write_result(folder, result, paths, extra)
+    (folder / RUN_FILE).unlink(missing_ok=True)
+    return paths
+
+
+def _write_result(folder: Path, result: RunResult, paths: Mapping[str, str], extra: Mapping[str, Any] | None) -> None:
     document = result.to_dict()
     document["artifacts"] = {**document["artifacts"], **paths}
     document.update(extra or {})
     write_text_atomically(folder / RESULT_FILE, json.dumps(document, indent=2, sort_keys=True) + "\n")
-    return paths

@@ -36,6 +36,7 @@ _CYCLE = "#d0021b"
 _CONTESTED = "#8e44ad"
 _REJECTED = "#d6008f"
 _REJECTED_LEGEND = "magenta, dashed: the rejected plan (red outline: the leg that failed the check)"
+_STUCK_KINDS = ("deadlock", "timeout", "interrupted")  # failures that explain who waits for whom
 _MIN_WIDTH = 480.0  # user units: room for a readable caption on the smallest maps
 _STUCK_LEGEND = (
     "arrow: waits for (red: in a wait-for cycle; dotted: plans to drive near its free next leg) \u00b7 "
@@ -303,8 +304,12 @@ def failure_step(failures: Sequence[Failure], time_step: float, last_step: int) 
 
     A failure at time t belongs to the step that ended at t (step ``t / time_step - 1``). Hash failures
     have no moment: when they are all there is, the picture is of the last step. Ties go to the failure
-    listed first. None without failures.
+    listed first. An interrupted run is pictured at its last step, the moment it was stopped at (what
+    was happening then is what its user wanted to see). None without failures.
     """
+    for failure in failures:
+        if failure.kind == "interrupted":
+            return last_step, failure
     timed = [(_step_of(f, time_step, last_step), index) for index, f in enumerate(failures) if f.kind not in MOMENTLESS]
     if timed:
         step, index = min(timed)
@@ -352,5 +357,5 @@ def failure_picture(scenario: Scenario, result: RunResult) -> tuple[int, str] | 
 
 
 def stuck_details(failure: Failure) -> Mapping[str, Any] | None:
-    """Who waits for whom, when ``failure`` is a deadlock or timeout that explains it; else None."""
-    return failure.details if failure.kind in ("deadlock", "timeout") and "vehicles" in failure.details else None
+    """Who waits for whom, when ``failure`` is a deadlock, timeout or interruption that explains it; else None."""
+    return failure.details if failure.kind in _STUCK_KINDS and "vehicles" in failure.details else None

@@ -22,7 +22,8 @@ Topics:
   for whom (namespace ``wait_for``, arrows; ``wait_for_cycle`` red; ``planned_near`` thin), the root-cause
   vehicles (``root_cause``, red discs), the contested segments (``contested``, purple) and the headline
   (``stuck_text``).
-- ``/rosout``: rejections, route errors and alerts (warnings), planner errors (errors), completed tasks.
+- ``/rosout``: rejections, route errors, alerts and an interruption (warnings), planner errors (errors),
+  completed tasks.
 
 The file is written under a temporary name and renamed when complete, so an interrupted recording never
 leaves a half-written file where a reviewer looks.
@@ -59,6 +60,7 @@ __all__ = [
     "Recording",
     "alert_label",
     "fleet_urdf",
+    "partial_path",
     "record_mcap",
 ]
 
@@ -330,6 +332,8 @@ def _log_lines(event: Sequence[Any]) -> tuple[int, str] | None:
         return _WARN, alert.text()
     if kind == "planner-error":
         return _ERROR, f"planner error for vehicle {event[1]}"
+    if kind == "interrupted":
+        return _WARN, f"run interrupted by {event[1]}: it ends here"
     return None
 
 
@@ -398,6 +402,12 @@ def _write_frame(bag: _Bag, scene: _Scene, frame: Frame, *, first: bool, tick: b
             bag.write("/rosout", time_ns, m.log(time, line[0], line[1]))
 
 
+def partial_path(path: Path) -> Path:
+    """Where the recording for ``path`` is written until it is complete: ``.run.mcap.partial`` beside it.
+    A writer killed outright leaves it; ``fleetsim record --trace`` replaces it with a complete file."""
+    return path.with_name(f".{path.name}.partial")
+
+
 def record_mcap(
     path: Path, scenario: Scenario, trace_lines: Sequence[str], *, every: int = 1, stuck: Mapping[str, Any] | None = None
 ) -> Recording:
@@ -412,7 +422,7 @@ def record_mcap(
         msg = f"every={every!r} must be a whole number of steps >= 1"
         raise ValueError(msg)
     path.parent.mkdir(parents=True, exist_ok=True)
-    partial = path.with_name(f".{path.name}.partial")
+    partial = partial_path(path)
     try:
         with partial.open("wb") as stream:
             bag = _Bag(stream)

@@ -21,6 +21,7 @@ from types import FrameType
 
 from fleetsim.errors import FleetsimError, PlannerProcessError
 from fleetsim.planning.protocol import RouteError
+from fleetsim.sim.interrupt import PlannerInterrupted
 
 __all__ = ["PlannerFault", "PlannerGuard"]
 
@@ -74,6 +75,16 @@ class PlannerGuard:
         self._previous_timer: tuple[float, float] = (0.0, 0.0)
         self._entered = 0.0
 
+    @property
+    def in_call(self) -> bool:
+        """A planner call is in progress (a stop signal may cut it short)."""
+        return self._call_started is not None
+
+    def forget_call(self) -> None:
+        """No call is in progress any more (one was abandoned by an exception raised between its return
+        and its accounting), so the timer must not fire for it."""
+        self._call_started = None
+
     def _tick(self, signum: int, frame: FrameType | None) -> None:
         started = self._call_started
         if started is not None and self.timeout is not None and time.perf_counter() - started > self.timeout:
@@ -105,7 +116,7 @@ class PlannerGuard:
         start = self._call_started = _clock()
         try:
             response = call(task, fleet, layout)
-        except RouteError:
+        except (RouteError, PlannerInterrupted):
             self._account(start)
             raise
         except _Overrun:

@@ -4,8 +4,10 @@ Each step, at time t: (1) bookkeeping — completed tasks leave their queues; (2
 ``planning_period``, each vehicle with tasks, in ascending id, is asked ``plan_routes`` (head task
 unrouted) or ``fix_legs``, and each response is checked and applied at once; (3) the reservation check;
 (4) motion over [t, t + dt] with task completions; (5) t ← t + dt and the step goes into the trace;
-(6) the end: all tasks done, the time limit, a stop-on event, a planner error, or deadlock (tasks
-pending, nothing moved and no plan changed for ``deadlock_after`` seconds).
+(6) the end: all tasks done, the time limit, a stop-on event, a planner error, deadlock (tasks
+pending, nothing moved and no plan changed for ``deadlock_after`` seconds), or a stop signal
+(:mod:`fleetsim.sim.interrupt`; ``interrupted``, with an ``["interrupted", signal]`` event in the
+step's trace line; a planner call in progress is cut short and the step ends without its answer).
 
 Event times: every event of a step (a rejection, a route error, a planner error, a collision alert, a
 completed task, the end of the run) is stamped t + dt, the end of the step it happened in. That is the
@@ -19,6 +21,7 @@ import math
 import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
+from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Literal
 
@@ -31,8 +34,9 @@ from fleetsim.planning.snapshot import VehicleState
 from fleetsim.scenario import Scenario
 from fleetsim.sim.diagnosis import Diagnosis, StuckFacts, diagnose
 from fleetsim.sim.guard import PlannerFault, PlannerGuard
+from fleetsim.sim.interrupt import PlannerInterrupted, StopSignals, signal_name
 from fleetsim.sim.result import AlertEvent, DeadlockReport, Ending, Failure, Metrics, RejectionEvent, RunResult, judge
-from fleetsim.sim.trace import Trace, plan_record
+from fleetsim.sim.trace import Trace, TraceFile, plan_record
 
 __all__ = ["RunProgress", "run_scenario"]
 
@@ -74,18 +78,23 @@ class _Run:
         self.plan_changed: dict[int, float] = {}
         self.accepted_plans = 0
         self.planner_error: Failure | None = None
+        self.interrupted_planning = False
 
     # -- the steps -----------------------------------------------------------------------------------
 
     def plan(self, now: float, stamp: float, events: list[list[Any]], plans: list[list[Any]]) -> bool:
         """Step 2 at ``now`` (what the planner sees); its events are stamped ``stamp``, the step's end.
-        False when the planner failed and the run must end."""
+        False when the planner failed and the run must end. A stop signal during a planner call ends
+        the planning of the step there (``interrupted_planning``); the call's answer is not waited for."""
         try:
             for outcome in self.controller.consult_all(self.planner, now):
                 self._note(outcome, now, stamp, events, plans)
         except (PlannerFault, PlannerError) as fault:
             self._planner_failed(fault, stamp, events)
             return False
+        except PlannerInterrupted:
+            self.guard.forget_call()
+            self.interrupted_planning = True
         return True
 
     def _planner_failed(self, fault: PlannerFault | PlannerError, stamp: float, events: list[list[Any]]) -> None:
@@ -190,18 +199,32 @@ def run_scenario(
     planner_timeout: float | None = 10.0,
     keep_trace: bool = True,
     on_progress: Callable[[RunProgress], None] | None = None,
+    stop: StopSignals | None = None,
+    trace_file: Path | None = None,
 ) -> RunResult:
     """Simulate ``scenario`` with ``planner`` (a fresh instance) and judge the run against its ``expect``.
 
     A planner with a ``close()`` method (a planner process, say) is closed when the run ends, however it ends.
+    ``stop``: the active :class:`StopSignals`; once it has received a signal, the run ends at the end of
+    the step (``ended: "interrupted"``). ``trace_file``: where to write the trace while the run goes
+    (:class:`TraceFile`); it holds every step written, however the run ends.
     """
+    sink = TraceFile(trace_file) if trace_file is not None else None
     try:
         with PlannerGuard(planner_timeout) as guard:
-            return _simulate(scenario, planner, guard, planner_name, keep_trace, on_progress)
+            if stop is not None:
+                stop.guard = guard
+            return _simulate(scenario, planner, guard, planner_name, keep_trace, on_progress, stop, sink)
     finally:
-        close = getattr(planner, "close", None)
-        if callable(close):
-            close()
+        if stop is not None:
+            stop.guard = None
+        try:
+            if sink is not None:
+                sink.close()
+        finally:
+            close = getattr(planner, "close", None)
+            if callable(close):
+                close()
 
 
 def _simulate(
@@ -211,9 +234,12 @@ def _simulate(
     planner_name: str,
     keep_trace: bool,
     on_progress: Callable[[RunProgress], None] | None,
+    stop: StopSignals | None,
+    sink: TraceFile | None,
 ) -> RunResult:
     started = time.perf_counter()
     run = _Run(scenario, planner, guard, keep_trace)
+    run.trace.sink = sink
     settings = scenario.settings
     dt = settings.time_step
     period = max(1, round(settings.planning_period / dt))
@@ -244,9 +270,10 @@ def _simulate(
         # The trace holds what changed; at step 0 that is everyone (the start), later only who moved.
         if step == 0:
             moved = [run.controller.state_of(v) for v in run.drivers]
-        run.trace.record(step, moved, plans, events)
         if not planned_ok:
             ended = "planner-error"
+        elif run.interrupted_planning:  # the step's planning was cut short: no other ending can be judged
+            ended = "interrupted"
         elif run.controller.tasks.all_done():
             ended = "completed"
         elif rejected and "rejection" in settings.stop_on:
@@ -256,17 +283,23 @@ def _simulate(
         elif end - run.last_activity >= settings.deadlock_after - 1e-9:
             ended = "deadlock"
             deadlock = DeadlockReport(end, run.diagnose("deadlock", end))
+        elif stop is not None and stop.requested:
+            ended = "interrupted"
         else:
+            run.trace.record(step, moved, plans, events)
             if on_progress is not None and step % 50 == 0:
                 on_progress(RunProgress(end, step + 1, len(run.controller.tasks.completed()), run.controller.tasks.total))
             continue
+        if ended == "interrupted":
+            events.append(["interrupted", signal_name(stop.signum or 0) if stop is not None else "signal"])
+        run.trace.record(step, moved, plans, events)
         break
     steps = step + 1
     sim_time = steps * dt
     completed = run.controller.tasks.completed()
     diagnosis = deadlock.diagnosis if deadlock is not None else None
-    if ended == "time-limit" and not run.controller.tasks.all_done():
-        diagnosis = run.diagnose("timeout", sim_time)
+    if ended in ("time-limit", "interrupted") and not run.controller.tasks.all_done():
+        diagnosis = run.diagnose("timeout", sim_time)  # who is still driving, who waits for whom
     makespan = max(completed.values()) if completed and run.controller.tasks.all_done() else None
     failures = judge(
         scenario.expect,
@@ -281,6 +314,7 @@ def _simulate(
         deadlock=deadlock,
         planner_error=run.planner_error,
         diagnosis=diagnosis,
+        interrupted_by=signal_name(stop.signum or 0) if ended == "interrupted" and stop is not None else None,
     )
     metrics = Metrics(
         makespan=makespan,

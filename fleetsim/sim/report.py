@@ -31,6 +31,7 @@ _BROKEN = {
     "deadlock": "expect.deadlock: false",
     "timeout": "expect.tasks",
     "planner-error": "the planner failed",
+    "interrupted": "finishing the run (a stop signal ended it early)",
     "hash-mismatch": "the recorded trace hash",
     "hash-missing": "the recorded trace hash",
     "nondeterministic": "a deterministic planner",
@@ -73,7 +74,7 @@ def failure_text(result: RunResult, failure: Failure) -> str:
         for event in result.collisions:
             if event.time == failure.time and event.alert.segment == failure.details.get("segment"):
                 return event.alert.text()
-    if failure.kind in ("deadlock", "timeout") and result.diagnosis is not None:
+    if failure.kind in ("deadlock", "timeout", "interrupted") and result.diagnosis is not None:
         return "\n".join([failure.message, *result.diagnosis.lines()])
     if failure.kind == "planner-error" and failure.details.get("traceback"):
         return f"{failure.message}\n{str(failure.details['traceback']).rstrip()}"

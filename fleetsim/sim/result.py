@@ -2,8 +2,9 @@
 
 A run's events (rejections, collision alerts, route errors, the way it ended) are judged against the
 scenario's ``expect`` block; every way in which they fall short is a :class:`Failure` with a kind:
-``rejection``, ``collision``, ``timeout``, ``deadlock``, ``planner-error``, ``hash-mismatch``, or
-``expectation`` (something the scenario required did not happen).
+``rejection``, ``collision``, ``timeout``, ``deadlock``, ``planner-error``, ``hash-mismatch``,
+``interrupted`` (a stop signal ended the run early), or ``expectation`` (something the scenario required
+did not happen).
 """
 
 from __future__ import annotations
@@ -23,8 +24,17 @@ from fleetsim.sim.trace import Trace
 __all__ = ["MOMENTLESS", "AlertEvent", "DeadlockReport", "Failure", "Metrics", "RejectionEvent", "RunResult", "judge", "plan_legs"]
 
 # "no-counterexample": a generated suite entry whose hunt found no scenario the planner fails.
+# "interrupted": SIGINT or SIGTERM ended the run at the end of a step (fleetsim.sim.interrupt).
 Ending = Literal[
-    "completed", "time-limit", "deadlock", "rejection", "collision", "planner-error", "load-error", "no-counterexample"
+    "completed",
+    "time-limit",
+    "deadlock",
+    "rejection",
+    "collision",
+    "planner-error",
+    "interrupted",
+    "load-error",
+    "no-counterexample",
 ]
 
 
@@ -215,8 +225,22 @@ def judge(  # noqa: PLR0913 - the facts of a run, named
     deadlock: DeadlockReport | None,
     planner_error: Failure | None,
     diagnosis: Diagnosis | None = None,
+    interrupted_by: str | None = None,
 ) -> tuple[Failure, ...]:
-    """Every way the run falls short of ``expect`` (SPEC §13), in a fixed order."""
+    """Every way the run falls short of ``expect`` (SPEC §13), in a fixed order.
+
+    An interrupted run (``interrupted_by``: the signal's name) fails with an ``interrupted`` failure,
+    listed first, and keeps the failures of what did happen (rejections, alerts, a planner error);
+    what the scenario expected to happen later (tasks, alerts, a deadlock) is not judged: the run
+    did not get there.
+    """
+    if interrupted_by is not None:
+        stopped = _interrupted(interrupted_by, end_time, tasks_total, tasks_completed, pending, diagnosis)
+        rest = judge(
+            expect, ended="completed", end_time=end_time, tasks_total=tasks_total, tasks_completed=tasks_total, pending=(),
+            makespan=makespan, rejections=rejections, collisions=collisions, deadlock=None, planner_error=planner_error,
+        )  # fmt: skip
+        return (stopped, *(f for f in rest if f.kind != "expectation"))
     failures: list[Failure] = []
     if planner_error is not None:
         failures.append(planner_error)
@@ -243,6 +267,18 @@ def judge(  # noqa: PLR0913 - the facts of a run, named
         msg = f"makespan {makespan:.2f} s exceeds max_makespan {expect.max_makespan:g} s"
         failures.append(Failure("expectation", makespan, msg, {"expect": "max_makespan"}))
     return tuple(failures)
+
+
+def _interrupted(
+    signal: str, end_time: float, tasks_total: int, tasks_completed: int, pending: tuple[Task, ...], diagnosis: Diagnosis | None
+) -> Failure:
+    msg = f"stopped by {signal} at the end of the step, with {tasks_completed} of {tasks_total} tasks completed"
+    details: dict[str, Any] = {"signal": signal, "pending": [t.id for t in pending]}
+    if diagnosis is not None and diagnosis.roots:
+        msg = f"{msg}; {diagnosis.headline()}"
+    if diagnosis is not None:
+        details.update(diagnosis.to_dict())
+    return Failure("interrupted", end_time, msg, details)
 
 
 def _rejection_details(rejection: Rejection) -> dict[str, Any]:

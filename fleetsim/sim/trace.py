@@ -11,15 +11,28 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
+import time
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from pathlib import Path
+from typing import IO, Any
 
 from fleetsim.enums import Progress, Traverse
 from fleetsim.planning.protocol import FleetPlan
 from fleetsim.planning.snapshot import VehicleState
 
-__all__ = ["TRACE_FORMAT", "Divergence", "Trace", "first_divergence", "plan_record", "vehicle_record", "vehicle_records"]
+__all__ = [
+    "TRACE_FORMAT",
+    "Divergence",
+    "Trace",
+    "TraceFile",
+    "complete_lines",
+    "first_divergence",
+    "plan_record",
+    "vehicle_record",
+    "vehicle_records",
+]
 
 TRACE_FORMAT = "fleetsim-trace/1"
 CHECKPOINT_EVERY = 100  # steps between the running digests kept for locating a divergence later
@@ -69,14 +82,77 @@ def plan_record(plan: FleetPlan) -> list[Any]:
     ]
 
 
+class TraceFile:
+    """A trace written while its run goes, so a run killed outright (SIGKILL, out of memory, a machine
+    gone) leaves a trace that is valid up to its last complete line.
+
+    Lines are those the hash is taken over, each ending in a newline, so the file's SHA-256 is the trace
+    hash of a complete run. They are written and flushed at every checkpoint (every 100 steps) and at
+    least every ``FLUSH_SECONDS`` of wall time (a slow planner takes long over 100 steps), and synced to
+    the disk at most that often.
+    """
+
+    FLUSH_SECONDS = 1.0
+
+    def __init__(self, path: Path) -> None:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        self.path = path
+        self._file: IO[str] = path.open("w", encoding="utf-8", newline="\n")
+        self._pending: list[str] = []
+        self._flushed = self._synced = -self.FLUSH_SECONDS  # the first step is written at once
+
+    def add(self, line: str) -> None:
+        self._pending.append(line)
+
+    @property
+    def due(self) -> bool:
+        """The last flush is ``FLUSH_SECONDS`` old."""
+        return time.monotonic() - self._flushed >= self.FLUSH_SECONDS
+
+    def flush(self, *, sync: bool = False) -> None:
+        """Write the pending lines and flush them to the operating system (and to the disk, when ``sync``
+        or the last sync is ``FLUSH_SECONDS`` old)."""
+        if self._file.closed:
+            return
+        if self._pending:
+            self._file.write("".join(f"{line}\n" for line in self._pending))
+            self._pending.clear()
+        self._file.flush()
+        now = self._flushed = time.monotonic()
+        if sync or now - self._synced >= self.FLUSH_SECONDS:
+            os.fsync(self._file.fileno())
+            self._synced = now
+
+    def close(self) -> None:
+        """Write what is pending, sync and close (again: nothing)."""
+        if not self._file.closed:
+            try:
+                self.flush(sync=True)
+            finally:
+                self._file.close()
+
+
+def complete_lines(text: str) -> tuple[list[str], bool]:
+    """The lines of a trace file that are whole, and whether the file ended cleanly.
+
+    A run killed while writing may leave a last line without its newline (or cut inside a character);
+    that line is dropped and the second value is False.
+    """
+    lines = text.split("\n")
+    tail = lines.pop()  # after the last newline: empty when the file ends cleanly
+    return lines, not tail
+
+
 @dataclass(slots=True)
 class Trace:
-    """The trace being written: its running hash, checkpoints and (optionally) its lines."""
+    """The trace being written: its running hash, checkpoints, (optionally) its lines, and (optionally) the
+    file it streams to."""
 
     keep_lines: bool = True
     lines: list[str] = field(default_factory=list)
     checkpoints: list[tuple[int, str]] = field(default_factory=list)  # (step, digest so far)
     steps: int = 0
+    sink: TraceFile | None = None
     _hash: Any = field(default_factory=hashlib.sha256)
     _last: dict[int, VehicleRecord] = field(default_factory=dict)
 
@@ -100,14 +176,21 @@ class Trace:
                 changed.append(record)
         self._write(_encode_step([step, changed, list(plans), list(events)]))
         self.steps = step + 1
+        sink = self.sink
         if self.steps % CHECKPOINT_EVERY == 0:
             self.checkpoints.append((step, self._hash.copy().hexdigest()))
+            if sink is not None:
+                sink.flush()
+        elif sink is not None and sink.due:
+            sink.flush()
 
     def _write(self, line: str) -> None:
         self._hash.update(line.encode("utf-8"))
         self._hash.update(b"\n")
         if self.keep_lines:
             self.lines.append(line)
+        if self.sink is not None:
+            self.sink.add(line)
 
     @property
     def digest(self) -> str:
