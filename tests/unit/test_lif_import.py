@@ -90,6 +90,16 @@ def test_the_robot_type_option_chooses_whose_edges_form_the_map(tmp_path: Path, 
     assert "warning skipped-edge: an edge not usable by" in lifted.warnings[0] and "(2 times" in lifted.warnings[0]
 
 
+def test_a_robot_type_that_may_use_every_edge_skips_none(tmp_path: Path) -> None:
+    assert load(tmp_path, TYPED, robot_type="Acme.Tug").warnings == ()
+
+
+def test_an_edge_to_a_node_of_its_own_layout_is_kept_without_a_warning(tmp_path: Path) -> None:
+    document = lif_v1(layout("hall", [node("A", 0, 0), node("B", 5, 0), node("Z", 5, 5)], [edge("e1", "A", "B"), edge("lift", "B", "Z")]))
+    site = load(tmp_path, document)
+    assert [s.names for s in site.segments] == [("e1",), ("lift",)] and site.warnings == ()
+
+
 def test_edges_that_differ_per_robot_type_need_the_option(tmp_path: Path) -> None:
     with pytest.raises(MapError) as caught:
         load(tmp_path, to_v2(TYPED))
