@@ -9,6 +9,8 @@ Progress comes from priorities. A vehicle with a task ranks by how long it has w
 task (the longest first; ties by id, so at the start the order is the vehicles' ids); a vehicle with no
 tasks left ranks last. The rules, in the order a blocked vehicle tries them:
 
+- *Hold only what you need.* A vehicle fixes its way up to the first place past its braking distance
+  and ``fix_ahead`` metres where it may stop, not as far as the way is free.
 - *Stop only where you do not block.* Legs fixed in one go end at the goal or on a leg that no
   higher-ranked vehicle's next legs come near, and never next to the exit of a vehicle that stands
   further along the route (it would be shut in). A lower-ranked vehicle's plans are no reason to stop.
@@ -16,10 +18,11 @@ tasks left ranks last. The rules, in the order a blocked vehicle tries them:
   the planner returns plans for them too, whose fixed legs take them to the nearest place off its route
   (moving the vehicles in their way first, two deep), and then on to their goals. Idle vehicles near a
   route are moved before anyone arrives. When the blockers cannot move (a dead end behind them), the
-  vehicle steps aside itself and waits off their way until they have moved.
+  vehicle steps aside itself and waits off their way until they have moved (moving those with no
+  tasks left off its way once it is out of theirs).
 - *Move on.* A vehicle whose way is free but that has nowhere to stop moves on anyway after 5 s.
-- *Look for a way round* after 2 s, then at doubling intervals (up to 16 s), counting the segments
-  others hold as nearly impassable; taken only when at most 1.5 times (+10 m) the way it replaces.
+- *Look for a way round* after 3 s, then at doubling intervals (up to 16 s), off every segment others
+  hold; taken only when at most 1.1 times (+2 m) the way it replaces (the search stops there).
 - *Dance.* When a few vehicles stay stuck in each other's way, a joint search finds single-leg moves
   that bring one of them to its goal, and they drive them in order (:mod:`fleetsim.planners.choreography`).
 
