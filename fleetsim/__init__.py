@@ -1,54 +1,64 @@
 """fleetsim: test fleet route planners against declarative scenarios, headless.
 
 The public API is exactly what this module exports (``__all__``); everything else may change.
+
+Importing :mod:`fleetsim` is cheap: each public name is imported from its module when it is first used,
+so that the command line and the pytest plugin (loaded in every pytest session of an environment where
+fleetsim is installed) pay only for what they use.
 """
 
-from fleetsim.enums import ConflictModel, Direction, JointKind, Progress, Shape, Traverse, TurnCapability
-from fleetsim.errors import (
-    FleetsimError,
-    LayoutError,
-    LoadError,
-    Location,
-    MapError,
-    PlannerError,
-    ScenarioFileError,
-    SuiteError,
-    UnreachableTaskError,
-)
-from fleetsim.layout import Connection, Layout, LintFinding, Segment, build_layout
-from fleetsim.load import (
-    ScenarioSpec,
-    Suite,
-    TiledMap,
-    discover_suites,
-    load_map,
-    load_scenario,
-    load_scenario_dir,
-    load_suite,
-    write_map,
-)
-from fleetsim.planning import (
-    CollisionAlert,
-    FleetLeg,
-    FleetPlan,
-    FleetSnapshot,
-    Planner,
-    Rejection,
-    RejectionCode,
-    RouteError,
-    VehicleState,
-)
-from fleetsim.scenario import (
-    DEFAULT_VEHICLE_TYPE,
-    Expectations,
-    Scenario,
-    ScenarioSettings,
-    Task,
-    Vehicle,
-    VehicleType,
-)
-from fleetsim.sim import Divergence, Failure, RunResult, first_divergence, run_scenario
-from fleetsim.sim.planner_spec import PlannerSpecError, load_planner_factory
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from fleetsim.enums import ConflictModel, Direction, JointKind, Progress, Shape, Traverse, TurnCapability
+    from fleetsim.errors import (
+        FleetsimError,
+        LayoutError,
+        LoadError,
+        Location,
+        MapError,
+        PlannerError,
+        ScenarioFileError,
+        SuiteError,
+        UnreachableTaskError,
+    )
+    from fleetsim.layout import Connection, Layout, LintFinding, Segment, build_layout
+    from fleetsim.load import (
+        ScenarioSpec,
+        Suite,
+        TiledMap,
+        discover_suites,
+        load_map,
+        load_scenario,
+        load_scenario_dir,
+        load_suite,
+        write_map,
+    )
+    from fleetsim.planning import (
+        CollisionAlert,
+        FleetLeg,
+        FleetPlan,
+        FleetSnapshot,
+        Planner,
+        Rejection,
+        RejectionCode,
+        RouteError,
+        VehicleState,
+    )
+    from fleetsim.scenario import (
+        DEFAULT_VEHICLE_TYPE,
+        Expectations,
+        Scenario,
+        ScenarioSettings,
+        Task,
+        Vehicle,
+        VehicleType,
+    )
+    from fleetsim.sim import Divergence, Failure, RunResult, first_divergence, run_scenario
+    from fleetsim.sim.planner_spec import PlannerSpecError, load_planner_factory
 
 __version__ = "0.1.0"
 
@@ -108,3 +118,72 @@ __all__ = [
     "write_map",
     "__version__",
 ]
+
+_HOMES: dict[str, str] = {
+    "CollisionAlert": "fleetsim.planning",
+    "ConflictModel": "fleetsim.enums",
+    "Connection": "fleetsim.layout",
+    "DEFAULT_VEHICLE_TYPE": "fleetsim.scenario",
+    "Direction": "fleetsim.enums",
+    "Divergence": "fleetsim.sim",
+    "Expectations": "fleetsim.scenario",
+    "Failure": "fleetsim.sim",
+    "FleetLeg": "fleetsim.planning",
+    "FleetPlan": "fleetsim.planning",
+    "FleetSnapshot": "fleetsim.planning",
+    "FleetsimError": "fleetsim.errors",
+    "JointKind": "fleetsim.enums",
+    "Layout": "fleetsim.layout",
+    "LayoutError": "fleetsim.errors",
+    "LintFinding": "fleetsim.layout",
+    "LoadError": "fleetsim.errors",
+    "Location": "fleetsim.errors",
+    "MapError": "fleetsim.errors",
+    "Planner": "fleetsim.planning",
+    "PlannerError": "fleetsim.errors",
+    "PlannerSpecError": "fleetsim.sim.planner_spec",
+    "Progress": "fleetsim.enums",
+    "Rejection": "fleetsim.planning",
+    "RejectionCode": "fleetsim.planning",
+    "RouteError": "fleetsim.planning",
+    "RunResult": "fleetsim.sim",
+    "Scenario": "fleetsim.scenario",
+    "ScenarioFileError": "fleetsim.errors",
+    "ScenarioSettings": "fleetsim.scenario",
+    "ScenarioSpec": "fleetsim.load",
+    "Segment": "fleetsim.layout",
+    "Shape": "fleetsim.enums",
+    "Suite": "fleetsim.load",
+    "SuiteError": "fleetsim.errors",
+    "Task": "fleetsim.scenario",
+    "TiledMap": "fleetsim.load",
+    "Traverse": "fleetsim.enums",
+    "TurnCapability": "fleetsim.enums",
+    "UnreachableTaskError": "fleetsim.errors",
+    "Vehicle": "fleetsim.scenario",
+    "VehicleState": "fleetsim.planning",
+    "VehicleType": "fleetsim.scenario",
+    "build_layout": "fleetsim.layout",
+    "discover_suites": "fleetsim.load",
+    "first_divergence": "fleetsim.sim",
+    "load_map": "fleetsim.load",
+    "load_planner_factory": "fleetsim.sim.planner_spec",
+    "load_scenario": "fleetsim.load",
+    "load_scenario_dir": "fleetsim.load",
+    "load_suite": "fleetsim.load",
+    "run_scenario": "fleetsim.sim",
+    "write_map": "fleetsim.load",
+}
+
+
+def __getattr__(name: str) -> Any:
+    home = _HOMES.get(name)
+    if home is None:
+        raise AttributeError(f"module 'fleetsim' has no attribute {name!r}")
+    value = getattr(importlib.import_module(home), name)
+    globals()[name] = value  # looked up once
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(__all__)

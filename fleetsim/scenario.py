@@ -6,10 +6,12 @@ import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 from fleetsim.enums import ConflictModel, Progress, Traverse, TurnCapability
-from fleetsim.layout.layout import Layout
+
+if TYPE_CHECKING:
+    from fleetsim.layout.layout import Layout
 
 __all__ = [
     "DEFAULT_VEHICLE_TYPE",

@@ -50,11 +50,11 @@ from fleetsim.sim.planner_spec import PlannerFactory, PlannerSpecError, load_pla
 from fleetsim.sim.report import failure_report, format_table, summary_cells
 from fleetsim.sim.result import RunResult
 from pytest_fleetsim._items import ScenarioFailed, ScenarioItem
+from pytest_fleetsim._key import STATE_KEY
 from pytest_fleetsim._planner import planner_source
 
 __all__ = ["NO_PLANNER", "FleetsimState", "state_of"]
 
-STATE_KEY = pytest.StashKey["FleetsimState"]()
 NO_PLANNER = (
     "no planner to test: run pytest with --planner module:Planner (a class or zero-argument factory), set "
     "fleetsim_planner in the [pytest] ini section, or override the fleetsim_planner fixture in conftest.py"

@@ -1,8 +1,10 @@
 """The pytest11 entry point of fleetsim: options, hooks and the ``fleetsim_planner`` fixture.
 
 It stays thin: collection lives in :mod:`pytest_fleetsim._items`, the session's state and gating in
-:mod:`pytest_fleetsim._state`, and everything a run does in :mod:`fleetsim`. The harness is imported
-only when pytest is configured, not when the plugin module is loaded.
+:mod:`pytest_fleetsim._state`, and everything a run does in :mod:`fleetsim`. The plugin is loaded in every
+pytest session of an environment where fleetsim is installed, so the harness is imported only when a
+session uses it: a fleetsim option is given (checked before any test runs), a suite file is collected,
+the ``fleetsim_planner`` fixture is asked for, or (pytest-xdist's controller) a scenario's report arrives.
 """
 
 from __future__ import annotations
@@ -11,8 +13,14 @@ from collections.abc import Generator
 from fnmatch import fnmatch
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
+
+from pytest_fleetsim._key import STATE_KEY
+
+if TYPE_CHECKING:
+    from pytest_fleetsim._state import FleetsimState
 
 DEFAULT_SUITE_PATTERN = "*.fleetsim.yaml"
 
@@ -93,11 +101,53 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     parser.addini("fleetsim_planner_timeout", "wall-clock limit per planner call in seconds (0 = none)", default="10")
 
 
-def pytest_configure(config: pytest.Config) -> None:
-    from pytest_fleetsim._state import STATE_KEY, FleetsimState
+def _active(config: pytest.Config) -> FleetsimState | None:
+    return config.stash.get(STATE_KEY, None)
 
-    state = config.stash[STATE_KEY] = FleetsimState.configure(config)
-    config.pluginmanager.register(state, "fleetsim-state")  # it receives every test report
+
+def _activate(config: pytest.Config) -> FleetsimState:
+    """The session's state, made (and its options checked) on first use."""
+    state = _active(config)
+    if state is None:
+        from pytest_fleetsim._state import FleetsimState
+
+        state = config.stash[STATE_KEY] = FleetsimState.configure(config)
+        config.pluginmanager.register(state, "fleetsim-state")  # it receives every test report from now on
+    return state
+
+
+def _asked_for(config: pytest.Config) -> bool:
+    """A fleetsim option is given: the session is meant to run scenarios, and a mistake in an option is
+    reported before any test runs."""
+    option = config.option
+    return bool(
+        option.fleetsim_planner
+        or config.getini("fleetsim_planner")
+        or option.fleetsim_update_hashes
+        or option.fleetsim_metrics_json
+        or option.fleetsim_compare
+        or option.fleetsim_compare_fail
+        or option.fleetsim_record_every != 1
+    )
+
+
+class _Waker:
+    """Until the state exists: makes it when the first scenario report arrives (pytest-xdist's controller
+    collects nothing, so only reports tell it that the session runs scenarios)."""
+
+    def __init__(self, config: pytest.Config) -> None:
+        self.config = config
+
+    def pytest_runtest_logreport(self, report: pytest.TestReport) -> None:
+        if getattr(report, "fleetsim", None) is not None and _active(self.config) is None:
+            _activate(self.config).pytest_runtest_logreport(report)
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    if _asked_for(config):
+        _activate(config)
+    else:
+        config.pluginmanager.register(_Waker(config), "fleetsim-waker")
 
 
 def pytest_report_header(config: pytest.Config) -> str:
@@ -105,15 +155,15 @@ def pytest_report_header(config: pytest.Config) -> str:
         installed = version("fleetsim")
     except PackageNotFoundError:  # running from a source tree that was never installed
         installed = "(not installed)"
-    from pytest_fleetsim._state import state_of
-
-    planner = state_of(config).planner
+    state = _active(config)
+    planner = state.planner if state is not None else None
     return f"fleetsim: {installed}, planner: {planner.spec if planner is not None else '(none given)'}"
 
 
 def pytest_collect_file(file_path: Path, parent: pytest.Collector) -> pytest.Collector | None:
     patterns = parent.config.getini("fleetsim_suite_patterns")
     if any(fnmatch(file_path.name, pattern) for pattern in patterns):
+        _activate(parent.config)
         from pytest_fleetsim._items import SuiteFile
 
         return SuiteFile.from_parent(parent, path=file_path)
@@ -127,9 +177,7 @@ def fleetsim_planner(request: pytest.FixtureRequest) -> object:
     Override it in a conftest.py to return a planner class, a zero-argument factory, or an instance
     (copied before each run). ``None`` skips the scenario tests, saying how to pass a planner.
     """
-    from pytest_fleetsim._state import state_of
-
-    return state_of(request.config).planner
+    return _activate(request.config).planner
 
 
 @pytest.hookimpl(wrapper=True)
@@ -147,9 +195,8 @@ def pytest_runtest_protocol(item: pytest.Item, nextitem: pytest.Item | None) -> 
     stops as on Ctrl-C: pytest's interrupt summary follows, and the exit status is 128 + the signal's
     number (130, 143; see :func:`pytest_sessionfinish`)."""
     outcome = yield
-    from pytest_fleetsim._state import state_of
-
-    stopped_by = state_of(item.config).stopped_by
+    state = _active(item.config)
+    stopped_by = state.stopped_by if state is not None else None
     if stopped_by is not None:
         from fleetsim.sim.interrupt import signal_name
 
@@ -166,9 +213,9 @@ def pytest_report_teststatus(report: pytest.TestReport) -> tuple[str, str, str] 
 
 
 def pytest_sessionfinish(session: pytest.Session) -> None:
-    from pytest_fleetsim._state import state_of
-
-    state = state_of(session.config)
+    state = _active(session.config)
+    if state is None:
+        return
     state.finish(session)
     if state.stopped_by is not None and session.exitstatus == pytest.ExitCode.INTERRUPTED:
         # pytest has printed its interrupt summary for INTERRUPTED (2); the session ends with the status of
@@ -177,9 +224,8 @@ def pytest_sessionfinish(session: pytest.Session) -> None:
 
 
 def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter, config: pytest.Config) -> None:
-    from pytest_fleetsim._state import state_of
-
-    lines = state_of(config).summary_lines()
+    state = _active(config)
+    lines = state.summary_lines() if state is not None else []
     if lines:
         terminalreporter.write_sep("=", "fleetsim")
         for line in lines:

@@ -13,13 +13,13 @@ import signal
 import sys
 from collections.abc import Sequence
 
+from importlib import import_module
+from typing import Any
+
 from fleetsim import __version__
-from fleetsim.cli import commands, recorded
-from fleetsim.cli.run import UsageError, run
 from fleetsim.enums import ConflictModel
 from fleetsim.errors import FleetsimError
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, ScenarioSettings
-from fleetsim.sim.planner_spec import PlannerSpecError
 
 __all__ = ["build_parser", "main"]
 
@@ -83,29 +83,49 @@ def _add_map_options(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--graph", type=int, metavar="N", help="RMF: the lane graph_idx (default: 0)")
 
 
+def _command(name: str) -> Any:
+    """The function a subcommand runs, from ``module:function``: a command's modules are imported only when
+    it runs (or its help is shown), so that ``fleetsim --help`` answers at once."""
+    module, _, function = name.partition(":")
+    return getattr(import_module(module), function)
+
+
+class _CommandParser(argparse.ArgumentParser):
+    """A subcommand's parser; its description is the docstring of the function that runs it."""
+
+    def __init__(self, *args: Any, command: str = "", **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.command = command
+
+    def format_help(self) -> str:
+        if self.description is None and self.command:
+            self.description = _command(self.command).__doc__
+        return super().format_help()
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="fleetsim",
         description="Check fleet route planners against scenarios drawn in Tiled.",
     )
     parser.add_argument("--version", action="version", version=f"fleetsim {__version__}")
-    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=_CommandParser)
 
-    validate = sub.add_parser("validate", help="load suites completely and print layout lint", description=commands.validate.__doc__)
+    validate = sub.add_parser("validate", help="load suites completely and print layout lint", command="fleetsim.cli.commands:validate")
     validate.add_argument("suites", nargs="+", metavar="SUITE", help="*.fleetsim.yaml files or folders holding them")
-    validate.set_defaults(run=commands.validate)
+    validate.set_defaults(run="fleetsim.cli.commands:validate")
 
-    inspect = sub.add_parser("inspect", help="segments, connections and conflicts of a map", description=commands.inspect.__doc__)
+    inspect = sub.add_parser("inspect", help="segments, connections and conflicts of a map", command="fleetsim.cli.commands:inspect")
     inspect.add_argument("map", metavar="MAP", help="a Tiled map (.json, .tmj, .tmx), LIF file (.lif.json) or RMF building map (.building.yaml)")
     inspect.add_argument("--json", action="store_true", help="print one JSON document instead of text")
     _add_layout_options(inspect)
     _add_map_options(inspect)
-    inspect.set_defaults(run=commands.inspect)
+    inspect.set_defaults(run="fleetsim.cli.commands:inspect")
 
     render = sub.add_parser(
         "render",
         help="draw a map, or one step of a recorded run, as SVG",
-        description=commands.render.__doc__,
+        command="fleetsim.cli.commands:render",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     render.add_argument("map", nargs="?", metavar="MAP", help="a Tiled map (.json, .tmj or .tmx); leave out with --trace")
@@ -125,9 +145,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _add_layout_options(render)
     _add_map_options(render)
-    render.set_defaults(run=commands.render)
+    render.set_defaults(run="fleetsim.cli.commands:render")
 
-    convert = sub.add_parser("convert", help="write a map as Tiled JSON/TMX or LIF 1.0", description=commands.convert.__doc__)
+    convert = sub.add_parser("convert", help="write a map as Tiled JSON/TMX or LIF 1.0", command="fleetsim.cli.commands:convert")
     convert.add_argument("map", metavar="IN", help="any map fleetsim loads (Tiled, LIF, RMF building map)")
     convert.add_argument("output", metavar="OUT", help="OUT.lif.json for LIF 1.0; OUT.json, OUT.tmj or OUT.tmx for Tiled")
     convert.add_argument(
@@ -135,12 +155,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="LIF: segment ends this close (metres) share a node (default: %(default)s)",
     )
     _add_map_options(convert)
-    convert.set_defaults(run=commands.convert)
+    convert.set_defaults(run="fleetsim.cli.commands:convert")
 
     record_parser = sub.add_parser(
         "record",
         help="rebuild a run's MCAP recording from its trace (a run killed outright, say)",
-        description=recorded.record.__doc__,
+        command="fleetsim.cli.recorded:record",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     record_parser.add_argument("--trace", required=True, metavar="PATH", help="the run's artifact folder or its trace.jsonl")
@@ -155,9 +175,9 @@ def build_parser() -> argparse.ArgumentParser:
         "--record-every", type=_steps, default=1, metavar="N",
         help="record every N-th step in full (steps with new plans, alerts or events always; default: 1)",
     )
-    record_parser.set_defaults(run=recorded.record)
+    record_parser.set_defaults(run="fleetsim.cli.recorded:record")
 
-    run_parser = sub.add_parser("run", help="simulate scenarios with a planner and judge the runs", description=run.__doc__)
+    run_parser = sub.add_parser("run", help="simulate scenarios with a planner and judge the runs", command="fleetsim.cli.run:run")
     run_parser.add_argument(
         "suites", nargs="+", metavar="SUITE[::SCENARIO]", help="*.fleetsim.yaml files or folders; FILE::NAME runs one scenario"
     )
@@ -178,14 +198,17 @@ def build_parser() -> argparse.ArgumentParser:
         "--record-every", type=_steps, default=1, metavar="N",
         help="with --record: record every N-th step (steps with new plans, alerts or events always; default: 1)",
     )
-    run_parser.set_defaults(run=run)
+    run_parser.set_defaults(run="fleetsim.cli.run:run")
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    from fleetsim.cli.run import UsageError
+    from fleetsim.sim.planner_spec import PlannerSpecError
+
     try:
-        return int(args.run(args))
+        return int(_command(args.run)(args))
     except (PlannerSpecError, UsageError) as error:
         print(f"fleetsim: error: {error}", file=sys.stderr)
         return 2
