@@ -15,9 +15,13 @@ others refer to it.
 from __future__ import annotations
 
 import argparse
+import os
+import select
 import shutil
+import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -32,6 +36,31 @@ from fleetsim.scenario import ScenarioSettings  # noqa: E402
 from fleetsim.sim.loop import run_scenario  # noqa: E402
 
 NODE_PLANNER = Path(__file__).resolve().parents[1] / "examples" / "planners" / "node" / "bfs_planner.js"
+
+
+ECHO = "import sys\nfor line in sys.stdin.buffer:\n    sys.stdout.buffer.write(line)\n    sys.stdout.buffer.flush()\n"
+# A fix_legs request as fleetsim sends it, and about the size of the commonest answer.
+LINE = b'{"type":"fix_legs","id":12345,"vehicle":42,"task":{"id":97,"vehicle_id":42,"goal_segment":1234,"goal_progress":null}}\n'
+
+
+def bare_round_trip(rounds: int) -> float:
+    """Seconds per round trip of a request-sized line through a child that echoes it: the pipe's own
+    cost (two writes, two reads, two wake-ups), read the way fleetsim reads a planner process."""
+    child = subprocess.Popen([sys.executable, "-c", ECHO], stdin=subprocess.PIPE, stdout=subprocess.PIPE)
+    assert child.stdin is not None and child.stdout is not None
+    write, read = child.stdin.fileno(), child.stdout.fileno()
+    try:
+        start = time.perf_counter()
+        for _ in range(rounds):
+            os.write(write, LINE)
+            buffer = b""
+            while not buffer.endswith(b"\n"):
+                select.select([read], [], [], None)
+                buffer += os.read(read, 1 << 16)
+        return (time.perf_counter() - start) / rounds
+    finally:
+        child.stdin.close()
+        child.wait()
 
 
 def main() -> int:
@@ -60,7 +89,10 @@ def main() -> int:
         outside = min(r.metrics.planner_wall_time for r in served)
         print(f"  {name} in process: {inside / calls * 1e6:6.1f} us per call ({calls} calls)")
         print(f"  {name} as `{' '.join(Path(part).name for part in command)}`: {outside / calls * 1e6:6.1f} us per call")
-        print(f"    protocol overhead {(outside - inside) / calls * 1e6:6.1f} us per call; same trace hash {direct[0].trace_hash[:12]}")
+        pipe = min(bare_round_trip(calls) for _ in range(args.repeat))
+        overhead = (outside - inside) / calls
+        print(f"    protocol overhead {overhead * 1e6:6.1f} us per call; same trace hash {direct[0].trace_hash[:12]}")
+        print(f"    bare pipe round trip {pipe * 1e6:6.1f} us; overhead / round trip {overhead / pipe:4.2f} [target <= 2]")
     return 0
 
 
