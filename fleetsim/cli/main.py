@@ -96,6 +96,8 @@ class _CommandParser(argparse.ArgumentParser):
     def __init__(self, *args: Any, command: str = "", **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
         self.command = command
+        if command:
+            self.set_defaults(run=command)
 
     def format_help(self) -> str:
         if self.description is None and self.command:
@@ -113,14 +115,12 @@ def build_parser() -> argparse.ArgumentParser:
 
     validate = sub.add_parser("validate", help="load suites completely and print layout lint", command="fleetsim.cli.commands:validate")
     validate.add_argument("suites", nargs="+", metavar="SUITE", help="*.fleetsim.yaml files or folders holding them")
-    validate.set_defaults(run="fleetsim.cli.commands:validate")
 
     inspect = sub.add_parser("inspect", help="segments, connections and conflicts of a map", command="fleetsim.cli.commands:inspect")
     inspect.add_argument("map", metavar="MAP", help="a Tiled map (.json, .tmj, .tmx), LIF file (.lif.json) or RMF building map (.building.yaml)")
     inspect.add_argument("--json", action="store_true", help="print one JSON document instead of text")
     _add_layout_options(inspect)
     _add_map_options(inspect)
-    inspect.set_defaults(run="fleetsim.cli.commands:inspect")
 
     render = sub.add_parser(
         "render",
@@ -145,7 +145,6 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _add_layout_options(render)
     _add_map_options(render)
-    render.set_defaults(run="fleetsim.cli.commands:render")
 
     convert = sub.add_parser("convert", help="write a map as Tiled JSON/TMX or LIF 1.0", command="fleetsim.cli.commands:convert")
     convert.add_argument("map", metavar="IN", help="any map fleetsim loads (Tiled, LIF, RMF building map)")
@@ -155,7 +154,6 @@ def build_parser() -> argparse.ArgumentParser:
         help="LIF: segment ends this close (metres) share a node (default: %(default)s)",
     )
     _add_map_options(convert)
-    convert.set_defaults(run="fleetsim.cli.commands:convert")
 
     record_parser = sub.add_parser(
         "record",
@@ -175,7 +173,6 @@ def build_parser() -> argparse.ArgumentParser:
         "--record-every", type=_steps, default=1, metavar="N",
         help="record every N-th step in full (steps with new plans, alerts or events always; default: 1)",
     )
-    record_parser.set_defaults(run="fleetsim.cli.recorded:record")
 
     run_parser = sub.add_parser("run", help="simulate scenarios with a planner and judge the runs", command="fleetsim.cli.run:run")
     run_parser.add_argument(
@@ -198,7 +195,6 @@ def build_parser() -> argparse.ArgumentParser:
         "--record-every", type=_steps, default=1, metavar="N",
         help="with --record: record every N-th step (steps with new plans, alerts or events always; default: 1)",
     )
-    run_parser.set_defaults(run="fleetsim.cli.run:run")
     return parser
 
 
