@@ -77,6 +77,10 @@ class FleetController:
         self._reservations = ReservationIndex(ConflictTable(self.layout))
         # The last snapshot handed out; reused until something it shows changes (most calls change nothing).
         self._snapshot: FleetSnapshot | None = None
+        # The read-only copies the snapshot shares until what they copy changes: a planning round changes
+        # plans many times and states not at all, so only the plans are copied again for each change.
+        self._states_view: Mapping[int, VehicleState] | None = None
+        self._plans_view: Mapping[int, FleetPlan] | None = None
         # The alerts of the last reservation check, valid while no plan has changed since. Plans that
         # only lost legs (driven past) reserve less, so they can end alerts but never start one.
         self._alerts: tuple[CollisionAlert, ...] | None = None
@@ -95,10 +99,14 @@ class FleetController:
         """An immutable view for a planner call: rebuilt when the fleet or the time has changed."""
         if self._snapshot is not None and self._snapshot.time == time:
             return self._snapshot
+        if self._states_view is None:
+            self._states_view = read_only(self._states)
+        if self._plans_view is None:
+            self._plans_view = read_only(self._plans)
         self._snapshot = FleetSnapshot(
             time=time,
-            vehicles=read_only(self._states),
-            plans=read_only(self._plans),
+            vehicles=self._states_view,
+            plans=self._plans_view,
             tasks=self.tasks.queues(),
             routed=self.tasks.routed,
         )
@@ -112,27 +120,30 @@ class FleetController:
 
     # -- changes -------------------------------------------------------------------------------------
 
+    def _put_plan(self, plan: FleetPlan) -> None:
+        self._plans[plan.vehicle_id] = plan
+        self._plans_view = self._snapshot = None
+
     def set_plan(self, plan: FleetPlan) -> None:
         """Replace a vehicle's plan without checks."""
-        self._plans[plan.vehicle_id] = plan
-        self._snapshot = None
+        self._put_plan(plan)
         self._alerts = None
 
     def drive_past(self, plan: FleetPlan) -> None:
         """The vehicle drove past its first legs: ``plan`` is its plan without them."""
-        self._plans[plan.vehicle_id] = plan
-        self._snapshot = None
+        self._put_plan(plan)
         if self._alerts:  # with no alerts in force, fewer reservations cannot raise one
             self._alerts = None
 
     def set_state(self, state: VehicleState) -> None:
         self._states[state.id] = state
-        self._snapshot = None
+        self._states_view = self._snapshot = None
 
     def set_states(self, states: Mapping[int, VehicleState]) -> None:
         """:meth:`set_state` for many vehicles (a step's motion), by vehicle id."""
-        self._states.update(states)
-        self._snapshot = None
+        if states:
+            self._states.update(states)
+            self._states_view = self._snapshot = None
 
     def consult(self, planner: Planner, vehicle_id: int, time: float) -> CallOutcome | None:
         """Step 2 for one vehicle: ask the planner, check the response, apply what passes.
@@ -193,8 +204,7 @@ class FleetController:
             if isinstance(result, Rejection):
                 rejections.append(result)
                 continue
-            self._plans[result.vehicle_id] = result
-            self._snapshot = None
+            self._put_plan(result)
             self._alerts = None
             self.tasks.mark_routed(result)
             goal = result.legs[0].goal_for_task
@@ -213,7 +223,7 @@ class FleetController:
             plan = self._plans[task.vehicle_id]
             if any(leg.goal_for_task == task.id for leg in plan.legs):
                 legs = tuple(replace(leg, goal_for_task=None) if leg.goal_for_task == task.id else leg for leg in plan.legs)
-                self._plans[task.vehicle_id] = FleetPlan(task.vehicle_id, legs)
+                self._put_plan(FleetPlan(task.vehicle_id, legs))
                 self._alerts = None
         return dropped
 
