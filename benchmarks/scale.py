@@ -1,0 +1,114 @@
+"""Does the harness cost the same per vehicle whatever the fleet size? 100, 1,000 and 10,000 vehicles.
+
+    python benchmarks/scale.py [--sizes 100,1000,10000] [--seconds 60] [--repeat 3] [--planner BFSPlanner]
+
+Each size gets a generated warehouse sized to the fleet (``warehouse.write_fleet_scenario``: about four
+aisles per vehicle, 2-3 tasks each, seeded) and is simulated for ``--seconds`` in a process of its own,
+so that its peak memory (the process's maximum resident set) is its own. The planner is a cheap one
+(BFSPlanner by default: bounded breadth-first routes, three legs fixed per call) so that the harness's
+own cost is what is measured; the harness's time is the run's wall time less the time inside planner
+calls. Per size: harness µs per vehicle-step (median of the repeats, and its ratio to the first size's),
+planner µs per call, realtime factor, peak memory, and the time to write and load the scenario. The
+trace hash of every repeat of a size must be the same (the script fails otherwise).
+
+Targets (issue 18): harness µs per vehicle-step at 1,000 vehicles <= 1.2x the figure at 100, at
+10,000 <= 1.5x; a 10,000-vehicle scenario simulates 60 s to the end in under 4 GiB.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import resource
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+sys.path.insert(0, str(Path(__file__).parent))
+
+from warehouse import write_fleet_scenario  # noqa: E402
+
+PLANNERS = ("BFSPlanner", "GreedyPlanner", "ReservingPlanner")
+
+
+def run_one(vehicles: int, seconds: float, planner_name: str) -> dict[str, Any]:
+    """Generate, load and simulate one fleet in this process; its figures."""
+    from fleetsim import planners
+    from fleetsim.load.scenario import load_scenario_dir
+    from fleetsim.scenario import ScenarioSettings
+    from fleetsim.sim.loop import run_scenario
+
+    with tempfile.TemporaryDirectory() as tmp:
+        start = time.perf_counter()
+        folder = write_fleet_scenario(Path(tmp) / f"fleet-{vehicles}", vehicles, seed=1)
+        written = time.perf_counter()
+        scenario = load_scenario_dir(folder, settings=ScenarioSettings(time_limit=seconds, stop_on=()))
+        loaded = time.perf_counter()
+    result = run_scenario(scenario, getattr(planners, planner_name)(), keep_trace=False)
+    metrics = result.metrics
+    vehicle_steps = vehicles * result.steps
+    return {
+        "vehicles": vehicles,
+        "write_s": written - start,
+        "load_s": loaded - written,
+        "sim_s": result.sim_time,
+        "ended": result.ended,
+        "hash": result.trace_hash,
+        "harness_us_per_vs": (metrics.wall_time - metrics.planner_wall_time) / vehicle_steps * 1e6,
+        "planner_us_per_call": metrics.planner_wall_time / max(metrics.planner_calls, 1) * 1e6,
+        "realtime": metrics.realtime_factor,
+        "peak_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
+        "tasks": f"{result.tasks_completed}/{result.tasks_total}",
+    }
+
+
+def _in_child(vehicles: int, seconds: float, planner: str) -> dict[str, Any]:
+    command = [sys.executable, __file__, "--child", str(vehicles), "--seconds", str(seconds), "--planner", planner]
+    output = subprocess.run(command, check=True, capture_output=True, text=True).stdout
+    figures: dict[str, Any] = json.loads(output.strip().splitlines()[-1])
+    return figures
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--sizes", default="100,1000,10000")
+    parser.add_argument("--seconds", type=float, default=60.0, help="simulated seconds per run (default: 60)")
+    parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--planner", choices=PLANNERS, default="BFSPlanner")
+    parser.add_argument("--child", type=int, help=argparse.SUPPRESS)
+    args = parser.parse_args(argv)
+    if args.child is not None:
+        print(json.dumps(run_one(args.child, args.seconds, args.planner)))
+        return 0
+    sizes = [int(size) for size in args.sizes.split(",") if size]
+    runs: dict[int, list[dict[str, Any]]] = {size: [] for size in sizes}
+    for _ in range(args.repeat):  # the sizes in turn, so that each repeat sees the machine's same moments
+        for size in sizes:
+            runs[size].append(_in_child(size, args.seconds, args.planner))
+    print(f"{args.planner}, {args.seconds:g} s simulated, median of {args.repeat} (each size in a process of its own)")
+    print(f"{'vehicles':>8} {'harness µs/vs':>14} {'ratio':>6} {'µs/call':>8} {'realtime':>9} {'peak MiB':>9} {'write s':>8} {'load s':>7}  tasks      ended")
+    first: float | None = None
+    failed = False
+    for size in sizes:
+        rows = runs[size]
+        if len({row["hash"] for row in rows}) != 1:
+            print(f"{size} vehicles: the repeats' trace hashes differ: {sorted({row['hash'][:12] for row in rows})}", file=sys.stderr)
+            failed = True
+        harness = statistics.median(row["harness_us_per_vs"] for row in rows)
+        first = harness if first is None else first
+        print(
+            f"{size:>8} {harness:>14.2f} {harness / first:>6.2f} {statistics.median(r['planner_us_per_call'] for r in rows):>8.1f} "
+            f"{statistics.median(r['realtime'] for r in rows):>8.2f}x {max(r['peak_mib'] for r in rows):>9.0f} "
+            f"{statistics.median(r['write_s'] for r in rows):>8.1f} {statistics.median(r['load_s'] for r in rows):>7.1f}  "
+            f"{rows[0]['tasks']:<10} {rows[0]['ended']}"
+        )
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
