@@ -179,7 +179,21 @@ def build_parser() -> argparse.ArgumentParser:
         help="with --record: record every N-th step (steps with new plans, alerts or events always; default: 1)",
     )
     run_parser.set_defaults(run=run)
+
+    # Its own parsers (a sweep, or "sweep report RESULTS") live in fleetsim.cli.sweep; imported when used.
+    sweep_parser = sub.add_parser(
+        "sweep", add_help=False, help="run planners x scenarios on Dask, or 'sweep report RESULTS' to compare them",
+        description="fleetsim sweep SPEC.yaml [--scheduler ADDRESS] [--resume]; fleetsim sweep report RESULTS [--fail-if ...]",
+    )
+    sweep_parser.add_argument("arguments", nargs=argparse.REMAINDER)
+    sweep_parser.set_defaults(run=_sweep)
     return parser
+
+
+def _sweep(args: argparse.Namespace) -> int:
+    from fleetsim.cli.sweep import sweep  # Dask and the report load only for this command
+
+    return sweep(args)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
