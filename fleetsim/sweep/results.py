@@ -15,10 +15,9 @@ from pathlib import Path
 from typing import IO, Any
 
 from fleetsim.errors import FleetsimError, Location
+from fleetsim.gating.baseline import SWEEP_RESULTS_FORMAT as RESULTS_FORMAT
 
 __all__ = ["RESULTS_FORMAT", "ResultsError", "ResultsFile", "read_results", "rows_by_key"]
-
-RESULTS_FORMAT = "fleetsim-sweep-results/1"
 
 
 class ResultsError(FleetsimError, ValueError):
