@@ -121,7 +121,7 @@ class FleetsimState:
         baseline = None
         if baseline_path is not None and not hasattr(config, "workerinput"):
             try:
-                baseline = read_metrics(baseline_path)
+                baseline = read_metrics(baseline_path, planner=spec)
             except FleetsimError as error:
                 raise pytest.UsageError(f"--fleetsim-compare: {error}") from None
         if option.fleetsim_record_every < 1:

@@ -195,11 +195,23 @@ def build_parser() -> argparse.ArgumentParser:
         "--record-every", type=_steps, default=1, metavar="N",
         help="with --record: record every N-th step (steps with new plans, alerts or events always; default: 1)",
     )
+
+    # Its own parsers (a sweep, or "sweep report RESULTS") live in fleetsim.cli.sweep; imported when used.
+    sweep_parser = sub.add_parser(
+        "sweep", add_help=False, help="run planners x scenarios on Dask, or 'sweep report RESULTS' to compare them",
+        description="fleetsim sweep SPEC.yaml [--scheduler ADDRESS] [--resume]; fleetsim sweep report RESULTS [--fail-if ...]",
+        command="fleetsim.cli.sweep:sweep",
+    )
+    sweep_parser.add_argument("arguments", nargs=argparse.REMAINDER)
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    words = list(sys.argv[1:] if argv is None else argv)
+    if words[:1] == ["sweep"]:  # its own parsers read everything after it, options first included
+        args = argparse.Namespace(command="sweep", arguments=words[1:], run="fleetsim.cli.sweep:sweep")
+    else:
+        args = build_parser().parse_args(words)
     from fleetsim.cli.run import UsageError
     from fleetsim.sim.planner_spec import PlannerSpecError
 

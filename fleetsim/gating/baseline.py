@@ -26,6 +26,7 @@ from fleetsim.sim.result import RunResult
 __all__ = [
     "METRICS",
     "METRICS_FORMAT",
+    "SWEEP_RESULTS_FORMAT",
     "BaselineError",
     "Comparison",
     "Metric",
@@ -41,6 +42,7 @@ __all__ = [
 ]
 
 METRICS_FORMAT = "fleetsim-metrics/1"
+SWEEP_RESULTS_FORMAT = "fleetsim-sweep-results/1"  # fleetsim sweep's JSON lines: a header, then rows like ours
 Outcome = Literal["passed", "failed", "xfailed", "xpassed", "skipped"]  # pytest's words for a test's end
 _SLACK = 1e-9  # relative; a value exactly at a limit written in decimal must not trip on binary rounding
 
@@ -153,8 +155,12 @@ def write_metrics(path: Path | str, rows: Iterable[ScenarioMetrics]) -> None:
     write_text_atomically(Path(path), text)
 
 
-def read_metrics(path: Path | str) -> dict[str, ScenarioMetrics]:
-    """The rows of a metrics document by id; anything unusable is a BaselineError naming ``path``."""
+def read_metrics(path: Path | str, planner: str | None = None) -> dict[str, ScenarioMetrics]:
+    """The rows of a metrics document by id; anything unusable is a BaselineError naming ``path``.
+
+    A sweep's results file (``fleetsim sweep``) is read too: its runs of suite scenarios (first
+    repetition) by ``planner``, or by its only planner when ``planner`` ran none of them.
+    """
     path = Path(path)
     try:
         text = path.read_text(encoding="utf-8-sig")  # a BOM from a hand edit is harmless
@@ -164,6 +170,8 @@ def read_metrics(path: Path | str) -> dict[str, ScenarioMetrics]:
     except (OSError, ValueError) as exc:  # ValueError: not UTF-8, or a NUL in the path
         msg = f"{path}: cannot read the metrics file: {exc}"
         raise BaselineError(msg) from None
+    if text.startswith('{"') and f'"format": "{SWEEP_RESULTS_FORMAT}"' in text.partition("\n")[0]:
+        return _sweep_rows(path, text, planner)
     try:
         document = json.loads(text)
     except json.JSONDecodeError as exc:
@@ -184,6 +192,29 @@ def read_metrics(path: Path | str) -> dict[str, ScenarioMetrics]:
             raise BaselineError(msg)
         rows[row.id] = row
     return rows
+
+
+def _sweep_rows(path: Path, text: str, planner: str | None) -> dict[str, ScenarioMetrics]:
+    rows: dict[str, dict[str, ScenarioMetrics]] = {}
+    lines = text.split("\n")
+    for number, line in enumerate(lines[1:-1], start=2):  # text after the last newline: a row cut short
+        try:
+            data = json.loads(line) if line.strip() else None
+        except json.JSONDecodeError as exc:
+            msg = f"{Location(path, number, exc.colno)}: {json_problem(exc)}"
+            raise BaselineError(msg) from None
+        if not isinstance(data, dict) or data.get("source") != "suite" or data.get("repetition") != 1:
+            continue  # generated scenarios have no pytest id to compare with
+        row = ScenarioMetrics.from_dict(data, where=f"{path}:{number}")
+        rows.setdefault(row.planner, {}).setdefault(row.id, row)
+    if planner in rows:
+        return rows[planner]
+    if len(rows) == 1:
+        return next(iter(rows.values()))
+    if not rows:
+        return {}
+    msg = f"{path}: a sweep of {len(rows)} planners ({', '.join(sorted(rows))}); run pytest with --planner one of them"
+    raise BaselineError(msg)
 
 
 # --- thresholds ----------------------------------------------------------------------------------

@@ -145,3 +145,22 @@ def test_render_unknown_highlight_is_an_error(tmp_path: Path, capsys: pytest.Cap
     assert status == 1
     assert "highlight=42" in err
     assert not (tmp_path / "x.svg").exists()
+
+
+@pytest.mark.parametrize(
+    ("command", "usage"),
+    [
+        (["validate", "--help"], "usage: fleetsim validate"),
+        (["render", "--help"], "usage: fleetsim render"),
+        (["sweep", "--help"], "usage: fleetsim sweep"),
+        (["sweep", "report", "--help"], "usage: fleetsim sweep report"),
+    ],
+)
+def test_every_command_answers_help_with_its_usage_and_description(
+    command: list[str], usage: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    with pytest.raises(SystemExit) as exited:
+        main(command)
+    out = capsys.readouterr().out
+    assert exited.value.code == 0 and out.startswith(usage)
+    assert len(out.splitlines()) > 4  # the description (the command's docstring) and the options follow

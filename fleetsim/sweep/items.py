@@ -1,0 +1,132 @@
+"""A sweep spec expanded into runs: one plain-data item per (planner, scenario, repetition).
+
+Generated sources are drawn here, on the machine that plans the sweep, reproducibly: Hypothesis's
+generation phase alone, driven by a random generator seeded with the source's ``seed``, gives the same
+scenarios in the same order in every process (whatever ``PYTHONHASHSEED``), and the first ``count``
+distinct ones are the source's scenarios; a larger ``count`` keeps the earlier ones.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import random
+import warnings
+from dataclasses import replace
+from pathlib import Path
+from typing import Any, TypedDict
+
+from hypothesis import HealthCheck, Phase, find, settings
+from hypothesis.errors import HypothesisWarning, NoSuchExample
+
+from fleetsim.errors import LoadError
+from fleetsim.gating.generated import _hypothesis_storage_elsewhere, generation_spec  # noqa: PLC2701 - the hunt's own storage rule
+from fleetsim.load.scenario import load_scenario
+from fleetsim.load.suite import discover_suites, load_suite
+from fleetsim.scenario import Scenario
+from fleetsim.strategies import scenarios
+from fleetsim.sweep.payload import scenario_payload
+from fleetsim.sweep.spec import GeneratedSource, SuiteSource, SweepSpec
+
+__all__ = ["RunItem", "expand", "generate_scenarios", "scenario_id"]
+
+
+class RunItem(TypedDict):
+    """One run, as plain data a worker anywhere can take (JSON-ready)."""
+
+    key: str  # unique in the sweep: planner, scenario id, repetition
+    id: str  # the scenario: SUITE::NAME (pytest's node id) or SPEC::SOURCE#INDEX for a generated one
+    planner: str
+    source: str  # "suite" | "generated"
+    seed: int | None  # a generated scenario's own seed: the source's base seed + its index
+    repetition: int
+    vehicles: int  # fleet size, for the report's metric-vs-fleet-size plot
+    scenario: dict[str, Any] | None  # scenario_payload(); None when it did not load
+    load_error: str | None
+    planner_timeout: float | None
+    record: str  # failed | all | none
+    artifacts: str  # root of the run folders
+
+
+def scenario_id(path: Path, name: str) -> str:
+    """``path::name`` with ``path`` relative to the working directory when below it, as pytest names items."""
+    relative = os.path.relpath(path)
+    shown = Path(relative if not relative.startswith("..") else path.resolve()).as_posix()
+    return f"{shown}::{name}"
+
+
+def generate_scenarios(source: GeneratedSource) -> list[Scenario]:
+    """The source's ``count`` scenarios, the same for the same seed on any machine."""
+    strategy = scenarios(generation_spec(source.entry, source.suite), name=source.entry.name)
+    found: list[Scenario] = []
+    seen: set[str] = set()
+
+    def collect(scenario: Scenario) -> bool:
+        digest = hashlib.sha256(json.dumps(scenario_payload(scenario)["files"], sort_keys=True).encode()).hexdigest()
+        if digest not in seen:
+            seen.add(digest)
+            found.append(scenario)
+        return len(found) >= source.count
+
+    draw = settings(
+        phases=[Phase.generate], database=None, max_examples=max(100, source.count * 20), deadline=None,
+        suppress_health_check=list(HealthCheck), derandomize=False,
+    )  # fmt: skip
+    with _hypothesis_storage_elsewhere(), warnings.catch_warnings():
+        warnings.filterwarnings("ignore", "Generating overly large repr", HypothesisWarning)
+        try:
+            find(strategy, collect, settings=draw, random=random.Random(source.seed))
+        except NoSuchExample:  # fewer distinct scenarios than asked for: the space is small
+            pass
+    return [_named(scenario, f"{source.entry.name}-{index}") for index, scenario in enumerate(found)]
+
+
+def _named(scenario: Scenario, name: str) -> Scenario:
+    return replace(scenario, name=name)
+
+
+def _cases(spec: SweepSpec) -> list[tuple[str, str, int | None, Scenario | None, str | None]]:
+    """(id, source kind, seed, scenario or None, load error) for every scenario of every source."""
+    cases: list[tuple[str, str, int | None, Scenario | None, str | None]] = []
+    for source in spec.sources:
+        if isinstance(source, SuiteSource):
+            for file in discover_suites([source.path]):
+                suite = load_suite(file)  # a suite that does not load stops the sweep before it starts
+                for entry in suite.scenarios:
+                    if entry.generate is not None or (source.name is not None and entry.name != source.name):
+                        continue  # a suite's hunts are pytest's; a sweep generates through its own sources
+                    try:
+                        cases.append((scenario_id(file, entry.name), "suite", None, load_scenario(entry, suite), None))
+                    except LoadError as error:
+                        cases.append((scenario_id(file, entry.name), "suite", None, None, str(error)))
+        else:
+            for index, scenario in enumerate(generate_scenarios(source)):
+                cases.append((f"{scenario_id(spec.path, source.entry.name)}#{index}", "generated", source.seed + index, scenario, None))
+    return cases
+
+
+def expand(spec: SweepSpec, artifacts: Path) -> list[RunItem]:
+    """Every run of the sweep, ordered by key (the order is irrelevant to the results, but fixed)."""
+    items: list[RunItem] = []
+    for scenario_key, kind, seed, scenario, error in _cases(spec):
+        payload = scenario_payload(scenario) if scenario is not None else None
+        for planner in spec.planners:
+            for repetition in range(1, spec.repetitions + 1):
+                items.append(
+                    RunItem(
+                        key=f"{planner} | {scenario_key} | {repetition}",
+                        id=scenario_key if repetition == 1 else f"{scenario_key}@{repetition}",
+                        planner=planner,
+                        source=kind,
+                        seed=seed,
+                        repetition=repetition,
+                        vehicles=len(scenario.vehicles) if scenario is not None else 0,
+                        scenario=payload,
+                        load_error=error,
+                        planner_timeout=spec.planner_timeout,
+                        record=spec.record,
+                        artifacts=str(artifacts.resolve()),
+                    )
+                )
+    return sorted(items, key=lambda item: item["key"])

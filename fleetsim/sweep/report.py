@@ -1,0 +1,153 @@
+"""What a sweep report says, computed once for both forms (HTML page, Markdown summary).
+
+Rows are taken in key order, so the report is the same whatever order the runs finished in or which
+worker ran them; only wall-clock figures (planner time per call) vary between sweeps.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from fleetsim.sweep.gate import Verdict
+from fleetsim.sweep.stats import METRICS, Paired, PlannerSummary, paired, summarise
+
+__all__ = ["COMPARED", "Report", "Worst", "build_report", "markdown"]
+
+COMPARED = ("success", "throughput", "makespan", "waiting_share", "alerts", "rejections", "deadlocks", "planner_time_per_call")
+WORST_SHOWN = 5
+
+
+@dataclass(frozen=True, slots=True)
+class Worst:
+    """A scenario where a candidate does worst against the baseline, with links to its run."""
+
+    id: str
+    candidate: str
+    difference: float  # throughput, candidate - baseline (tasks/h)
+    status: str
+    failure: str
+    links: Mapping[str, str]  # folder, picture, mcap: paths relative to the report, for those that exist
+
+
+@dataclass(frozen=True, slots=True)
+class Report:
+    title: str
+    baseline: str
+    candidates: tuple[str, ...]
+    rows: tuple[Mapping[str, Any], ...]  # key order
+    summaries: tuple[PlannerSummary, ...]
+    comparisons: Mapping[str, tuple[Paired, ...]]  # candidate -> one per metric of COMPARED
+    worst: Mapping[str, tuple[Worst, ...]]
+    verdicts: tuple[Verdict, ...]
+
+
+def build_report(title: str, rows: Sequence[Mapping[str, Any]], baseline: str, verdicts: Sequence[Verdict], where: Path) -> Report:
+    """``where``: the folder the report is written to (links are relative to it)."""
+    ordered = tuple(sorted(rows, key=lambda r: str(r["key"])))
+    summaries = tuple(summarise(ordered))
+    candidates = tuple(s.planner for s in summaries if s.planner != baseline)
+    comparisons = {c: tuple(paired(ordered, metric, c, baseline) for metric in COMPARED) for c in candidates}
+    worst = {c: _worst(ordered, c, baseline, where) for c in candidates}
+    return Report(title, baseline, candidates, ordered, summaries, comparisons, worst, tuple(verdicts))
+
+
+def _worst(rows: Sequence[Mapping[str, Any]], candidate: str, baseline: str, where: Path) -> tuple[Worst, ...]:
+    """The candidate's runs ranked by how much worse than the baseline they are: failing where the
+    baseline passed first, then by throughput lost; ties by id."""
+    base = {r["id"]: r for r in rows if r["planner"] == baseline}
+    ranked = []
+    for row in rows:
+        other = base.get(row["id"])
+        if row["planner"] != candidate or other is None:
+            continue
+        lost_pass = other["status"] == "passed" and row["status"] != "passed"
+        difference = (row.get("throughput") or 0.0) - (other.get("throughput") or 0.0)
+        ranked.append((not lost_pass, difference, str(row["id"]), row))
+    ranked.sort(key=lambda entry: entry[:3])
+    shown = [entry for entry in ranked if not entry[0] or entry[1] < 0][:WORST_SHOWN]
+    return tuple(
+        Worst(str(row["id"]), candidate, difference, str(row["status"]), (row.get("failures") or [""])[0], _links(row, where))
+        for _, difference, _, row in shown
+    )
+
+
+def _links(row: Mapping[str, Any], where: Path) -> dict[str, str]:
+    links = {}
+    for kind, path in (row.get("artifacts") or {}).items():
+        if kind in ("folder", "picture", "mcap") and Path(path).exists():
+            links[kind] = Path(os.path.relpath(path, where)).as_posix()
+    return links
+
+
+def short(planner: str) -> str:
+    """``fleetsim.planners:ReservingPlanner`` -> ``ReservingPlanner``; exec: specs as they are."""
+    return planner if planner.startswith("exec:") else planner.rpartition(":")[2]
+
+
+def figure(value: float | None, digits: int = 4) -> str:
+    return "–" if value is None else f"{value:.{digits}g}"
+
+
+def summary_table(report: Report) -> tuple[list[str], list[list[str]]]:
+    head = ["planner", "runs", "errors", *(f"{METRICS[m].label}" + (f" ({METRICS[m].unit})" if METRICS[m].unit else "") for m in COMPARED)]
+    body = []
+    for s in report.summaries:
+        cells = [short(s.planner), str(s.runs), str(s.errors)]
+        for metric in COMPARED:
+            cells.append(f"{s.totals[metric]:.0f}" if metric in s.totals else figure(s.means[metric]))
+        body.append(cells)
+    return head, body
+
+
+def comparison_table(report: Report, candidate: str) -> tuple[list[str], list[list[str]]]:
+    head = ["metric", "n", "baseline mean", "mean difference", "95% CI", "relative", "verdict"]
+    body = []
+    for c in report.comparisons[candidate]:
+        metric = METRICS[c.metric]
+        if c.n == 0:
+            body.append([metric.label, "0", "–", "–", "–", "–", "no pairs"])
+            continue
+        relative = c.relative(c.mean)
+        verdict = _verdict(c)
+        body.append([
+            f"{metric.label}" + (f" ({metric.unit})" if metric.unit else ""), str(c.n), figure(c.baseline_mean),
+            f"{c.mean:+.4g}", f"{c.low:+.4g} .. {c.high:+.4g}", "–" if relative is None else f"{relative * 100:+.1f}%", verdict,
+        ])  # fmt: skip
+    return head, body
+
+
+def _verdict(c: Paired) -> str:
+    """Worse or better beyond doubt (the whole interval on one side of zero), else no clear difference."""
+    below, above = c.high < 0, c.low > 0
+    if not (below or above):
+        return "no clear difference"
+    return "better" if (above if METRICS[c.metric].better == "higher" else below) else "worse"
+
+
+def _markdown_table(head: list[str], body: list[list[str]]) -> list[str]:
+    rows = [head, ["---"] * len(head), *body]
+    return ["| " + " | ".join(cell.replace("|", "\\|") for cell in row) + " |" for row in rows]
+
+
+def markdown(report: Report) -> str:
+    """The summary for CI logs and job summaries (GitHub's $GITHUB_STEP_SUMMARY renders it)."""
+    lines = [f"# Sweep report: {report.title}", "", f"{len(report.rows)} runs; baseline **{short(report.baseline)}**.", ""]
+    lines += ["## Planners", "", *_markdown_table(*summary_table(report)), ""]
+    for candidate in report.candidates:
+        lines += [f"## {short(candidate)} against {short(report.baseline)}", "",
+                  "Paired by scenario; 95% percentile bootstrap interval of the mean difference (2000 resamples, fixed seed).", ""]  # fmt: skip
+        lines += [*_markdown_table(*comparison_table(report, candidate)), ""]
+        worst = report.worst[candidate]
+        if worst:
+            lines += ["Where it does worst:", ""]
+            for w in worst:
+                link = f" ([run]({w.links['folder']}))" if "folder" in w.links else ""
+                lines.append(f"- `{w.id}`: {w.status}, throughput {w.difference:+.4g} tasks/h{link}" + (f" — {w.failure[:120]}" if w.failure else ""))
+            lines.append("")
+    if report.verdicts:
+        lines += ["## Gate", "", *(f"- {v.line()}" for v in report.verdicts), ""]
+    return "\n".join(lines)

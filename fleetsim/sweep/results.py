@@ -1,0 +1,113 @@
+"""The results file of a sweep: JSON lines, a header and then one row per finished run.
+
+Rows are appended (and flushed) as runs finish, so a sweep killed at any moment leaves every finished
+run on disk; ``--resume`` reads the file, drops a last line cut short, and runs only the keys missing.
+Each row carries the fields of a metrics file row (:class:`fleetsim.gating.baseline.ScenarioMetrics`),
+so the same file feeds ``pytest --fleetsim-compare``.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Iterable
+from pathlib import Path
+from typing import IO, Any
+
+from fleetsim.errors import FleetsimError, Location
+from fleetsim.gating.baseline import SWEEP_RESULTS_FORMAT as RESULTS_FORMAT
+
+__all__ = ["RESULTS_FORMAT", "ResultsError", "ResultsFile", "read_results", "rows_by_key"]
+
+
+class ResultsError(FleetsimError, ValueError):
+    """A results file cannot be read or appended to; the message names the file (and line)."""
+
+
+def read_results(path: Path | str) -> tuple[dict[str, Any], list[dict[str, Any]]]:
+    """The header and the rows of a results file; a last line cut short (a killed sweep) is left out.
+
+    A key given twice keeps its first row: every run counts once, whatever happened to the file.
+    """
+    path = Path(path)
+    try:
+        lines = path.read_text(encoding="utf-8").split("\n")
+    except FileNotFoundError:
+        raise ResultsError(f"{path}: no such results file; write one with fleetsim sweep SPEC.yaml -o {path}") from None
+    except (OSError, UnicodeDecodeError) as error:
+        raise ResultsError(f"{path}: cannot read the results file: {error}") from None
+    header = _parse(lines[0], path, 1) if lines and lines[0] else None
+    if not isinstance(header, dict) or header.get("format") != RESULTS_FORMAT:
+        raise ResultsError(f"{Location(path, 1)}: not a sweep results file (its first line must be the header with \"format\": {RESULTS_FORMAT!r})")
+    rows: dict[str, dict[str, Any]] = {}
+    # Every row ends with a newline: text after the last one is a row cut short by a kill (not done).
+    for number, line in enumerate(lines[1:-1], start=2):
+        if not line.strip():
+            continue
+        row = _parse(line, path, number)
+        if not isinstance(row, dict) or not isinstance(row.get("key"), str):
+            raise ResultsError(f"{Location(path, number)}: row={line[:80]!r} must be a JSON object with a \"key\"")
+        rows.setdefault(row["key"], row)
+    return header, list(rows.values())
+
+
+def _parse(line: str, path: Path, number: int) -> Any:
+    try:
+        return json.loads(line)
+    except json.JSONDecodeError as error:
+        raise ResultsError(f"{Location(path, number, error.colno)}: invalid JSON: {error.msg}") from None
+
+
+class ResultsFile:
+    """Appends rows to a results file, one flushed line each; a key is written at most once."""
+
+    def __init__(self, path: Path, header: dict[str, Any], *, resume: bool) -> None:
+        self.path = path
+        self.done: set[str] = set()
+        if resume and path.exists():
+            _, rows = read_results(path)
+            self.done = {row["key"] for row in rows}
+            _cut_partial_line(path)
+            self._file: IO[str] = path.open("a", encoding="utf-8")
+        elif path.exists():
+            raise ResultsError(f"{path} exists; pass --resume to run only what it lacks, or choose another file with -o")
+        else:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            self._file = path.open("w", encoding="utf-8")
+            self._write({"format": RESULTS_FORMAT, **header})
+
+    def add(self, row: dict[str, Any]) -> bool:
+        """Write ``row`` unless its key is done already; True if written."""
+        if row["key"] in self.done:
+            return False
+        self.done.add(row["key"])
+        self._write(row)
+        return True
+
+    def _write(self, document: dict[str, Any]) -> None:
+        self._file.write(json.dumps(document, sort_keys=True) + "\n")
+        self._file.flush()
+        os.fsync(self._file.fileno())
+
+    def close(self) -> None:
+        self._file.close()
+
+    def __enter__(self) -> ResultsFile:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def _cut_partial_line(path: Path) -> None:
+    """Drop a last line without its newline (a write cut short), so appending starts on a fresh line."""
+    data = path.read_bytes()
+    end = data.rfind(b"\n") + 1
+    if end < len(data):
+        with path.open("r+b") as file:
+            file.truncate(end)
+
+
+def rows_by_key(rows: Iterable[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Rows in key order: reports do not depend on the order runs finished in."""
+    return sorted(rows, key=lambda row: str(row["key"]))

@@ -1,0 +1,107 @@
+"""Sweep specs: located errors, never a traceback; reproducible generated sources; Dask optional."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import pytest
+
+from fleetsim.cli.main import main
+from fleetsim.sweep.items import expand
+from fleetsim.sweep.spec import SweepSpecError, load_sweep_spec
+
+GOOD = """fleetsim-sweep: 1
+name: small
+planners: [fleetsim.planners:ReservingPlanner, fleetsim.planners:BFSPlanner]
+defaults: {time_limit: 30}
+sources:
+  - name: warehouses
+    generate: {layout: warehouse, size: [1, 2], vehicles: [1, 2], tasks: [1, 2]}
+    count: 4
+    seed: 5
+"""
+
+
+def _spec(tmp_path: Path, text: str) -> Path:
+    path = tmp_path / "s.sweep.yaml"
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "line", "words"),
+    [
+        ("planners: [fleetsim.planners:ReservingPlanner, fleetsim.planners:BFSPlanner]", "planners: [not a spec]", 3, "planners[0]='not a spec'"),
+        ("    count: 4", "    count: -4", 8, "count=-4 must be a whole number >= 1"),
+        ("size: [1, 2]", "size: [3, 2]", 7, "size=[3, 2] must be [min, max]"),
+        ("layout: warehouse", "layout: spiral", 7, "'spiral'"),
+        ("defaults: {time_limit: 30}", "defaults: {time_limit: fast}", 4, "'fast'"),
+        ("name: small", "name: small\nbaseline: other:Planner", 3, "baseline='other:Planner' must be one of the planners"),
+    ],
+)
+def test_bad_spec_value_is_a_located_error(tmp_path: Path, old: str, new: str, line: int, words: str) -> None:
+    path = _spec(tmp_path, GOOD.replace(old, new))
+    with pytest.raises(SweepSpecError) as caught:
+        load_sweep_spec(path)
+    assert caught.value.location is not None and caught.value.location.path == path
+    assert caught.value.location.line == line, str(caught.value)
+    assert words in str(caught.value)
+
+
+def test_bad_spec_on_the_command_line_is_one_located_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = _spec(tmp_path, GOOD.replace("    seed: 5", "    seed: 5\n  - suite: nowhere.fleetsim.yaml"))
+    assert main(["sweep", str(path), "-o", str(tmp_path / "r.jsonl")]) == 1
+    err = capsys.readouterr().err
+    assert f"{path}:10:" in err and "nowhere.fleetsim.yaml" in err and "Traceback" not in err
+
+
+def test_generated_sources_are_the_same_for_the_same_seed(tmp_path: Path) -> None:
+    spec = load_sweep_spec(_spec(tmp_path, GOOD))
+    first, second = expand(spec, tmp_path), expand(spec, tmp_path)
+    assert [i["scenario"] for i in first] == [i["scenario"] for i in second]
+    assert len(first) == 8 and len({i["key"] for i in first}) == 8
+    other = load_sweep_spec(_spec(tmp_path, GOOD.replace("seed: 5", "seed: 6")))
+    assert [i["scenario"] for i in expand(other, tmp_path)] != [i["scenario"] for i in first]
+
+
+def test_a_faulty_planner_fails_its_run_not_the_sweep(tmp_path: Path) -> None:
+    from fleetsim.sweep.worker import run_item
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "data" / "sweep"))
+    try:
+        spec = load_sweep_spec(_spec(tmp_path, GOOD.replace("fleetsim.planners:BFSPlanner", "sweep_planners:Exploding")))
+        rows = [run_item(item) for item in expand(spec, tmp_path / "runs")]
+    finally:
+        sys.path.pop(0)
+    exploding = [row for row in rows if row["planner"] == "sweep_planners:Exploding"]
+    assert exploding and all(row["status"] == "failed" and "boom in the constructor" in row["error"] for row in exploding)
+    assert all(row["status"] == "passed" for row in rows if row not in exploding)
+
+
+def test_sweep_without_dask_says_how_to_install_it(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
+    monkeypatch.setitem(sys.modules, "distributed", None)  # import distributed -> ImportError
+    assert main(["sweep", str(_spec(tmp_path, GOOD)), "-o", str(tmp_path / "r.jsonl")]) == 1
+    assert "pip install 'fleetsim[sweep]'" in capsys.readouterr().err
+
+
+def test_sweep_results_feed_fleetsim_compare(tmp_path: Path) -> None:
+    from fleetsim.gating.baseline import BaselineError, read_metrics
+    from fleetsim.sweep.items import RunItem
+    from fleetsim.sweep.results import ResultsFile
+    from fleetsim.sweep.worker import failed_row
+
+    def row(planner: str, source: str, sid: str) -> dict[str, object]:
+        item = RunItem(key=f"{planner} | {sid} | 1", id=sid, planner=planner, source=source, seed=None, repetition=1, vehicles=1,
+                       scenario=None, load_error="x", planner_timeout=None, record="none", artifacts=str(tmp_path))  # fmt: skip
+        return failed_row(item, "x")
+
+    path = tmp_path / "r.jsonl"
+    with ResultsFile(path, {"name": "n"}, resume=False) as results:
+        for planner in ("a:P", "b:P"):
+            results.add(row(planner, "suite", "s.fleetsim.yaml::one"))
+            results.add(row(planner, "generated", "x.sweep.yaml::gen#0"))
+    assert list(read_metrics(path, planner="b:P")) == ["s.fleetsim.yaml::one"]
+    assert read_metrics(path, planner="b:P")["s.fleetsim.yaml::one"].planner == "b:P"
+    with pytest.raises(BaselineError, match="a sweep of 2 planners"):
+        read_metrics(path, planner="c:P")
