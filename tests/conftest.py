@@ -7,5 +7,5 @@ import os
 from hypothesis import settings
 
 settings.register_profile("ci", derandomize=True, print_blob=True)
-settings.register_profile("dev")
+settings.register_profile("dev", print_blob=True)  # a random failure prints how to reproduce it
 settings.load_profile("ci" if os.environ.get("CI") else os.environ.get("HYPOTHESIS_PROFILE", "dev"))
