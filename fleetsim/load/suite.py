@@ -68,6 +68,18 @@ class ScenarioSpec:
     random_disturbances: RandomDisturbances | None = None
     hunt_disturbances: HuntDisturbances | None = None  # Hypothesis searches stop schedules
 
+    @property
+    def hunts(self) -> bool:
+        """Whether the entry is a hunt (fleetsim.gating.generated): generated, or with ``hunt_disturbances``."""
+        return self.generate is not None or self.hunt_disturbances is not None
+
+    @property
+    def hunt_examples(self) -> int:
+        """How many examples the entry's hunt may try."""
+        if self.generate is not None:
+            return self.generate.examples
+        return self.hunt_disturbances.examples if self.hunt_disturbances is not None else 0
+
 
 @dataclass(frozen=True, slots=True)
 class Suite:
