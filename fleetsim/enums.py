@@ -7,6 +7,7 @@ from enum import Enum
 __all__ = [
     "ConflictModel",
     "Direction",
+    "Disturbed",
     "JointKind",
     "Progress",
     "Shape",
@@ -109,6 +110,18 @@ class ConflictModel(str, Enum):
 
     SWEPT = "swept"
     BBOX = "bbox"
+
+    def __str__(self) -> str:
+        return self.value
+
+
+class Disturbed(str, Enum):
+    """What a disturbance does to a vehicle now, as a fleet manager would see it (not for how long)."""
+
+    __hash__ = str.__hash__
+
+    STOPPED = "stopped"
+    SLOWED = "slowed"
 
     def __str__(self) -> str:
         return self.value

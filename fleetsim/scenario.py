@@ -15,7 +15,9 @@ if TYPE_CHECKING:
 
 __all__ = [
     "DEFAULT_VEHICLE_TYPE",
+    "Disturbance",
     "Expectations",
+    "RandomDisturbances",
     "Scenario",
     "ScenarioSettings",
     "Task",
@@ -91,6 +93,37 @@ class Task:
     goal_progress: Progress | None = None
 
 
+@dataclass(frozen=True, slots=True)
+class Disturbance:
+    """A declared disturbance (issue 20): ``vehicle`` stops (stands ``duration`` s once at rest) or is
+    slowed to ``factor`` × its max speed for ``duration`` s, from time ``at`` or when it is first on
+    segment ``on_segment`` (exactly one of the two is set)."""
+
+    vehicle: int
+    kind: Literal["stop", "slow"]
+    duration: float
+    at: float | None = None
+    on_segment: int | None = None
+    factor: float = 0.0  # slow only
+    line: int | None = field(default=None, compare=False)  # of its entry in the suite, for errors
+
+    def entry(self) -> dict[str, float | int]:
+        """The suite entry that declares it (``disturbances:`` list item)."""
+        where: dict[str, float | int] = {"at": self.at} if self.at is not None else {"on_segment": self.on_segment or 0}
+        what: dict[str, float | int] = {"stop": self.duration} if self.kind == "stop" else {"slow": self.factor, "for": self.duration}
+        return {"vehicle": self.vehicle, **where, **what}
+
+
+@dataclass(frozen=True, slots=True)
+class RandomDisturbances:
+    """Stops drawn from ``seed`` (fleetsim.sim.disturbances.draw_stops): on average
+    ``stops_per_vehicle_hour`` per vehicle, each standing a duration drawn uniformly from ``stop``."""
+
+    seed: int
+    stops_per_vehicle_hour: float
+    stop: tuple[float, float]
+
+
 StopOn = Literal["rejection", "collision"]
 
 
@@ -136,6 +169,8 @@ class Scenario:
     map_path: Path | None = None
     vehicles_path: Path | None = None
     tasks_path: Path | None = None
+    disturbances: tuple[Disturbance, ...] = ()
+    random_disturbances: RandomDisturbances | None = None
     warnings: tuple[str, ...] = ()  # load-time notes that did not stop loading (e.g. shapes on non-polylines)
 
     @property

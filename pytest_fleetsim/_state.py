@@ -168,7 +168,7 @@ class FleetsimState:
         except PlannerSpecError as error:
             raise ScenarioFailed(_story(str(error), heading)) from None
         heading += f" with planner {source.identity}"
-        if item.spec.generate is not None:
+        if item.spec.hunts:
             self._hunt(item, source.make, source.identity, heading, stop)
             return
         try:
@@ -214,7 +214,7 @@ class FleetsimState:
 
     def _hunt(self, item: ScenarioItem, make: Any, identity: str, heading: str, stop: StopSignals) -> None:
         """A generated entry: Hypothesis hunts for a failing scenario; a shrunk one is saved and reported."""
-        assert item.spec.generate is not None
+        assert item.spec.hunts
         folder = artifact_folder(self.artifacts, item.path, item.spec.name)
         about = {"suite": str(item.path), "nodeid": item.nodeid, "line": item.spec.line, "scenario": item.spec.name, "planner": identity}
         try:
@@ -229,16 +229,16 @@ class FleetsimState:
             if found.result is not None:
                 self._describe(item, found.result, None, identity, label=label, generated=True)
                 if found.result.ended == "interrupted":
-                    raise ScenarioFailed(failure_report(found.result, heading=heading) + "\n\n" + counts_story(found, item.spec.generate.examples))
+                    raise ScenarioFailed(failure_report(found.result, heading=heading) + "\n\n" + counts_story(found, item.spec.hunt_examples))
             return
         extra = {"suite": str(item.path), "nodeid": item.nodeid, "line": item.spec.line, **hunt_facts(found)}
         paths = record_counterexample(found, folder, extra, record_every=self.record_every, streamed=True)
         shown = {kind: _relative(self.config, Path(path)) for kind, path in paths.items()}
         result = replace(found.result, artifacts={**found.result.artifacts, **shown})
         self._describe(item, result, None, identity, label=label, generated=True)
-        entry = counterexample_entry(item.spec, Path(paths["scenario"]), item.path)
+        entry = counterexample_entry(item.spec, Path(paths["scenario"]), item.path, found.counterexample.disturbances)
         where = _relative(self.config, item.path)
-        story = "\n\n" + counterexample_story(found, item.spec.generate.examples, shown["scenario"], where, entry)
+        story = "\n\n" + counterexample_story(found, item.spec.hunt_examples, shown["scenario"], where, entry)
         raise ScenarioFailed(failure_report(result, heading=heading) + story)
 
     def _lock(self, suite: Path) -> HashLock:

@@ -199,7 +199,7 @@ def _run_target(
     try:
         if target.suite.planner is not None:  # the suite documents this planner, whatever was asked
             factory = load_planner_factory(target.suite.planner, call_timeout=timeout)
-        if target.spec.generate is not None:
+        if target.spec.hunts:
             return _hunt_target(target, factory, timeout, counterexamples, stop)
         scenario = load_scenario(target.spec, target.suite)
     except (LoadError, PlannerSpecError) as error:
@@ -223,7 +223,7 @@ def _hunt_target(
 ) -> _Outcome:
     """A generated entry: hunt for a failing scenario; a shrunk counterexample is always saved (under
     ``--record``'s folder, else the default artifact folder) and its suite entry printed."""
-    assert target.suite is not None and target.spec is not None and target.spec.generate is not None
+    assert target.suite is not None and target.spec is not None and target.spec.hunts
     root, every = counterexamples
     folder = artifact_folder(root, target.suite_path, target.spec.name)
     about = {"suite": str(target.suite_path), "line": target.spec.line, "scenario": target.spec.name, "planner": factory.spec}
@@ -237,8 +237,8 @@ def _hunt_target(
         extra = {"suite": str(target.suite_path), "line": target.spec.line, **hunt_facts(found)}
         paths = record_counterexample(found, folder, extra, record_every=every, streamed=True)
         result = replace(result, artifacts={**result.artifacts, **paths})
-        entry = counterexample_entry(target.spec, Path(paths["scenario"]), target.suite_path)
-        story = counterexample_story(found, target.spec.generate.examples, paths["scenario"], str(target.suite_path), entry)
+        entry = counterexample_entry(target.spec, Path(paths["scenario"]), target.suite_path, found.counterexample.disturbances)
+        story = counterexample_story(found, target.spec.hunt_examples, paths["scenario"], str(target.suite_path), entry)
         print(f"{target.label}: {story}", file=sys.stderr)
     return _Outcome(target, result, loaded=True, hunt=found)
 

@@ -23,8 +23,8 @@ from collections.abc import Mapping
 from types import MappingProxyType
 from typing import IO, Any
 
-from fleetsim.enums import ConflictModel, Direction, Progress, Shape, Traverse, TurnCapability
-from fleetsim.exec.protocol import PROTOCOL, decode_plan, encode_plan
+from fleetsim.enums import ConflictModel, Direction, Disturbed, Progress, Shape, Traverse, TurnCapability
+from fleetsim.exec.protocol import PROTOCOL_FAMILY, decode_plan, encode_plan
 from fleetsim.layout.layout import Layout, build_layout
 from fleetsim.layout.segment import Segment
 from fleetsim.planning.protocol import FleetPlan, Planner, RouteError
@@ -69,8 +69,9 @@ class _Session:
     """What the init message said, and the fleet the requests refer to."""
 
     def __init__(self, init: Mapping[str, Any]) -> None:
-        if init.get("type") != "init" or init.get("protocol") != PROTOCOL:
-            msg = f"expected the init message of {PROTOCOL}, got type={init.get('type')!r} protocol={init.get('protocol')!r}"
+        protocol = str(init.get("protocol"))
+        if init.get("type") != "init" or protocol.partition(".")[0] != PROTOCOL_FAMILY:
+            msg = f"expected the init message of {PROTOCOL_FAMILY}.x, got type={init.get('type')!r} protocol={init.get('protocol')!r}"
             raise ProtocolError(msg)
         self.layout = _layout(init["layout"])
         scenario = init["scenario"]
@@ -92,7 +93,7 @@ class _Session:
         for v in data["vehicles"]:
             self.vehicles[v["id"]] = VehicleState(
                 v["id"], v["segment"], Traverse(v["traverse"]), Progress(v["progress"]), v["distance"], v["speed"],
-                v["x"], v["y"], v["heading"], self.types[v["type"]],
+                v["x"], v["y"], v["heading"], self.types[v["type"]], _disturbed(v.get("disturbed")),
             )  # fmt: skip
         for plan in map(decode_plan, data["plans"]):
             self.plans[plan.vehicle_id] = plan  # an unchanged plan stays the same object, as in process
@@ -150,3 +151,7 @@ def serve(planner: Planner, stdin: IO[str] | None = None, stdout: IO[str] | None
         sink.write(json.dumps(answer, separators=(",", ":")) + "\n")
         sink.flush()
     return 0
+
+
+def _disturbed(word: str | None) -> Disturbed | None:
+    return None if word is None else Disturbed(word)

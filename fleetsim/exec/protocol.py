@@ -6,7 +6,10 @@ is kept for error reports). Enum values are the words of the suite files (``forw
 ``forward``/``reverse``, ``same``/``opposite``/``turn_in_place``...). The JSON Schemas of every message
 are in ``schemas/planner-*.schema.json``.
 
-1. ``{"type": "init", "protocol": "fleetsim-planner/1", "layout": {...}, "scenario": {...}}``
+Versions: ``fleetsim-planner/MAJOR.MINOR`` (``fleetsim-planner/1`` is 1.0). A minor version only adds
+optional fields, so a client checks the major part; 1.1 added ``disturbed``.
+
+1. ``{"type": "init", "protocol": "fleetsim-planner/1.1", "layout": {...}, "scenario": {...}}``
    - ``layout`` (the same document as ``fleetsim inspect --json`` gives, without lint):
      ``segments`` (``id, shape, direction, length, waypoints`` in metres), ``connections``
      (``from: [segment, traverse], to: [segment, traverse], joint``; the successors of a state are its
@@ -20,7 +23,8 @@ are in ``schemas/planner-*.schema.json``.
    Answer: ``{"type": "ready"}``.
 2. ``{"type": "plan_routes" | "fix_legs", "id": N, "vehicle": V, "task": TASK, "fleet": FLEET}``, one
    per planner call, ``id`` counting from 1. ``fleet`` is the snapshot: ``time``, ``vehicles`` (each
-   ``id, segment, traverse, progress, distance, speed, x, y, heading, type``), ``plans`` (each
+   ``id, segment, traverse, progress, distance, speed, x, y, heading, type``, and ``disturbed``:
+   ``stopped``/``slowed`` while a disturbance stops or slows it, absent otherwise), ``plans`` (each
    ``vehicle_id, legs``; a leg is ``segment, traverse, progress, fixed, goal_for_task``), ``tasks``
    (``[vehicle_id, [task ids, head first]]`` pairs) and ``routed`` (task ids). It is sent only when it
    changed since the last request; a request without ``fleet`` means "the same fleet as before". The
@@ -54,6 +58,7 @@ from fleetsim.scenario import Task, VehicleType
 
 __all__ = [
     "PROTOCOL",
+    "PROTOCOL_FAMILY",
     "decode_response",
     "encode_fleet",
     "encode_init",
@@ -63,7 +68,8 @@ __all__ = [
     "decode_plan",
 ]
 
-PROTOCOL = "fleetsim-planner/1"
+PROTOCOL = "fleetsim-planner/1.1"
+PROTOCOL_FAMILY = "fleetsim-planner/1"  # what a client checks: the same major version
 
 
 def encode_layout(layout: Layout) -> dict[str, Any]:
@@ -147,7 +153,7 @@ def encode_plan(plan: FleetPlan) -> dict[str, Any]:
 
 
 def _state(state: VehicleState) -> dict[str, Any]:
-    return {
+    encoded = {
         "id": state.id,
         "segment": state.segment,
         "traverse": state.traverse.value,
@@ -159,6 +165,9 @@ def _state(state: VehicleState) -> dict[str, Any]:
         "heading": state.heading,
         "type": state.type.name,
     }
+    if state.disturbed is not None:  # absent when undisturbed: the messages of 1.0 where nothing is disturbed
+        encoded["disturbed"] = state.disturbed.value
+    return encoded
 
 
 def encode_fleet(fleet: FleetSnapshot, previous: FleetSnapshot | None = None) -> dict[str, Any]:

@@ -29,11 +29,12 @@ from hypothesis.errors import HypothesisWarning, NoSuchExample
 from hypothesis.strategies import SearchStrategy
 
 from fleetsim.errors import Location, SuiteError
-from fleetsim.load.scenario import default_vehicle_type
+from fleetsim.gating.disturbance_hunt import disturbance_lines, disturbed, stop_schedules
+from fleetsim.load.scenario import default_vehicle_type, load_scenario
 from fleetsim.load.suite import ScenarioSpec, Suite
 from fleetsim.planning.protocol import Planner
 from fleetsim.recording.artifacts import start_run_folder, write_run_artifacts
-from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Expectations, Scenario
+from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Disturbance, Expectations, Scenario
 from fleetsim.sim.interrupt import StopSignals
 from fleetsim.sim.loop import run_scenario
 from fleetsim.sim.result import RunResult
@@ -100,9 +101,15 @@ def check_generate_block(spec: ScenarioSpec, suite: Suite) -> None:
 
 
 def _strategy(spec: ScenarioSpec, suite: Suite) -> SearchStrategy[Scenario]:
-    """The entry's scenarios strategy; a generate block no layout has room for is a :class:`SuiteError`."""
+    """The entry's scenarios strategy; a generate block no layout has room for is a :class:`SuiteError`.
+    With ``hunt_disturbances`` each scenario (the entry's own, or each generated one) gets stops drawn."""
+    if spec.generate is None:
+        assert spec.hunt_disturbances is not None
+        base = load_scenario(spec, suite)
+        return stop_schedules(base, spec.hunt_disturbances).map(lambda ds: replace(base, disturbances=base.disturbances + ds))
     try:
-        return scenarios(generation_spec(spec, suite), name=spec.name)
+        generated = scenarios(generation_spec(spec, suite), name=spec.name)
+        return generated if spec.hunt_disturbances is None else disturbed(generated, spec.hunt_disturbances)
     except NoRoomError as error:
         problem = error.describe(f"generate.vehicles={list(error.vehicles)!r}", f"size {list(error.size)!r}", "larger layouts (size)")
         raise SuiteError(f"scenario {spec.name!r}: {problem}", Location(spec.suite_path, spec.line, field="generate")) from None
@@ -144,7 +151,7 @@ def hunt(
     folder of the counterexample and its ``run.json`` content; its last run streams its trace there
     (:func:`record_counterexample` with ``streamed=True`` completes the folder).
     """
-    assert spec.generate is not None
+    assert spec.hunts
     strategy = _strategy(spec, suite)
     generated = shrink_runs = 0
     shrinking = False
@@ -170,7 +177,7 @@ def hunt(
         return not last.passed
 
     search = settings(
-        max_examples=spec.generate.examples,
+        max_examples=spec.hunt_examples,
         derandomize=in_ci() if derandomize is None else derandomize,
         database=None,  # a counterexample is saved as a scenario folder instead
         deadline=None,
@@ -207,14 +214,16 @@ def _expect_lines(expect: Expectations) -> list[str]:
     return ["    expect:", *lines] if lines else []
 
 
-def counterexample_entry(spec: ScenarioSpec, folder: Path, suite_path: Path) -> str:
-    """A suite entry for the saved counterexample, to paste under ``scenarios:``."""
+def counterexample_entry(spec: ScenarioSpec, folder: Path, suite_path: Path, disturbances: tuple[Disturbance, ...] = ()) -> str:
+    """A suite entry for the saved counterexample, to paste under ``scenarios:`` (with the
+    disturbances of its run as a ``disturbances:`` list)."""
     where = Path(os.path.relpath(folder, suite_path.parent)).as_posix()
     lines = [
         f"  - name: {spec.name}-counterexample",
-        f"    description: shrunk counterexample found by generating {spec.name}",
+        f"    description: shrunk counterexample found by {'generating' if spec.generate is not None else 'hunting disturbances in'} {spec.name}",
         f"    dir: {where}/",
         *_expect_lines(spec.expect),
+        *disturbance_lines(disturbances),
     ]
     return "\n".join(lines) + "\n"
 

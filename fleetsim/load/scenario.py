@@ -8,6 +8,7 @@ check (every goal reachable, :mod:`.task_reach`) need the layout. Nothing is ret
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import replace
 from pathlib import Path
 from types import MappingProxyType
 
@@ -22,6 +23,7 @@ from fleetsim.load.scenario_files import (
     read_tasks_with_lines,
     read_vehicles_with_lines,
 )
+from fleetsim.load.disturbances import check_disturbances
 from fleetsim.load.map_options import MapOptions
 from fleetsim.load.site_map import load_site_map
 from fleetsim.load.suite import ScenarioSpec, Suite
@@ -41,7 +43,7 @@ __all__ = ["default_vehicle_type", "load_scenario", "load_scenario_dir"]
 
 def load_scenario(spec: ScenarioSpec, suite: Suite) -> Scenario:
     """Load the files of one suite entry into a complete scenario."""
-    return _assemble(
+    scenario = _assemble(
         spec.name,
         (spec.map_path, spec.vehicles_path, spec.tasks_path),
         suite.vehicle_types,
@@ -50,6 +52,11 @@ def load_scenario(spec: ScenarioSpec, suite: Suite) -> Scenario:
         Location(spec.suite_path, line=spec.line),
         spec.map_options,
     )
+    if not spec.disturbances and spec.random_disturbances is None:
+        return scenario
+    scenario = replace(scenario, disturbances=spec.disturbances, random_disturbances=spec.random_disturbances)
+    check_disturbances(scenario, spec.suite_path)
+    return scenario
 
 
 def load_scenario_dir(

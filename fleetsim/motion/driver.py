@@ -21,7 +21,8 @@ from typing import NamedTuple
 from fleetsim.enums import Progress, Traverse
 from fleetsim.layout.layout import Layout
 from fleetsim.layout.segment import Segment
-from fleetsim.motion.profile import SpeedProfile
+from fleetsim.enums import Disturbed
+from fleetsim.motion.slowdown import Profile, plan_profile
 from fleetsim.planning.protocol import FleetLeg, FleetPlan
 from fleetsim.planning.snapshot import VehicleState
 from fleetsim.scenario import Vehicle
@@ -145,7 +146,12 @@ class Driver:
         self.speed = 0.0
         self.heading = heading  # where the nose points
         self.odometer = 0.0
-        self._profile: SpeedProfile | None = None
+        self._profile: Profile | None = None
+        # Disturbances (fleetsim.sim.disturbances): a halted vehicle brakes to rest and stays; a slowed one
+        # keeps to ``speed_limit``. ``disturbed`` is what its state shows the planner.
+        self.halted = False
+        self.speed_limit = vehicle.type.max_speed
+        self.disturbed: Disturbed | None = None
         self._elapsed = 0.0
         self._till_stop = False
         self._turn_left = 0.0  # seconds of turning in place still to do
@@ -206,7 +212,7 @@ class Driver:
             self.still_on = None
         if self._profile is not None:
             # Only a plan from outside (not the one this driver returned) can bring new fixed legs.
-            if plan is not self._last_out and not self._till_stop:
+            if plan is not self._last_out and not self._till_stop and not self.halted:
                 reach, till_stop = self._reach_in(plan)
                 if reach > self._remaining() + _EPS:  # new fixed legs: re-plan from the current speed
                     self._start(reach, till_stop)
@@ -220,6 +226,8 @@ class Driver:
         turned = False
         budget = dt
         while budget > _EPS:
+            if self.halted and self._profile is None:
+                break  # at rest (or its turn frozen) until the disturbance ends
             if self._turn_left > 0.0:
                 budget -= self._turn(budget)
                 turned = True
@@ -281,7 +289,7 @@ class Driver:
         x = self.x = ax + fraction * dx
         y = self.y = ay + fraction * dy
         heading = self.heading = reverse if leg.progress is _REVERSE else forward
-        state = _new(VehicleState, (self.id, leg.segment, leg.traverse, self.progress, along, speed, x, y, heading, self.type))
+        state = _new(VehicleState, (self.id, leg.segment, leg.traverse, self.progress, along, speed, x, y, heading, self.type, self.disturbed))
         return state, distance
 
     def _track(self, leg: FleetLeg) -> Track:
@@ -295,10 +303,8 @@ class Driver:
         assert self._profile is not None
         return self._profile.distance - self._travelled
 
-    def _start(self, reach: float, till_stop: bool) -> SpeedProfile:
-        profile = self._profile = SpeedProfile.plan(
-            min(self.speed, self.type.max_speed), self.type.acceleration, self.type.max_speed, reach
-        )
+    def _start(self, reach: float, till_stop: bool) -> Profile:
+        profile = self._profile = plan_profile(self.speed, self.type.acceleration, self.speed_limit, reach)
         self._elapsed = 0.0
         self._travelled = 0.0
         self._till_stop = till_stop
@@ -367,6 +373,29 @@ class Driver:
             self.heading = _wrap(self._turn_target - self._turn_sign * self._turn_left * self._turn_rate)
         return spent
 
+    # -- disturbances ---------------------------------------------------------------------------------
+
+    def halt(self) -> float:
+        """Brake to rest at the deceleration (within the distance left) and stay until :meth:`release`;
+        a turn in place freezes. The seconds until at rest."""
+        self.halted = True
+        if self._profile is None:
+            return 0.0
+        a = self.type.acceleration
+        braking = min(self._remaining(), self.speed * self.speed / (2.0 * a))
+        return self._start(braking, self._till_stop).stop_time
+
+    def release(self) -> None:
+        self.halted = False
+        self.still_on = None  # may drive again what it stood still on
+
+    def limit_speed(self, speed_limit: float) -> None:
+        """Keep to ``speed_limit`` from now on (braking down to it at the deceleration)."""
+        self.speed_limit = speed_limit
+        self.still_on = None
+        if self._profile is not None and not self.halted:
+            self._start(self._remaining(), self._till_stop)
+
     # -- what a planner sees -------------------------------------------------------------------------
 
     def state(self, plan: FleetPlan) -> VehicleState:
@@ -393,4 +422,5 @@ class Driver:
             y=y,
             heading=self.heading,
             type=self.type,
+            disturbed=self.disturbed,
         )

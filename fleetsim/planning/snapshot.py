@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from types import MappingProxyType
 from typing import NamedTuple, TypeVar
 
-from fleetsim.enums import Progress, Traverse
+from fleetsim.enums import Disturbed, Progress, Traverse
 from fleetsim.layout.layout import Layout
 from fleetsim.planning.protocol import FleetLeg, FleetPlan
 from fleetsim.scenario import Task, Vehicle, VehicleType
@@ -24,7 +24,8 @@ class VehicleState(NamedTuple):
     """Where a vehicle is and how it moves: on which leg, how far along it, its pose and speed.
 
     ``distance`` is metres driven along the current leg; ``heading`` (radians, counter-clockwise from +x)
-    is where the vehicle's nose points, the travel direction plus π when it is backing. Immutable (a
+    is where the vehicle's nose points, the travel direction plus π when it is backing. ``disturbed``:
+    whether a disturbance stops or slows it now (``None``: it drives as planned). Immutable (a
     named tuple: made for every moving vehicle on every step, so it must be cheap); use ``_replace`` to
     derive a changed copy.
     """
@@ -39,6 +40,7 @@ class VehicleState(NamedTuple):
     y: float
     heading: float
     type: VehicleType
+    disturbed: Disturbed | None = None
 
 
 @dataclass(frozen=True, slots=True)

@@ -276,9 +276,9 @@ def path_points(polyline: Sequence[Point], z: float = 0.0) -> list[Any]:
     return [point(x=float(x), y=float(y), z=float(z)) for x, y in polyline]
 
 
-def line_strip(time: Stamp, namespace: str, marker_id: int, path: Sequence[Any], width: float, rgba: RGBA) -> Any:
-    """One LINE_STRIP marker in ``map`` along ``path`` (from :func:`path_points`)."""
-    return _marker(time, "map", namespace, marker_id, 4, scale=(width, 0.0, 0.0), rgba=rgba, points=path)
+def line_strip(time: Stamp, namespace: str, marker_id: int, path: Sequence[Any], width: float, rgba: RGBA, frame: str = "map") -> Any:
+    """One LINE_STRIP marker in ``frame`` (locked to it unless ``map``) along ``path`` (from :func:`path_points`)."""
+    return _marker(time, frame, namespace, marker_id, 4, scale=(width, 0.0, 0.0), rgba=rgba, points=path, frame_locked=frame != "map")
 
 
 def text_marker(

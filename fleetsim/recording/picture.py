@@ -32,6 +32,8 @@ _ALERT = "#ff8c00"
 _INK = "#111111"
 _LEGEND = "thick: fixed legs \u00b7 dashed: planned legs \u00b7 orange: segments with a collision alert"
 _WAITS = "#2c3e50"
+_DISTURBED = "#e6007e"  # the outline and label of a vehicle a disturbance stops or slows
+_DISTURBED_LEGEND = "magenta dashed outline: a disturbance stops (STOP) or slows (SLOW) the vehicle"
 _CYCLE = "#d0021b"
 _CONTESTED = "#8e44ad"
 _REJECTED = "#d6008f"
@@ -62,6 +64,7 @@ def render_frame_svg(
     """
     font = 0.4 * pixels_per_metre
     legends = [_LEGEND, *([_STUCK_LEGEND] if stuck else []), *([_REJECTED_LEGEND] if rejected and rejected.get("plan") else [])]
+    legends += [_DISTURBED_LEGEND] if frame.disturbed else []
     view = _frame(scenario.layout, margin=1.5, pixels_per_metre=pixels_per_metre)
     width = max(view.width, _MIN_WIDTH)
     # About 0.6 em per character of sans-serif: lines as long as the picture is wide.
@@ -270,10 +273,28 @@ def _vehicles_svg(
             f'<text class="vehicle-label" x="{label_x:.2f}" y="{label_y:.2f}" font-size="{font:.1f}" '
             f'font-weight="bold" text-anchor="middle" dominant-baseline="middle" fill="{_INK}" stroke="#ffffff" stroke-width="{0.25 * font:.2f}" '
             f'paint-order="stroke">{vehicle.id}</text>',
+            *_disturbed_svg(vehicle, pose, view, font, frame.disturbed.get(vehicle.id)),
             "</g>",
         ]
     parts.append("</g>")
     return parts
+
+
+def _disturbed_svg(vehicle: Vehicle, pose: Pose, view: _Frame, font: float, kind: str | None) -> list[str]:
+    """A dashed outline round a disturbed vehicle and ``STOP``/``SLOW`` on its right (the id is on its left)."""
+    if kind is None:
+        return []
+    grown = replace(vehicle.type, length=vehicle.type.length + 0.5, width=vehicle.type.width + 0.5)
+    outline, _ = _vehicle_outline(replace(vehicle, type=grown), pose)
+    side = 0.5 * grown.width + 0.9 * font / view.scale
+    x, y = view.point((pose.x + side * math.sin(pose.heading), pose.y - side * math.cos(pose.heading)))
+    return [
+        f'<polygon class="vehicle-disturbed" data-disturbed="{kind}" points="{view.points(outline)}" fill="none" stroke="{_DISTURBED}" '
+        f'stroke-width="{0.08 * view.scale:.2f}" stroke-dasharray="{0.2 * view.scale:.2f} {0.1 * view.scale:.2f}"/>',
+        f'<text class="vehicle-disturbed-label" x="{x:.2f}" y="{y:.2f}" font-size="{0.8 * font:.1f}" font-weight="bold" '
+        f'text-anchor="middle" dominant-baseline="middle" fill="{_DISTURBED}" stroke="#ffffff" stroke-width="{0.2 * font:.2f}" '
+        f'paint-order="stroke">{kind.upper()}</text>',
+    ]
 
 
 def _vehicle_outline(vehicle: Vehicle, pose: Pose) -> tuple[list[Point], list[Point]]:

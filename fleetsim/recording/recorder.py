@@ -18,6 +18,8 @@ Topics:
 - ``/fleetsim/alerts``: segments of the collision alerts in force, orange, each with a short label
   (``segment 7: 1 ⟂ 2``) beside its middle, placed so that labels do not overlap.
 - ``/fleetsim/sim_time``: a text marker with the simulated time.
+- ``/fleetsim/disturbed``: a magenta outline and ``STOP``/``SLOW`` round each vehicle a disturbance
+  stops or slows, locked to its frame, replaced whenever a disturbance begins or ends.
 - ``/fleetsim/stuck``: at the end of a run that deadlocked or ran out of time with tasks pending, who waits
   for whom (namespace ``wait_for``, arrows; ``wait_for_cycle`` red; ``planned_near`` thin), the root-cause
   vehicles (``root_cause``, red discs), the contested segments (``contested``, purple) and the headline
@@ -92,6 +94,7 @@ TOPICS: dict[str, tuple[str, bool]] = {
     "/fleetsim/alerts": (_ARRAY, False),
     "/fleetsim/sim_time": (_ARRAY, False),
     "/fleetsim/stuck": (_ARRAY, False),
+    "/fleetsim/disturbed": (_ARRAY, False),
     "/rosout": ("rcl_interfaces/msg/Log", False),
 }
 
@@ -102,6 +105,7 @@ _WAITS = (0.17, 0.24, 0.31, 1.0)
 _CYCLE_RED = (0.82, 0.0, 0.11, 1.0)
 _ROOT_RED = (0.82, 0.0, 0.11, 0.45)
 _PURPLE = (0.56, 0.27, 0.68, 0.8)
+_MAGENTA = (0.9, 0.0, 0.5, 1.0)
 _FIXED_WIDTH, _PLANNED_WIDTH, _MAP_WIDTH, _ALERT_WIDTH = 0.18, 0.06, 0.05, 0.35
 _INFO, _WARN, _ERROR = 20, 30, 40
 
@@ -307,6 +311,19 @@ class _Scene:
             markers.append(m.text_marker(time, "map", "stuck_text", 0, headline, (x, y + 1.5 * self.letter, 0.0), self.letter, _CYCLE_RED))
         return m.marker_array(markers)
 
+    def disturbed(self, time: m.Stamp, disturbed: Mapping[int, str]) -> Any:
+        """A magenta outline round each disturbed vehicle and STOP/SLOW above it, locked to its frame."""
+        markers = [m.delete_all(time, "")]
+        types = {v.id: v.type for v in self.scenario.vehicles}
+        for vid, kind in disturbed.items():
+            half_length, half_width = 0.5 * types[vid].length + 0.25, 0.5 * types[vid].width + 0.25
+            corners = [(half_length, half_width), (-half_length, half_width), (-half_length, -half_width), (half_length, -half_width)]
+            outline = m.path_points([*corners, corners[0]], 0.05)
+            markers.append(m.line_strip(time, "disturbed", vid, outline, 0.08, _MAGENTA, frame=_frame_name(vid)))
+            at = (0.0, 0.0, types[vid].height + 0.9)
+            markers.append(m.text_marker(time, _frame_name(vid), "disturbed_label", vid, kind.upper(), at, 0.4, _MAGENTA, True))
+        return m.marker_array(markers)
+
     def sim_time(self, time: m.Stamp, seconds: float) -> Any:
         x, y = self.top_left
         return m.marker_array([m.text_marker(time, "map", "sim_time", 0, f"t = {seconds:.2f} s", (x, y, 0.0), self.letter, _WHITE)])
@@ -334,6 +351,8 @@ def _log_lines(event: Sequence[Any]) -> tuple[int, str] | None:
         return _ERROR, f"planner error for vehicle {event[1]}"
     if kind == "interrupted":
         return _WARN, f"run interrupted by {event[1]}: it ends here"
+    if kind in ("disturb", "resume"):
+        return _INFO, f"vehicle {event[1]} {'disturbed' if kind == 'disturb' else 'resumes'}: {event[2]}"
     return None
 
 
@@ -396,6 +415,8 @@ def _write_frame(bag: _Bag, scene: _Scene, frame: Frame, *, first: bool, tick: b
         bag.write("/fleetsim/alerts", time_ns, scene.alerts(time, frame.alerts))
     if tick:
         bag.write("/fleetsim/sim_time", time_ns, scene.sim_time(time, frame.time))
+    if any(event[0] in ("disturb", "resume") for event in frame.events):
+        bag.write("/fleetsim/disturbed", time_ns, scene.disturbed(time, frame.disturbed))
     for event in frame.events:
         line = _log_lines(event)
         if line is not None:

@@ -13,7 +13,7 @@ from __future__ import annotations
 import json
 import math
 from collections.abc import Iterable, Iterator, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any, NamedTuple
 
@@ -60,6 +60,9 @@ class Frame:
     events: tuple[tuple[Any, ...], ...]
     moved: tuple[int, ...]  # vehicles whose pose changed in this step
     plans_changed: bool  # a plan was accepted or a vehicle passed a leg in this step
+    # Vehicles a disturbance stops or slows in this step, by id: "stop" or "slow" (the trace's
+    # "disturb"/"resume" events; a disturbance that begins at t and ends at t' marks the frames in (t, t']).
+    disturbed: Mapping[int, str] = field(default_factory=lambda: MappingProxyType({}))
 
 
 _new = tuple.__new__
@@ -121,6 +124,8 @@ def replay(scenario: Scenario, lines: Iterable[str]) -> Iterator[Frame]:
     index = ReservationIndex(ConflictTable(layout))
     alerts = index.alerts(plans)
     reported = bool(alerts)
+    disturbed: dict[int, list[str]] = {}
+    shown: Mapping[int, str] = MappingProxyType({})
     for number, line in enumerate(iterator, start=2):
         try:
             step, vehicles, accepted, events = json.loads(line)
@@ -155,6 +160,8 @@ def replay(scenario: Scenario, lines: Iterable[str]) -> Iterator[Frame]:
         if reported and (accepted or (trimmed and alerts)):
             alerts = index.alerts(plans)
         changed = bool(accepted) or trimmed
+        if any(event[0] in ("disturb", "resume") for event in events):
+            shown = _disturbed(disturbed, events)
         yield Frame(
             step=step,
             time=(step + 1) * dt,
@@ -164,7 +171,19 @@ def replay(scenario: Scenario, lines: Iterable[str]) -> Iterator[Frame]:
             events=tuple(tuple(event) for event in events),
             moved=tuple(moved),
             plans_changed=changed,
+            disturbed=shown,
         )
+
+
+def _disturbed(going: dict[int, list[str]], events: Sequence[Sequence[Any]]) -> Mapping[int, str]:
+    """Apply a step's disturbance events to ``going`` (vehicle -> kinds); each vehicle's shown kind
+    (a stop over a slow)."""
+    for event in events:
+        if event[0] == "disturb":
+            going.setdefault(event[1], []).append(event[2])
+        elif event[0] == "resume" and event[2] in going.get(event[1], []):
+            going[event[1]].remove(event[2])
+    return MappingProxyType({v: "stop" if "stop" in kinds else "slow" for v, kinds in sorted(going.items()) if kinds})
 
 
 def frame_at(scenario: Scenario, lines: Iterable[str], step: int) -> Frame:

@@ -33,6 +33,7 @@ from fleetsim.planning.reservations import CollisionAlert
 from fleetsim.planning.snapshot import VehicleState
 from fleetsim.scenario import Scenario
 from fleetsim.sim.diagnosis import Diagnosis, StuckFacts, diagnose
+from fleetsim.sim.disturbances import Disturber
 from fleetsim.sim.guard import PlannerFault, PlannerGuard
 from fleetsim.sim.interrupt import PlannerInterrupted, StopSignals, signal_name
 from fleetsim.sim.result import AlertEvent, DeadlockReport, Ending, Failure, Metrics, RejectionEvent, RunResult, judge
@@ -66,6 +67,9 @@ class _Run:
             v.id: Driver(v, scenario.layout, headings, states[v.id].heading) for v in sorted(scenario.vehicles, key=lambda v: v.id)
         }
         self.trace = Trace(keep_lines=keep_trace)
+        # Only a scenario with disturbances has a disturber: without, the run (and its hash) is as before.
+        has_disturbances = bool(scenario.disturbances) or scenario.random_disturbances is not None
+        self.disturber = Disturber(scenario, self.drivers, self.controller) if has_disturbances else None
         self.rejections: list[RejectionEvent] = []
         self.collisions: list[AlertEvent] = []
         self.route_errors: list[dict[str, Any]] = []
@@ -244,14 +248,15 @@ def _simulate(
     dt = settings.time_step
     period = max(1, round(settings.planning_period / dt))
     max_steps = max(1, math.ceil(settings.time_limit / dt - 1e-9))
-    run.trace.begin(
-        {
-            "time_step_us": round(dt * 1e6),
-            "planning_period_steps": period,
-            "vehicles": [v.id for v in sorted(scenario.vehicles, key=lambda v: v.id)],
-            "tasks": len(scenario.tasks),
-        }
-    )
+    header: dict[str, Any] = {
+        "time_step_us": round(dt * 1e6),
+        "planning_period_steps": period,
+        "vehicles": [v.id for v in sorted(scenario.vehicles, key=lambda v: v.id)],
+        "tasks": len(scenario.tasks),
+    }
+    if run.disturber is not None:
+        header["disturbances"] = run.disturber.header()
+    run.trace.begin(header)
     ended: Ending = "time-limit"
     deadlock: DeadlockReport | None = None
     step = 0
@@ -260,6 +265,8 @@ def _simulate(
         events: list[list[Any]] = []
         plans: list[list[Any]] = []
         run.controller.bookkeeping()
+        if run.disturber is not None and run.disturber.step(now, events):
+            run.last_activity = now  # a vehicle stands in a stop: the deadlock timer counts from its end
         # Every event of the step is stamped with its end, when the step enters the trace and the recording
         # (the planner is asked at ``now``). Times are multiples of dt, never sums of them.
         end = (step + 1) * dt
@@ -344,5 +351,6 @@ def _simulate(
         metrics=metrics,
         diagnosis=diagnosis,
         checkpoints=tuple(run.trace.checkpoints),
+        disturbances=run.disturber.happened() if run.disturber is not None else (),
         trace=run.trace if keep_trace else None,
     )

@@ -19,6 +19,7 @@ from fleetsim.planning.protocol import FleetPlan
 from fleetsim.planning.reservations import CollisionAlert
 from fleetsim.scenario import Expectations, Task
 from fleetsim.sim.diagnosis import Diagnosis
+from fleetsim.sim.disturbances import DisturbanceEvent
 from fleetsim.sim.trace import Trace
 
 __all__ = ["MOMENTLESS", "AlertEvent", "DeadlockReport", "Failure", "Metrics", "RejectionEvent", "RunResult", "judge", "plan_legs"]
@@ -173,6 +174,7 @@ class RunResult:
     metrics: Metrics
     diagnosis: Diagnosis | None = None  # why tasks are pending at a deadlock or the time limit
     checkpoints: tuple[tuple[int, str], ...] = ()
+    disturbances: tuple[DisturbanceEvent, ...] = ()  # those that happened, in the order they began
     artifacts: Mapping[str, str] = field(default_factory=lambda: MappingProxyType({}))
     trace: Trace | None = field(default=None, compare=False, repr=False)
 
@@ -203,6 +205,7 @@ class RunResult:
                 "cycles": [list(cycle) for cycle in self.deadlock.diagnosis.cycles],
             },
             "metrics": self.metrics.to_dict(),
+            "disturbances": [d.to_dict() for d in self.disturbances],
             "artifacts": dict(self.artifacts),
         }
 

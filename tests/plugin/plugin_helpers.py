@@ -17,7 +17,7 @@ def copy_example_suites(pytester: pytest.Pytester, *suites: str, locks: bool = T
     templates into the pytester folder; with ``locks`` also their lock files (recorded hashes for
     ReservingPlanner in ``examples``, BFSPlanner in ``caught-bugs``)."""
     root = pytester.path
-    for folder in ("examples", "tiled"):
+    for folder in ("examples", "tiled", "caught-bugs"):
         if not (root / folder).exists():
             shutil.copytree(SUITES / folder, root / folder)
     for suite in suites or ("examples",):

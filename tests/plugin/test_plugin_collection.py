@@ -297,7 +297,7 @@ def test_a_fixture_value_that_is_not_a_planner_fails_the_scenario_saying_what_it
 def test_a_suite_pinned_to_a_planner_runs_with_it_whatever_planner_names(pytester: pytest.Pytester) -> None:
     copy_example_suites(pytester, "caught-bugs")  # pinned to BFSPlanner; its lock holds BFSPlanner's hashes
     result = pytester.runpytest_inprocess("caught-bugs.fleetsim.yaml", "--planner", RESERVING, "--junitxml=junit.xml")
-    result.assert_outcomes(passed=2, xfailed=1)  # ReservingPlanner would raise no collision alert here
+    result.assert_outcomes(passed=3, xfailed=2)  # ReservingPlanner would raise no collision alert here
     cases = ET.parse(pytester.path / "junit.xml").getroot().iter("testcase")
     planners = {
         prop.get("value") for case in cases for prop in case.iter("property") if prop.get("name") == "fleetsim_planner"

@@ -84,16 +84,19 @@ def test_the_shipped_suites_pass_with_the_reserving_planner(
     monkeypatch.chdir(tmp_path)  # the hunt's counterexample goes to ./fleetsim-results
     status, out, err = run(capsys, "run", str(SUITES), "--planner", RESERVING)
     assert status == 0, out + err
-    header, *rows = out.splitlines()[:8]
+    header, *rows = out.splitlines()[:16]
     assert header.split() == ["scenario", "outcome", "tasks", "makespan", "alerts", "rejections", "route", "errors", "hash", "realtime"]
     expected = [[f"caught-bugs.fleetsim.yaml::{name}", "passed"] for name in ("crossing-collides", "corridor-head-on")]
     # The hunt catches BFSPlanner; its label says what it ran: "(N generated, M shrink runs)".
     expected += [["caught-bugs.fleetsim.yaml::generated-layouts", "generated,", "shrink", "runs)", "xfailed"]]
+    expected += [["caught-bugs.fleetsim.yaml::late-crossing-stop", "passed"]]
+    expected += [["caught-bugs.fleetsim.yaml::late-crossing-hunt", "generated,", "shrink", "runs)", "xfailed"]]
+    expected += [[f"disturbances.fleetsim.yaml::{spec.name}", "passed"] for spec in fleetsim.load_suite(SUITES / "disturbances.fleetsim.yaml").scenarios]
     expected += [[f"examples.fleetsim.yaml::{name}", "passed"] for name in NAMES]
     assert [[cell for cell in row.split() if not cell.lstrip("(").isdigit()][: len(want)] for row, want in zip(rows, expected, strict=True)] == expected
     assert (tmp_path / "fleetsim-results" / "caught-bugs" / "generated-layouts" / "counterexample" / "map.json").is_file()
     # The caught-bugs suite is pinned to BFSPlanner, whatever --planner says.
-    assert f"9 scenario(s) with fleetsim.planners:BFSPlanner, {RESERVING}: 8 passed, 1 xfailed" in out
+    assert f"17 scenario(s) with fleetsim.planners:BFSPlanner, {RESERVING}: 15 passed, 2 xfailed" in out
     assert "FAILED" not in out
 
 
@@ -161,8 +164,9 @@ def test_a_scenario_named_twice_runs_once_in_the_order_given(capsys: pytest.Capt
     assert status == 0
     names = [r["scenario"] for r in json_lines(out)]
     assert names == [
-        "mixed-shapes", "crossing-collides", "corridor-head-on", "generated-layouts", "crossing", "loop-one-way",
-        "corridor-passing-bay", "packing-hall-lif", "clinic-rmf",
+        "mixed-shapes", "crossing-collides", "corridor-head-on", "generated-layouts", "late-crossing-stop", "late-crossing-hunt",
+        *(spec.name for spec in fleetsim.load_suite(SUITES / "disturbances.fleetsim.yaml").scenarios),
+        "crossing", "loop-one-way", "corridor-passing-bay", "packing-hall-lif", "clinic-rmf",
     ]  # fmt: skip
 
 

@@ -9,7 +9,8 @@ import jsonschema
 import pytest
 
 from fleetsim import load_scenario, load_suite
-from fleetsim.exec.client import _Session
+from fleetsim.enums import Disturbed
+from fleetsim.exec.client import ProtocolError, _Session
 from fleetsim.exec.protocol import decode_response, encode_fleet, encode_init, encode_task
 from fleetsim.planners import ReservingPlanner
 from fleetsim.planning.controller import FleetController
@@ -90,3 +91,25 @@ def test_a_served_planner_answers_like_the_planner_itself() -> None:
     answer = session.answer(ReservingPlanner(), json.loads(json.dumps(request)))
     jsonschema.validate(answer, schema("response"))
     assert decode_response(answer) == list(ReservingPlanner().plan_routes(task, fleet, scenario.layout))
+
+
+def test_the_disturbed_field_travels_only_while_set_and_protocol_1_0_clients_are_still_greeted() -> None:
+    scenario = crossing()
+    controller = FleetController(scenario)
+    first = controller.snapshot(0.0)
+    init = json.loads(json.dumps(encode_init(scenario.layout, first)))
+    assert init["protocol"] == "fleetsim-planner/1.1"
+    assert all("disturbed" not in v for v in encode_fleet(first)["vehicles"])  # as in 1.0 when undisturbed
+    session = _Session(init)
+    session.snapshot(json.loads(json.dumps(encode_fleet(first))))
+    controller.set_state(controller.states[1]._replace(disturbed=Disturbed.STOPPED))
+    second = controller.snapshot(0.1)
+    update = json.loads(json.dumps(encode_fleet(second, first)))
+    assert update["vehicles"][0]["disturbed"] == "stopped"
+    jsonschema.validate({"type": "fix_legs", "id": 2, "vehicle": 1, "task": encode_task(scenario.tasks[0]), "fleet": update}, schema("request"))
+    assert session.snapshot(update).vehicles[1].disturbed is Disturbed.STOPPED
+    with pytest.raises(jsonschema.ValidationError):
+        jsonschema.validate({**update["vehicles"][0], "disturbed": "late"}, schema("request")["$defs"]["vehicle_state"])
+    _Session({**init, "protocol": "fleetsim-planner/1"})  # the same major version
+    with pytest.raises(ProtocolError):
+        _Session({**init, "protocol": "fleetsim-planner/2.0"})

@@ -22,7 +22,7 @@
 
 const readline = require("readline");
 
-const PROTOCOL = "fleetsim-planner/1";
+const PROTOCOL = "fleetsim-planner/1"; // the major version; minor versions (1.1, ...) only add optional fields
 const FIX_HORIZON = 3; // fix_legs commits (at most) the first three legs of a plan, like BFSPlanner
 
 // What the init message tells us, and the fleet of the last request that carried one.
@@ -45,7 +45,7 @@ const stateKey = (segment, traverse) => `${segment}|${traverse}`;
 // ---- init: index the layout's connections by their "from" state --------------------------------------
 
 function init(message) {
-  if (message.protocol !== PROTOCOL) fail(`unsupported protocol ${JSON.stringify(message.protocol)}, expected ${PROTOCOL}`);
+  if (typeof message.protocol !== "string" || message.protocol.split(".")[0] !== PROTOCOL) fail(`unsupported protocol ${JSON.stringify(message.protocol)}, expected ${PROTOCOL}`);
   const { layout, scenario } = message;
   if (!isObject(layout) || !Array.isArray(layout.connections)) fail("init: layout.connections missing");
   if (!isObject(scenario) || !Array.isArray(scenario.vehicle_types)) fail("init: scenario.vehicle_types missing");
