@@ -24,10 +24,10 @@ from fleetsim.errors import LoadError
 from fleetsim.gating.generated import _hypothesis_storage_elsewhere, generation_spec  # noqa: PLC2701 - the hunt's own storage rule
 from fleetsim.load.scenario import load_scenario
 from fleetsim.load.suite import discover_suites, load_suite
-from fleetsim.scenario import Scenario
+from fleetsim.scenario import RandomDisturbances, Scenario
 from fleetsim.strategies import scenarios
 from fleetsim.sweep.payload import scenario_payload
-from fleetsim.sweep.spec import GeneratedSource, SuiteSource, SweepSpec
+from fleetsim.sweep.spec import GeneratedSource, SuiteSource, SweepDisturbances, SweepSpec
 
 __all__ = ["RunItem", "expand", "generate_scenarios", "scenario_id"]
 
@@ -86,9 +86,13 @@ def _named(scenario: Scenario, name: str) -> Scenario:
     return replace(scenario, name=name)
 
 
-def _cases(spec: SweepSpec) -> list[tuple[str, str, int | None, Scenario | None, str | None]]:
-    """(id, source kind, seed, scenario or None, load error) for every scenario of every source."""
-    cases: list[tuple[str, str, int | None, Scenario | None, str | None]] = []
+Case = tuple[str, str, int | None, Scenario | None, str | None]
+
+
+def _cases(spec: SweepSpec) -> list[Case]:
+    """(id, source kind, seed, scenario or None, load error) for every scenario of every source (and, with
+    the spec's ``disturbances``, every disturbance seed)."""
+    cases: list[Case] = []
     for source in spec.sources:
         if isinstance(source, SuiteSource):
             for file in discover_suites([source.path]):
@@ -103,7 +107,18 @@ def _cases(spec: SweepSpec) -> list[tuple[str, str, int | None, Scenario | None,
         else:
             for index, scenario in enumerate(generate_scenarios(source)):
                 cases.append((f"{scenario_id(spec.path, source.entry.name)}#{index}", "generated", source.seed + index, scenario, None))
-    return cases
+    return cases if spec.disturbances is None else _disturbed(cases, spec.disturbances)
+
+
+def _disturbed(cases: list[Case], drawn: SweepDisturbances) -> list[Case]:
+    """Each case once per disturbance seed (``ID~dSEED``), with random stops drawn from that seed."""
+    out: list[Case] = []
+    for key, kind, seed, scenario, error in cases:
+        for stops in drawn.seeds:
+            random_stops = RandomDisturbances(stops, drawn.stops_per_vehicle_hour, drawn.stop)
+            disturbed = None if scenario is None else replace(scenario, random_disturbances=random_stops)
+            out.append((f"{key}~d{stops}", kind, seed, disturbed, error))
+    return out
 
 
 def expand(spec: SweepSpec, artifacts: Path) -> list[RunItem]:

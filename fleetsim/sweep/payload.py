@@ -15,7 +15,7 @@ from typing import Any
 
 from fleetsim.enums import ConflictModel, TurnCapability
 from fleetsim.load.scenario import load_scenario_dir
-from fleetsim.scenario import Expectations, Scenario, ScenarioSettings, VehicleType
+from fleetsim.scenario import Disturbance, Expectations, RandomDisturbances, Scenario, ScenarioSettings, VehicleType
 from fleetsim.strategies import save_scenario
 
 __all__ = ["scenario_from_payload", "scenario_payload"]
@@ -43,6 +43,8 @@ def scenario_payload(scenario: Scenario) -> dict[str, Any]:
         ],
         "settings": {f.name: _plain(getattr(scenario.settings, f.name)) for f in dataclasses.fields(scenario.settings)},
         "expect": {f.name: _plain(getattr(scenario.expect, f.name)) for f in dataclasses.fields(scenario.expect)},
+        "disturbances": [dataclasses.asdict(d) for d in scenario.disturbances],
+        "random_disturbances": None if scenario.random_disturbances is None else dataclasses.asdict(scenario.random_disturbances),
     }
 
 
@@ -65,4 +67,9 @@ def scenario_from_payload(payload: dict[str, Any]) -> Scenario:
         for name, text in payload["files"].items():
             (Path(folder) / Path(name).name).write_text(text, encoding="utf-8")
         scenario = load_scenario_dir(folder, vehicle_types=types, settings=settings)
-    return dataclasses.replace(scenario, name=payload["name"], expect=expect, map_path=None, vehicles_path=None, tasks_path=None)
+    drawn = payload.get("random_disturbances")
+    return dataclasses.replace(
+        scenario, name=payload["name"], expect=expect, map_path=None, vehicles_path=None, tasks_path=None,
+        disturbances=tuple(Disturbance(**d) for d in payload.get("disturbances", ())),
+        random_disturbances=None if drawn is None else RandomDisturbances(**{**drawn, "stop": tuple(drawn["stop"])}),
+    )  # fmt: skip

@@ -38,12 +38,12 @@ from fleetsim.load.suite_schema import check_against_schema
 from fleetsim.load.yaml_source import Locate, YamlPath, load_yaml_with_marks
 from fleetsim.scenario import ScenarioSettings
 
-__all__ = ["FORMAT", "GeneratedSource", "SuiteSource", "SweepSpec", "SweepSpecError", "load_sweep_spec"]
+__all__ = ["FORMAT", "GeneratedSource", "SuiteSource", "SweepDisturbances", "SweepSpec", "SweepSpecError", "load_sweep_spec"]
 
 FORMAT = 1
 Record = Literal["failed", "all", "none"]
 _KEYS = {"fleetsim-sweep", "name", "description", "planners", "baseline", "repetitions", "planner_timeout", "record",
-         "vehicle_types", "defaults", "sources"}
+         "vehicle_types", "defaults", "sources", "disturbances"}
 _SOURCE_KEYS = ("count", "seed")  # what a generated source adds to a suite entry
 
 
@@ -70,6 +70,16 @@ class GeneratedSource:
 
 
 @dataclass(frozen=True, slots=True)
+class SweepDisturbances:
+    """Every scenario runs once per seed with random stops drawn from it (a suite's
+    ``random_disturbances`` with that seed, in place of any of its own)."""
+
+    stops_per_vehicle_hour: float
+    stop: tuple[float, float]
+    seeds: tuple[int, ...]
+
+
+@dataclass(frozen=True, slots=True)
 class SweepSpec:
     path: Path
     name: str
@@ -79,6 +89,7 @@ class SweepSpec:
     planner_timeout: float | None
     record: Record
     sources: tuple[SuiteSource | GeneratedSource, ...]
+    disturbances: SweepDisturbances | None = None
 
 
 def _error(problem: str, locate: Locate, where: YamlPath, *, key: bool = False) -> SweepSpecError:
@@ -119,7 +130,34 @@ def load_sweep_spec(path: Path | str) -> SweepSpec:
         planner_timeout=float(timeout) or None,
         record=record,
         sources=_sources(path, data, locate),
+        disturbances=_disturbances(data.get("disturbances"), locate),
     )
+
+
+def _number(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _disturbances(raw: Any, locate: Locate) -> SweepDisturbances | None:
+    """``disturbances: {stops_per_vehicle_hour: R, stop: [MIN, MAX], seeds: [S, ...]}``, or None."""
+    if raw is None:
+        return None
+    where: YamlPath = ("disturbances",)
+    if not isinstance(raw, dict) or set(raw) - {"stops_per_vehicle_hour", "stop", "seeds"} or "seeds" not in raw:
+        raise _error(f"disturbances={raw!r} must be {{stops_per_vehicle_hour: R, stop: [MIN, MAX], seeds: [S, ...]}}", locate, where)
+    rate = raw.get("stops_per_vehicle_hour", 6)
+    if not _number(rate) or not rate > 0:
+        raise _error(f"stops_per_vehicle_hour={rate!r} must be a number > 0", locate, (*where, "stops_per_vehicle_hour"))
+    stop = raw.get("stop", [5, 30])
+    if not (isinstance(stop, list) and len(stop) == 2 and all(map(_number, stop)) and 0 < stop[0] <= stop[1]):
+        raise _error(f"stop={stop!r} must be [MIN, MAX] seconds with 0 < MIN <= MAX", locate, (*where, "stop"))
+    seeds = raw["seeds"]
+    if not isinstance(seeds, list) or not seeds:
+        raise _error(f"seeds={seeds!r} must be a non-empty list of whole numbers >= 0", locate, (*where, "seeds"))
+    for index, seed in enumerate(seeds):
+        if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0 or seeds.index(seed) != index:
+            raise _error(f"seeds[{index}]={seed!r} must be a whole number >= 0, listed once", locate, (*where, "seeds", index))
+    return SweepDisturbances(float(rate), (float(stop[0]), float(stop[1])), tuple(seeds))
 
 
 def _planners(raw: Any, locate: Locate) -> tuple[str, ...]:

@@ -38,6 +38,10 @@ def _spec(tmp_path: Path, text: str) -> Path:
         ("layout: warehouse", "layout: spiral", 7, "'spiral'"),
         ("defaults: {time_limit: 30}", "defaults: {time_limit: fast}", 4, "'fast'"),
         ("name: small", "name: small\nbaseline: other:Planner", 3, "baseline='other:Planner' must be one of the planners"),
+        ("name: small", "name: small\ndisturbances: {seeds: [1, 1]}", 3, "seeds[1]=1 must be a whole number >= 0, listed once"),
+        ("name: small", "name: small\ndisturbances: {stop: [30, 5], seeds: [1]}", 3, "stop=[30, 5] must be [MIN, MAX] seconds"),
+        ("name: small", "name: small\ndisturbances: {stops_per_vehicle_hour: 0, seeds: [1]}", 3, "stops_per_vehicle_hour=0 must be a number > 0"),
+        ("name: small", "name: small\ndisturbances: {rate: 6}", 3, "disturbances={'rate': 6} must be"),
     ],
 )
 def test_bad_spec_value_is_a_located_error(tmp_path: Path, old: str, new: str, line: int, words: str) -> None:
@@ -105,3 +109,30 @@ def test_sweep_results_feed_fleetsim_compare(tmp_path: Path) -> None:
     assert read_metrics(path, planner="b:P")["s.fleetsim.yaml::one"].planner == "b:P"
     with pytest.raises(BaselineError, match="a sweep of 2 planners"):
         read_metrics(path, planner="c:P")
+
+
+def test_disturbance_seeds_run_every_scenario_once_per_seed(tmp_path: Path) -> None:
+    """The pairs stay pairs: each (scenario, seed) is one id, run by every planner with the same stops."""
+    spec = load_sweep_spec(_spec(tmp_path, GOOD + "disturbances: {stops_per_vehicle_hour: 600, stop: [5, 10], seeds: [3, 4]}\n"))
+    items = expand(spec, tmp_path)
+    assert len(items) == 16 and len({i["key"] for i in items}) == 16
+    assert sorted({i["id"].rsplit("~", 1)[1] for i in items}) == ["d3", "d4"]
+    drawn = {i["id"]: i["scenario"]["random_disturbances"] for i in items if i["scenario"] is not None}
+    assert {(d["seed"], d["stops_per_vehicle_hour"], tuple(d["stop"])) for d in drawn.values()} == {(3, 600.0, (5.0, 10.0)), (4, 600.0, (5.0, 10.0))}
+    assert load_sweep_spec(_spec(tmp_path, GOOD)).disturbances is None  # narrowly: without the key, no stops
+
+
+def test_a_scenario_sent_to_a_worker_keeps_its_disturbances() -> None:
+    """Declared and drawn disturbances travel with the scenario: the run hashes as the suite's own."""
+    from fleetsim import load_scenario, load_suite, run_scenario
+    from fleetsim.planners import ReservingPlanner
+    from fleetsim.sweep.payload import scenario_from_payload, scenario_payload
+
+    root = Path(__file__).resolve().parents[2] / "scenario_suites"
+    for file, name in (("disturbances.fleetsim.yaml", "random-stops-at-the-junction"), ("caught-bugs.fleetsim.yaml", "late-crossing-stop")):
+        suite = load_suite(root / file)
+        scenario = load_scenario(next(spec for spec in suite.scenarios if spec.name == name), suite)
+        assert scenario.disturbances or scenario.random_disturbances
+        sent = scenario_from_payload(scenario_payload(scenario))
+        assert (sent.disturbances, sent.random_disturbances) == (scenario.disturbances, scenario.random_disturbances)
+        assert run_scenario(sent, ReservingPlanner()).trace_hash == run_scenario(scenario, ReservingPlanner()).trace_hash
