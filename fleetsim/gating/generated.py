@@ -40,7 +40,7 @@ from fleetsim.sim.loop import run_scenario
 from fleetsim.sim.result import RunResult
 from fleetsim.strategies import GenerationSpec, NoRoomError, save_scenario, scenarios
 
-__all__ = ["COUNTEREXAMPLE_FOLDER", "DEFAULT_ARTIFACTS", "Hunt", "check_generate_block", "counterexample_entry", "counterexample_story", "counts_story", "generation_spec", "hunt", "hunt_facts", "hunt_label", "in_ci", "record_counterexample"]
+__all__ = ["COUNTEREXAMPLE_FOLDER", "DEFAULT_ARTIFACTS", "Hunt", "check_generate_block", "counterexample_entry", "counterexample_story", "counts_story", "generation_spec", "hunt", "hunt_facts", "hunt_label", "hypothesis_storage_elsewhere", "in_ci", "record_counterexample"]
 
 COUNTEREXAMPLE_FOLDER = "counterexample"
 DEFAULT_ARTIFACTS = Path("fleetsim-results")  # under the working directory, as pytest's --fleetsim-artifacts
@@ -121,7 +121,7 @@ class _Stopped(BaseException):
 
 
 @contextmanager
-def _hypothesis_storage_elsewhere() -> Iterator[None]:
+def hypothesis_storage_elsewhere() -> Iterator[None]:
     """Hypothesis's caches in a temporary folder for the hunt, not ``.hypothesis/`` in the working
     directory; whatever folder it used before (the user's own tests may run in this process) after."""
     before = vars(configuration).get("__hypothesis_home_directory")
@@ -185,7 +185,7 @@ def hunt(
         suppress_health_check=list(HealthCheck),
     )
     try:
-        with _hypothesis_storage_elsewhere(), warnings.catch_warnings():
+        with hypothesis_storage_elsewhere(), warnings.catch_warnings():
             # find() describes the failing example for a report it does not show; a scenario's repr
             # is large, and the warning about that would only confuse (the counterexample is saved).
             warnings.filterwarnings("ignore", "Generating overly large repr", HypothesisWarning)

@@ -28,7 +28,10 @@ from fleetsim.load.suite_schema import check_against_schema, suite_error
 from fleetsim.load.yaml_source import Locate, load_yaml_with_marks
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Disturbance, Expectations, RandomDisturbances, ScenarioSettings, VehicleType
 
-__all__ = ["SUITE_SUFFIX", "Generation", "ScenarioSpec", "Suite", "discover_suites", "load_suite"]
+__all__ = [
+    "SUITE_SUFFIX", "Generation", "ScenarioSpec", "Suite", "discover_suites", "load_suite", "parse_scenario_entry", "parse_settings",
+    "parse_vehicle_types",
+]
 
 SUITE_SUFFIX = ".fleetsim.yaml"
 SETTING_KEYS = tuple(f.name for f in fields(ScenarioSettings))
@@ -123,13 +126,13 @@ def load_suite(path: Path | str) -> Suite:
         msg = "empty file: a suite needs at least 'fleetsim: 1', 'name' and 'scenarios'"
         raise SuiteError(msg, Location(path))
     check_against_schema(data, locate)
-    vehicle_types = _vehicle_types(data.get("vehicle_types"), locate)
+    vehicle_types = parse_vehicle_types(data.get("vehicle_types"), locate)
     defaults = data.get("defaults", {})
-    base = _settings(ScenarioSettings(), defaults, vehicle_types, locate, ("defaults",))
+    base = parse_settings(ScenarioSettings(), defaults, vehicle_types, locate, ("defaults",))
     _check_unique_names(data["scenarios"], locate)
     base_options = defaults.get("map_options", {})
     scenarios = tuple(
-        _scenario(path, index, entry, base, vehicle_types, locate, base_options)
+        parse_scenario_entry(path, index, entry, base, vehicle_types, locate, base_options)
         for index, entry in enumerate(data["scenarios"])
     )
     return Suite(
@@ -155,7 +158,7 @@ def _color(raw: str | list[float] | None) -> tuple[float, float, float, float] |
     return (rgba[0], rgba[1], rgba[2], rgba[3])
 
 
-def _vehicle_types(raw: Mapping[str, Any] | None, locate: Locate) -> dict[str, VehicleType]:
+def parse_vehicle_types(raw: Mapping[str, Any] | None, locate: Locate) -> dict[str, VehicleType]:
     if raw is None:
         return {DEFAULT_VEHICLE_TYPE.name: DEFAULT_VEHICLE_TYPE}
     seen: dict[str, str] = {}
@@ -192,7 +195,7 @@ def _type_name(name: str, types: Mapping[str, VehicleType], locate: Locate, wher
 # -- settings and expectations --------------------------------------------------------------------
 
 
-def _settings(
+def parse_settings(
     base: ScenarioSettings,
     raw: Mapping[str, Any],
     types: Mapping[str, VehicleType],
@@ -253,7 +256,7 @@ def _check_unique_names(entries: list[Mapping[str, Any]], locate: Locate) -> Non
         first[name.casefold()] = (name, index)
 
 
-def _scenario(
+def parse_scenario_entry(
     suite_path: Path,
     index: int,
     entry: Mapping[str, Any],
@@ -276,7 +279,7 @@ def _scenario(
         map_path=map_path,
         vehicles_path=vehicles_path,
         tasks_path=tasks_path,
-        settings=_settings(base, entry, types, locate, where),
+        settings=parse_settings(base, entry, types, locate, where),
         expect=_expectations(entry.get("expect", {})),
         tags=tuple(entry.get("tags", ())),
         xfail=entry.get("xfail"),

@@ -21,7 +21,7 @@ from hypothesis import HealthCheck, Phase, find, settings
 from hypothesis.errors import HypothesisWarning, NoSuchExample
 
 from fleetsim.errors import LoadError
-from fleetsim.gating.generated import _hypothesis_storage_elsewhere, generation_spec  # noqa: PLC2701 - the hunt's own storage rule
+from fleetsim.gating.generated import generation_spec, hypothesis_storage_elsewhere
 from fleetsim.load.scenario import load_scenario
 from fleetsim.load.suite import discover_suites, load_suite
 from fleetsim.scenario import RandomDisturbances, Scenario
@@ -73,7 +73,7 @@ def generate_scenarios(source: GeneratedSource) -> list[Scenario]:
         phases=[Phase.generate], database=None, max_examples=max(100, source.count * 20), deadline=None,
         suppress_health_check=list(HealthCheck), derandomize=False,
     )  # fmt: skip
-    with _hypothesis_storage_elsewhere(), warnings.catch_warnings():
+    with hypothesis_storage_elsewhere(), warnings.catch_warnings():
         warnings.filterwarnings("ignore", "Generating overly large repr", HypothesisWarning)
         try:
             find(strategy, collect, settings=draw, random=random.Random(source.seed))

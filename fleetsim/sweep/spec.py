@@ -32,8 +32,7 @@ from typing import Any, Literal
 
 from fleetsim.errors import Location, LoadError, SuiteError
 from fleetsim.gating.generated import check_generate_block
-from fleetsim.load.suite import ScenarioSpec, Suite, load_suite
-from fleetsim.load.suite import _scenario, _settings, _vehicle_types  # noqa: PLC2701 - the suite's own parsing, reused
+from fleetsim.load.suite import ScenarioSpec, Suite, load_suite, parse_scenario_entry, parse_settings, parse_vehicle_types
 from fleetsim.load.suite_schema import check_against_schema
 from fleetsim.load.yaml_source import Locate, YamlPath, load_yaml_with_marks
 from fleetsim.scenario import ScenarioSettings
@@ -227,9 +226,9 @@ def _as_suite(path: Path, data: Mapping[str, Any], generated: list[int], locate:
 
     try:
         check_against_schema(as_suite, remapped)
-        types = _vehicle_types(data.get("vehicle_types"), remapped)
-        base = _settings(ScenarioSettings(), data.get("defaults", {}), types, remapped, ("defaults",))
-        specs = tuple(_scenario(path, k, entry, base, types, remapped, {}) for k, entry in enumerate(entries))
+        types = parse_vehicle_types(data.get("vehicle_types"), remapped)
+        base = parse_settings(ScenarioSettings(), data.get("defaults", {}), types, remapped, ("defaults",))
+        specs = tuple(parse_scenario_entry(path, k, entry, base, types, remapped, {}) for k, entry in enumerate(entries))
         suite = Suite(path, str(data.get("name", "sweep")), "", types, specs)
         for spec in specs:
             check_generate_block(spec, suite)
