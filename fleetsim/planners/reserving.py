@@ -135,13 +135,19 @@ class ReservingPlanner:
         if self._haven.get(vehicle_id) == plan.legs[0].segment:
             del self._haven[vehicle_id]  # it has arrived where it was sent to wait
         fixed_count = len(plan.fixed_legs)
-        response: list[FleetPlan] = [*danced, *self._clear_idle_ahead(vehicle_id, plan, fleet, layout, index)]
+        cleared = self._clear_idle_ahead(vehicle_id, plan, fleet, layout, index)
+        response: list[FleetPlan] = [*danced, *cleared]
         if fixed_count == len(plan.legs):
             return response  # everything up to the goal is committed already
         extended = self._fix(plan, fleet, index)
         if extended is not plan:
             self._blocked.pop(vehicle_id, None)
             return [*response, extended]
+        if cleared:
+            # Its way is being cleared: it waits for that rather than stepping aside or turning to another
+            # route (where the vehicles just moved may stand, so that it would move them back, and so on).
+            self._blocked.pop(vehicle_id, None)
+            return response
         return response + self._unblock(task, plan, fleet, layout, index)
 
     # -- ranks ---------------------------------------------------------------------------------------
