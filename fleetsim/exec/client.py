@@ -128,9 +128,13 @@ class _Session:
 
 
 def serve(planner: Planner, stdin: IO[str] | None = None, stdout: IO[str] | None = None) -> int:
-    """Answer fleetsim's messages on ``stdin`` (default: the process's) until it closes; the exit status."""
-    source = stdin if stdin is not None else sys.stdin
-    sink = stdout if stdout is not None else sys.stdout
+    """Answer fleetsim's messages on ``stdin`` (default: the process's) until it closes; the exit status.
+
+    The process's own streams are read and written as bytes (JSON is UTF-8): a call then costs no text
+    decoding and encoding layer on either side of the pipe."""
+    source: IO[Any] = stdin if stdin is not None else sys.stdin.buffer
+    sink: IO[Any] = stdout if stdout is not None else sys.stdout.buffer
+    binary = stdout is None
     session: _Session | None = None
     for line in source:
         if not line.strip():
@@ -148,7 +152,8 @@ def serve(planner: Planner, stdin: IO[str] | None = None, stdout: IO[str] | None
         except Exception:  # the planner's own error: its traceback goes to fleetsim's report via stderr
             traceback.print_exc(file=sys.stderr)
             return 1
-        sink.write(json.dumps(answer, separators=(",", ":")) + "\n")
+        text = json.dumps(answer, separators=(",", ":")) + "\n"
+        sink.write(text.encode("utf-8") if binary else text)
         sink.flush()
     return 0
 

@@ -202,10 +202,11 @@ class SubprocessPlanner:
 
     def _send(self, message: dict[str, Any], what: str) -> None:
         assert self._process is not None and self._process.stdin is not None
-        line = json.dumps(message, separators=(",", ":"), allow_nan=False).encode("utf-8") + b"\n"
+        line = memoryview(json.dumps(message, separators=(",", ":"), allow_nan=False).encode("utf-8") + b"\n")
         try:
-            self._process.stdin.write(line)
-            self._process.stdin.flush()
+            descriptor = self._process.stdin.fileno()
+            while line:  # straight to the pipe: no buffer to fill and flush on every call
+                line = line[os.write(descriptor, line) :]
         except (BrokenPipeError, ConnectionResetError, ValueError):
             raise self._fail(f"{self._ended()} before reading {what}") from None
 
