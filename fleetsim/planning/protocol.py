@@ -55,13 +55,18 @@ class FleetLeg:
     goal_for_task: int | None = None
 
     def __post_init__(self) -> None:
-        _whole_number(self.segment, "segment")
-        object.__setattr__(self, "traverse", _enum_value(Traverse, self.traverse, "traverse"))
-        object.__setattr__(self, "progress", _enum_value(Progress, self.progress, "progress"))
-        if not isinstance(self.fixed, bool):
+        # Legs are made by the thousand every simulated second: the common case (an int and the enum
+        # members themselves) is checked by type alone, anything else converted or refused with a message.
+        if type(self.segment) is not int:
+            _whole_number(self.segment, "segment")
+        if type(self.traverse) is not Traverse:
+            object.__setattr__(self, "traverse", _enum_value(Traverse, self.traverse, "traverse"))
+        if type(self.progress) is not Progress:
+            object.__setattr__(self, "progress", _enum_value(Progress, self.progress, "progress"))
+        if self.fixed is not True and self.fixed is not False:
             msg = f"fixed={self.fixed!r} must be True or False"
             raise TypeError(msg)
-        if self.goal_for_task is not None:
+        if self.goal_for_task is not None and type(self.goal_for_task) is not int:
             _whole_number(self.goal_for_task, "goal_for_task")
 
     def same_drive(self, other: FleetLeg) -> bool:
