@@ -76,12 +76,16 @@ def main() -> int:
     parser.add_argument("--seed", type=int, default=1)
     args = parser.parse_args()
     here = Path(__file__).resolve().parent.parent
-    commit = subprocess.run(["git", "rev-parse", "--verify", f"{args.ref}^{{commit}}"], cwd=here, capture_output=True, text=True)
+    commit = subprocess.run(
+        ["git", "rev-parse", "--verify", f"{args.ref}^{{commit}}"], cwd=here, capture_output=True, text=True
+    )
     if commit.returncode != 0:
         raise SystemExit(f"ref={args.ref!r} is not a commit of {here}: {commit.stderr.strip()}")
     with tempfile.TemporaryDirectory() as tmp:
         worktree, folder = Path(tmp) / "ref", Path(tmp) / "scenario"
-        subprocess.run(["git", "worktree", "add", "--detach", "-q", str(worktree), commit.stdout.strip()], cwd=here, check=True)
+        subprocess.run(
+            ["git", "worktree", "add", "--detach", "-q", str(worktree), commit.stdout.strip()], cwd=here, check=True
+        )
         try:
             write_fleet_scenario(folder, args.vehicles, seed=args.seed)
             trees = {f"{args.ref} ({commit.stdout.strip()[:10]})": worktree, "this tree": here}
@@ -91,7 +95,9 @@ def main() -> int:
                     rounds[name].append(run_in(tree, folder, args))
         finally:
             subprocess.run(["git", "worktree", "remove", "--force", str(worktree)], cwd=here, check=False)
-    print(f"{args.vehicles} vehicles, {args.planner}, {args.seconds:g} s simulated; {args.rounds} alternating rounds, best of 3 runs each")
+    print(
+        f"{args.vehicles} vehicles, {args.planner}, {args.seconds:g} s simulated; {args.rounds} alternating rounds, best of 3 runs each"
+    )
     for name, results in rounds.items():
         print(f"  {name}")
         print(f"    planner µs/call        {column(results, 'per_call', '{:6.1f}')}")

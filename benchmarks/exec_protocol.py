@@ -90,7 +90,13 @@ def main() -> int:
         write_fleet_scenario(Path(tmp), args.vehicles, seed=args.seed)
         scenario = load_scenario_dir(Path(tmp), settings=ScenarioSettings(time_limit=args.seconds, stop_on=()))
     node = shutil.which("node")
-    cases: list[tuple[str, type[Planner], list[str]]] = [("ReservingPlanner", ReservingPlanner, [sys.executable, "-m", "fleetsim.exec", "fleetsim.planners:ReservingPlanner"])]
+    cases: list[tuple[str, type[Planner], list[str]]] = [
+        (
+            "ReservingPlanner",
+            ReservingPlanner,
+            [sys.executable, "-m", "fleetsim.exec", "fleetsim.planners:ReservingPlanner"],
+        )
+    ]
     if node is not None:
         cases.append(("BFSPlanner", BFSPlanner, [node, str(NODE_PLANNER)]))
     print(f"{args.vehicles} vehicles, {args.seconds:.0f} s simulated, best of {args.repeat}")
@@ -107,12 +113,16 @@ def main() -> int:
         inside = min(r.metrics.planner_wall_time for r in direct)
         outside = min(r.metrics.planner_wall_time - start for r, start in zip(served, starts))
         print(f"  {name} in process: {inside / calls * 1e6:6.1f} us per call ({calls} calls)")
-        print(f"  {name} as `{' '.join(Path(part).name for part in command)}`: {outside / calls * 1e6:6.1f} us per call"
-              f" (starting the process: {min(starts):.2f} s, once per run, not counted)")
+        print(
+            f"  {name} as `{' '.join(Path(part).name for part in command)}`: {outside / calls * 1e6:6.1f} us per call"
+            f" (starting the process: {min(starts):.2f} s, once per run, not counted)"
+        )
         pipe = min(bare_round_trip(calls) for _ in range(args.repeat))
         overhead = (outside - inside) / calls
         print(f"    protocol overhead {overhead * 1e6:6.1f} us per call; same trace hash {direct[0].trace_hash[:12]}")
-        print(f"    bare pipe round trip {pipe * 1e6:6.1f} us; overhead / round trip {overhead / pipe:4.2f} [target <= 2]")
+        print(
+            f"    bare pipe round trip {pipe * 1e6:6.1f} us; overhead / round trip {overhead / pipe:4.2f} [target <= 2]"
+        )
     return 0
 
 

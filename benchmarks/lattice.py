@@ -37,7 +37,11 @@ from fleetsim.strategies.geometry import grid  # noqa: E402
 
 __all__ = ["write_lattice_scenario"]
 
-PLANNERS: dict[str, type[Planner]] = {"BFSPlanner": BFSPlanner, "GreedyPlanner": GreedyPlanner, "ReservingPlanner": ReservingPlanner}
+PLANNERS: dict[str, type[Planner]] = {
+    "BFSPlanner": BFSPlanner,
+    "GreedyPlanner": GreedyPlanner,
+    "ReservingPlanner": ReservingPlanner,
+}
 
 
 def write_lattice_scenario(folder: Path, side: int = 21, vehicles: int = 30, *, seed: int = 1) -> Path:
@@ -51,7 +55,10 @@ def write_lattice_scenario(folder: Path, side: int = 21, vehicles: int = 30, *, 
     starts = spread_starts(layout, order, vehicles, f"straights of a {side}x{side} grid")
     folder.mkdir(parents=True, exist_ok=True)
     write_map(folder / "map.json", segments)
-    rows = ["vehicle_id,start_segment_id,segment_orientation", *(f"{v},{s},forward" for v, s in enumerate(starts, start=1))]
+    rows = [
+        "vehicle_id,start_segment_id,segment_orientation",
+        *(f"{v},{s},forward" for v, s in enumerate(starts, start=1)),
+    ]
     (folder / "vehicles.csv").write_text("\n".join(rows) + "\n", encoding="utf-8")
     tasks = ["vehicle_id,goal_segment_id"]
     for vehicle_id, start in enumerate(starts, start=1):
@@ -70,7 +77,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--record", type=Path, help="write the artifact folder (result, picture, MCAP) here")
     args = parser.parse_args(argv)
     with tempfile.TemporaryDirectory() as tmp:
-        folder = write_lattice_scenario(Path(tmp) / f"lattice-{args.side}x{args.side}-{args.vehicles}", args.side, args.vehicles, seed=args.seed)
+        folder = write_lattice_scenario(
+            Path(tmp) / f"lattice-{args.side}x{args.side}-{args.vehicles}", args.side, args.vehicles, seed=args.seed
+        )
         scenario = load_scenario_dir(folder, settings=ScenarioSettings(time_limit=args.time_limit))
         result = run_scenario(scenario, PLANNERS[args.planner](), planner_name=args.planner)
         if args.record is not None:

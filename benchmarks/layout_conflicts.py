@@ -79,8 +79,9 @@ def main() -> int:
         tiled_map, load_times = timed(lambda: load_map(map_path), args.repeat)
     segments = tiled_map.segments
     pieces = sum(len(s.waypoints) - 1 for s in segments)
-    print(f"map: {len(segments)} segments, {pieces} straight pieces, {size_mb:.1f} MB JSON; "
-          f"vehicle radius {radius:.3f} m")
+    print(
+        f"map: {len(segments)} segments, {pieces} straight pieces, {size_mb:.1f} MB JSON; vehicle radius {radius:.3f} m"
+    )
     conflicts, conflict_times = timed(
         lambda: conflict_sets(segments, ConflictModel.SWEPT, radius, 0.0, TOLERANCE), args.repeat
     )

@@ -41,8 +41,11 @@ def _bulge(a: tuple[float, float], b: tuple[float, float]) -> dict[str, Any]:
     (ax, ay), (bx, by) = a, b
     length = math.dist(a, b)
     mx, my = (ax + bx) / 2 - (by - ay) / length * 0.6, (ay + by) / 2 + (bx - ax) / length * 0.6
-    return {"degree": 2, "knotVector": [0, 0, 0, 1, 1, 1],
-            "controlPoints": [{"x": ax, "y": ay}, {"x": mx, "y": my, "weight": 0.8}, {"x": bx, "y": by}]}
+    return {
+        "degree": 2,
+        "knotVector": [0, 0, 0, 1, 1, 1],
+        "controlPoints": [{"x": ax, "y": ay}, {"x": mx, "y": my, "weight": 0.8}, {"x": bx, "y": by}],
+    }
 
 
 def site(edges: int, curved_every: int) -> dict[str, Any]:
@@ -51,8 +54,10 @@ def site(edges: int, curved_every: int) -> dict[str, Any]:
     while 2 * 2 * side * (side - 1) < edges:
         side += 1
     position = {f"N{i}_{j}": (i * SPACING, j * SPACING) for i in range(side) for j in range(side)}
-    nodes = [{"nodeId": name, "nodePosition": {"x": x, "y": y}, "vehicleTypeNodeProperties": [{"vehicleTypeId": TYPE}]}
-             for name, (x, y) in position.items()]
+    nodes = [
+        {"nodeId": name, "nodePosition": {"x": x, "y": y}, "vehicleTypeNodeProperties": [{"vehicleTypeId": TYPE}]}
+        for name, (x, y) in position.items()
+    ]
     edge_list = []
     count = 0
     for i in range(side):
@@ -68,9 +73,15 @@ def site(edges: int, curved_every: int) -> dict[str, Any]:
                     back = dict(there, controlPoints=list(reversed(there["controlPoints"])))
                 edge_list += [_edge(f"{a}-{b}", a, b, there), _edge(f"{b}-{a}", b, a, back)]
                 count += 1
-    return {"metaInformation": {"projectIdentification": "benchmark", "creator": "fleetsim",
-                                "exportTimestamp": "2026-01-01T00:00:00.00Z", "lifVersion": "1.0.0"},
-            "layouts": [{"layoutId": "lattice", "layoutVersion": "1", "nodes": nodes, "edges": edge_list, "stations": []}]}
+    return {
+        "metaInformation": {
+            "projectIdentification": "benchmark",
+            "creator": "fleetsim",
+            "exportTimestamp": "2026-01-01T00:00:00.00Z",
+            "lifVersion": "1.0.0",
+        },
+        "layouts": [{"layoutId": "lattice", "layoutVersion": "1", "nodes": nodes, "edges": edge_list, "stations": []}],
+    }
 
 
 def main() -> None:
@@ -95,11 +106,15 @@ def main() -> None:
             load_times.append(loaded_at - start)
     edges = len(document["layouts"][0]["edges"])
     points = sum(len(segment.waypoints) for segment in loaded.segments)
-    print(f"{edges} edges ({size / 1e6:.1f} MB) -> {len(layout.segments)} segments, "
-          f"{points} waypoints, {len(layout.connections)} connections, {conflicts} conflict pairs (ordered)")
+    print(
+        f"{edges} edges ({size / 1e6:.1f} MB) -> {len(layout.segments)} segments, "
+        f"{points} waypoints, {len(layout.connections)} connections, {conflicts} conflict pairs (ordered)"
+    )
     print(f"load (parse, sample, merge): median {statistics.median(load_times):.3f} s")
-    print(f"load + layout with conflicts: median {statistics.median(times):.3f} s over {args.repeat} runs "
-          f"(min {min(times):.3f}, max {max(times):.3f}); target < 2 s: {'met' if statistics.median(times) < 2 else 'NOT met'}")
+    print(
+        f"load + layout with conflicts: median {statistics.median(times):.3f} s over {args.repeat} runs "
+        f"(min {min(times):.3f}, max {max(times):.3f}); target < 2 s: {'met' if statistics.median(times) < 2 else 'NOT met'}"
+    )
 
 
 if __name__ == "__main__":

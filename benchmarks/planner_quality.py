@@ -83,7 +83,15 @@ class SoloPlanner:
 
         capability = fleet.vehicles[vehicle_id].type.turn_capability
         estimate = straight_line_estimate(layout, task.goal_segment)
-        path = shortest_route(layout, capability, (last.segment, last.traverse, last.progress), task.goal_segment, task.goal_progress, cost, estimate)
+        path = shortest_route(
+            layout,
+            capability,
+            (last.segment, last.traverse, last.progress),
+            task.goal_segment,
+            task.goal_progress,
+            cost,
+            estimate,
+        )
         if path is None:
             return [RouteError(vehicle_id, f"no route to segment {task.goal_segment}")]
         legs = tuple(replace(leg, fixed=True) for leg in legs_along(path, task, task.goal_progress))
@@ -143,7 +151,11 @@ def one_way_warehouse(folder: Path, seed: int, side: int = 4, vehicles: int = 8)
         rows.append(f"{vehicle_id},{start},{traverse.value}")
     tasks = ["vehicle_id,goal_segment_id"]
     for vehicle_id, start in enumerate(starts, start=1):
-        tasks += [f"{vehicle_id},{rng.choice(candidates)}", f"{vehicle_id},{rng.choice(candidates)}", f"{vehicle_id},{start}"]
+        tasks += [
+            f"{vehicle_id},{rng.choice(candidates)}",
+            f"{vehicle_id},{rng.choice(candidates)}",
+            f"{vehicle_id},{start}",
+        ]
     return _write(folder, segments, rows, tasks)
 
 
@@ -155,7 +167,10 @@ def loop_bays(folder: Path, seed: int) -> Scenario:
     order = ids[:]
     rng.shuffle(order)
     starts = spread_starts(layout, order, 4, "segments of the ring")
-    rows = ["vehicle_id,start_segment_id,segment_orientation", *(f"{v},{s},forward" for v, s in enumerate(starts, start=1))]
+    rows = [
+        "vehicle_id,start_segment_id,segment_orientation",
+        *(f"{v},{s},forward" for v, s in enumerate(starts, start=1)),
+    ]
     tasks = ["vehicle_id,goal_segment_id"]
     for vehicle_id, start in enumerate(starts, start=1):
         tasks += [f"{vehicle_id},{rng.choice(ids)}", f"{vehicle_id},{rng.choice(ids)}", f"{vehicle_id},{start}"]
@@ -193,7 +208,14 @@ def generated_scenarios(count: int) -> list[Scenario]:
     spec = GenerationSpec(layout="any", size=(1, 4), vehicles=(1, 6), tasks=(1, 3), vehicle_types=(AGV, TUGGER))
     found: list[Scenario] = []
 
-    @settings(max_examples=count, derandomize=True, database=None, phases=[Phase.generate], deadline=None, suppress_health_check=list(HealthCheck))
+    @settings(
+        max_examples=count,
+        derandomize=True,
+        database=None,
+        phases=[Phase.generate],
+        deadline=None,
+        suppress_health_check=list(HealthCheck),
+    )
     @given(scenarios(spec))
     def collect(scenario: Scenario) -> None:
         found.append(scenario)
@@ -243,7 +265,11 @@ class Figures:
         def mean(values: list[float] | None, fmt: str) -> str:
             return format(statistics.fmean(values), fmt) if values else "-"
 
-        makespan = "-" if not self.makespans else (f"{self.makespans[0]:.1f}" if self.runs == 1 else f"{statistics.fmean(self.makespans):.1f}*")
+        makespan = (
+            "-"
+            if not self.makespans
+            else (f"{self.makespans[0]:.1f}" if self.runs == 1 else f"{statistics.fmean(self.makespans):.1f}*")
+        )
         return (
             f"{case:<18} {planner:<16} {self.completed_runs:>4}/{self.runs:<4} {self.tasks_done:>5}/{self.tasks_total:<5} {makespan:>8} "
             f"{self.deadlocks:>5} {self.alerts:>6} {self.rejections:>5} {mean(self.waiting, '.1%'):>8} {mean(self.per_call, '.1f'):>8} "
@@ -274,13 +300,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=1)
     args = parser.parse_args(argv)
     planners = [p for p in args.planners.split(",") if p]
-    unknown = [p for p in planners if p not in PLANNERS] + [c for c in args.cases.split(",") if c and c not in CASES and c != "generated"]
+    unknown = [p for p in planners if p not in PLANNERS] + [
+        c for c in args.cases.split(",") if c and c not in CASES and c != "generated"
+    ]
     if unknown:
         parser.error(f"unknown planner or case: {', '.join(unknown)}")
     print(HEADER)
     with tempfile.TemporaryDirectory() as tmp:
         for case in (c for c in args.cases.split(",") if c):
-            cases = generated_scenarios(args.generated) if case == "generated" else [CASES[case](Path(tmp) / case, args.seed)]
+            cases = (
+                generated_scenarios(args.generated)
+                if case == "generated"
+                else [CASES[case](Path(tmp) / case, args.seed)]
+            )
             for planner in planners:
                 print(measure(case, cases, planner).row(case, planner), flush=True)
     print("makespan*: mean over the runs that completed; efficiency: bound / makespan (mean over completed runs)")

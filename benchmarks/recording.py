@@ -67,7 +67,9 @@ def main() -> int:
         # Keeping the trace costs what it measurably costs (never less than nothing), writing the rest.
         overhead = (max(with_trace - base, 0.0) + write) / base
         vehicle_seconds = args.vehicles * result.sim_time
-        print(f"{args.vehicles} vehicles, ReservingPlanner, {result.sim_time:.0f} s simulated, every {args.every} step(s), best of {args.repeat}")
+        print(
+            f"{args.vehicles} vehicles, ReservingPlanner, {result.sim_time:.0f} s simulated, every {args.every} step(s), best of {args.repeat}"
+        )
         print(f"  run, no trace kept    {base:7.3f} s")
         print(f"  run, trace kept       {with_trace:7.3f} s")
         print(f"  writing the MCAP      {write:7.3f} s")

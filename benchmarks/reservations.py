@@ -165,7 +165,9 @@ def percentile(values: Iterable[float], fraction: float) -> float:
 
 def _report(label: str, times: list[float]) -> float:
     median = statistics.median(times)
-    print(f"  {'':<14} {label:<13} best {min(times):6.2f} ms   median {median:6.2f} ms   p95 {percentile(times, 0.95):6.2f} ms")
+    print(
+        f"  {'':<14} {label:<13} best {min(times):6.2f} ms   median {median:6.2f} ms   p95 {percentile(times, 0.95):6.2f} ms"
+    )
     return median
 
 

@@ -91,13 +91,18 @@ def main(argv: Sequence[str] | None = None) -> int:
         for size in sizes:
             runs[size].append(_in_child(size, args.seconds, args.planner))
     print(f"{args.planner}, {args.seconds:g} s simulated, median of {args.repeat} (each size in a process of its own)")
-    print(f"{'vehicles':>8} {'harness µs/vs':>14} {'ratio':>6} {'µs/call':>8} {'realtime':>9} {'peak MiB':>9} {'write s':>8} {'load s':>7}  tasks      ended")
+    print(
+        f"{'vehicles':>8} {'harness µs/vs':>14} {'ratio':>6} {'µs/call':>8} {'realtime':>9} {'peak MiB':>9} {'write s':>8} {'load s':>7}  tasks      ended"
+    )
     first: float | None = None
     failed = False
     for size in sizes:
         rows = runs[size]
         if len({row["hash"] for row in rows}) != 1:
-            print(f"{size} vehicles: the repeats' trace hashes differ: {sorted({row['hash'][:12] for row in rows})}", file=sys.stderr)
+            print(
+                f"{size} vehicles: the repeats' trace hashes differ: {sorted({row['hash'][:12] for row in rows})}",
+                file=sys.stderr,
+            )
             failed = True
         harness = statistics.median(row["harness_us_per_vs"] for row in rows)
         first = harness if first is None else first

@@ -145,13 +145,21 @@ def show_phases(scenario: Scenario, vehicles: int, name: str, repeat: int) -> No
     }
     parts["rest (bookkeeping, the loop)"] = harness - sum(parts.values())
     vehicle_steps = result.steps * vehicles
-    print(f"\nharness time by step of the loop, {vehicles} vehicles, {name} (least harness time of {repeat}; "
-          f"timing the phases adds its own small cost):")
-    print(f"  {'inside the planner':<30} {m.planner_wall_time:7.3f} s {m.planner_wall_time / max(m.planner_calls, 1) * 1e6:7.2f} µs/call")
+    print(
+        f"\nharness time by step of the loop, {vehicles} vehicles, {name} (least harness time of {repeat}; "
+        f"timing the phases adds its own small cost):"
+    )
+    print(
+        f"  {'inside the planner':<30} {m.planner_wall_time:7.3f} s {m.planner_wall_time / max(m.planner_calls, 1) * 1e6:7.2f} µs/call"
+    )
     for label, seconds in parts.items():
-        print(f"  {label:<30} {seconds:7.3f} s {seconds / vehicle_steps * 1e6:7.2f} µs/vehicle-step {seconds / harness:6.1%}")
-    print(f"  {'harness in all':<30} {harness:7.3f} s {harness / vehicle_steps * 1e6:7.2f} µs/vehicle-step "
-          f"(share {harness / m.wall_time:.1%})")
+        print(
+            f"  {label:<30} {seconds:7.3f} s {seconds / vehicle_steps * 1e6:7.2f} µs/vehicle-step {seconds / harness:6.1%}"
+        )
+    print(
+        f"  {'harness in all':<30} {harness:7.3f} s {harness / vehicle_steps * 1e6:7.2f} µs/vehicle-step "
+        f"(share {harness / m.wall_time:.1%})"
+    )
 
 
 def _area(filename: str) -> str:
@@ -207,8 +215,12 @@ def main() -> int:
     )
     parser.add_argument("--planning-period", type=float, default=ScenarioSettings().planning_period)
     parser.add_argument("--seed", type=int, default=1)
-    parser.add_argument("--repeat", type=int, default=1, help="runs per case; the one with the least wall time is shown")
-    parser.add_argument("--phases", action="store_true", help=f"split the harness time of {TARGET_SIZE}:{TARGET_PLANNER} by loop step")
+    parser.add_argument(
+        "--repeat", type=int, default=1, help="runs per case; the one with the least wall time is shown"
+    )
+    parser.add_argument(
+        "--phases", action="store_true", help=f"split the harness time of {TARGET_SIZE}:{TARGET_PLANNER} by loop step"
+    )
     parser.add_argument("--profile", type=parse_profile, metavar="SIZE:PLANNER")
     parser.add_argument("--top", type=int, default=30, help="functions listed with --profile")
     args = parser.parse_args()
@@ -229,7 +241,9 @@ def main() -> int:
                 results[size, name] = result
                 print(row(size, name, result), flush=True)
         if args.phases:
-            scenario = fleet_scenario(Path(tmp) / f"phases-{TARGET_SIZE}", TARGET_SIZE, settings(TARGET_SIZE), args.seed)
+            scenario = fleet_scenario(
+                Path(tmp) / f"phases-{TARGET_SIZE}", TARGET_SIZE, settings(TARGET_SIZE), args.seed
+            )
             show_phases(scenario, TARGET_SIZE, TARGET_PLANNER, args.repeat)
         if args.profile is not None:
             size, name = args.profile
@@ -248,9 +262,13 @@ def main() -> int:
     m = target.metrics
     realtime = m.realtime_factor or 0.0
     harness = 1 - m.planner_wall_time / m.wall_time
-    print(f"{TARGET_SIZE} vehicles, {TARGET_PLANNER}: realtime {realtime:.1f}x [target >= {TARGET_REALTIME:g}x], "
-          f"harness share {harness:.1%} [target <= {TARGET_HARNESS:.0%}]")
-    print(f"{LARGE_FLEET}+ vehicles: {len(large)} runs finished ({', '.join(r.ended for r in large)}) [target: run at all]")
+    print(
+        f"{TARGET_SIZE} vehicles, {TARGET_PLANNER}: realtime {realtime:.1f}x [target >= {TARGET_REALTIME:g}x], "
+        f"harness share {harness:.1%} [target <= {TARGET_HARNESS:.0%}]"
+    )
+    print(
+        f"{LARGE_FLEET}+ vehicles: {len(large)} runs finished ({', '.join(r.ended for r in large)}) [target: run at all]"
+    )
     ok = realtime >= TARGET_REALTIME and harness <= TARGET_HARNESS
     print("targets met" if ok else "TARGETS MISSED")
     return 0 if ok else 1

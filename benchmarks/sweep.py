@@ -60,7 +60,9 @@ def main() -> None:
                 (one if workers == 1 else two).append(_time(items, workers, folder))
             print(f"repetition {index + 1}: 1 worker {one[-1]:.2f} s, 2 workers {two[-1]:.2f} s")
         median_one, median_two = statistics.median(one), statistics.median(two)
-        print(f"median: 1 worker {median_one:.2f} s, 2 workers {median_two:.2f} s, speed-up {median_one / median_two:.2f}x")
+        print(
+            f"median: 1 worker {median_one:.2f} s, 2 workers {median_two:.2f} s, speed-up {median_one / median_two:.2f}x"
+        )
 
 
 if __name__ == "__main__":

@@ -110,7 +110,9 @@ class Disturbance:
     def entry(self) -> dict[str, float | int]:
         """The suite entry that declares it (``disturbances:`` list item)."""
         where: dict[str, float | int] = {"at": self.at} if self.at is not None else {"on_segment": self.on_segment or 0}
-        what: dict[str, float | int] = {"stop": self.duration} if self.kind == "stop" else {"slow": self.factor, "for": self.duration}
+        what: dict[str, float | int] = (
+            {"stop": self.duration} if self.kind == "stop" else {"slow": self.factor, "for": self.duration}
+        )
         return {"vehicle": self.vehicle, **where, **what}
 
 

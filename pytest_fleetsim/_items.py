@@ -36,7 +36,9 @@ class SuiteFile(pytest.File):
         except FleetsimError as error:
             raise self.CollectError(f"fleetsim could not load this suite:\n{error}") from None
         for index, spec in enumerate(suite.scenarios):
-            item = ScenarioItem.from_parent(self, name=spec.name, callobj=fleetsim_scenario, suite=suite, spec=spec, index=index)
+            item = ScenarioItem.from_parent(
+                self, name=spec.name, callobj=fleetsim_scenario, suite=suite, spec=spec, index=index
+            )
             for tag in spec.tags:
                 self.config.addinivalue_line("markers", f"{tag}: fleetsim suite tag")  # for --strict-markers
                 item.add_marker(tag)

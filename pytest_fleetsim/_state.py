@@ -117,7 +117,9 @@ class FleetsimState:
                 raise pytest.UsageError(str(error)) from None
         baseline_path = _path(config, option.fleetsim_compare)
         if thresholds and baseline_path is None:
-            raise pytest.UsageError("--fleetsim-compare-fail needs --fleetsim-compare PATH (the baseline metrics to compare with)")
+            raise pytest.UsageError(
+                "--fleetsim-compare-fail needs --fleetsim-compare PATH (the baseline metrics to compare with)"
+            )
         baseline = None
         if baseline_path is not None and not hasattr(config, "workerinput"):
             try:
@@ -125,7 +127,9 @@ class FleetsimState:
             except FleetsimError as error:
                 raise pytest.UsageError(f"--fleetsim-compare: {error}") from None
         if option.fleetsim_record_every < 1:
-            raise pytest.UsageError(f"--fleetsim-record-every={option.fleetsim_record_every} must be a whole number of steps >= 1")
+            raise pytest.UsageError(
+                f"--fleetsim-record-every={option.fleetsim_record_every} must be a whole number of steps >= 1"
+            )
         return cls(
             config=config,
             planner=planner,
@@ -216,9 +220,23 @@ class FleetsimState:
         """A generated entry: Hypothesis hunts for a failing scenario; a shrunk one is saved and reported."""
         assert item.spec.hunts
         folder = artifact_folder(self.artifacts, item.path, item.spec.name)
-        about = {"suite": str(item.path), "nodeid": item.nodeid, "line": item.spec.line, "scenario": item.spec.name, "planner": identity}
+        about = {
+            "suite": str(item.path),
+            "nodeid": item.nodeid,
+            "line": item.spec.line,
+            "scenario": item.spec.name,
+            "planner": identity,
+        }
         try:
-            found = hunt(item.spec, item.suite, make, identity=identity, planner_timeout=self.timeout, stop=stop, record_to=(folder, about))
+            found = hunt(
+                item.spec,
+                item.suite,
+                make,
+                identity=identity,
+                planner_timeout=self.timeout,
+                stop=stop,
+                record_to=(folder, about),
+            )
         except LoadError as error:  # a generate block no layout has room for
             raise ScenarioFailed(_story(str(error), heading)) from None
         except PlannerSpecError as error:
@@ -229,7 +247,11 @@ class FleetsimState:
             if found.result is not None:
                 self._describe(item, found.result, None, identity, label=label, generated=True)
                 if found.result.ended == "interrupted":
-                    raise ScenarioFailed(failure_report(found.result, heading=heading) + "\n\n" + counts_story(found, item.spec.hunt_examples))
+                    raise ScenarioFailed(
+                        failure_report(found.result, heading=heading)
+                        + "\n\n"
+                        + counts_story(found, item.spec.hunt_examples)
+                    )
             return
         extra = {"suite": str(item.path), "nodeid": item.nodeid, "line": item.spec.line, **hunt_facts(found)}
         paths = record_counterexample(found, folder, extra, record_every=self.record_every, streamed=True)
@@ -247,15 +269,26 @@ class FleetsimState:
             self._locks[path] = HashLock.load(path)
         return self._locks[path]
 
-    def _write_artifacts(self, item: ScenarioItem, scenario: Scenario, result: RunResult, *, streamed: bool) -> RunResult:
+    def _write_artifacts(
+        self, item: ScenarioItem, scenario: Scenario, result: RunResult, *, streamed: bool
+    ) -> RunResult:
         folder = artifact_folder(self.artifacts, item.path, item.spec.name)
         extra = {"suite": str(item.path), "nodeid": item.nodeid, "line": item.spec.line}
-        paths = write_run_artifacts(folder, result, extra, scenario=scenario, record_every=self.record_every, streamed=streamed)
+        paths = write_run_artifacts(
+            folder, result, extra, scenario=scenario, record_every=self.record_every, streamed=streamed
+        )
         shown = {kind: _relative(self.config, Path(path)) for kind, path in paths.items()}
         return replace(result, artifacts={**result.artifacts, **shown})
 
     def _describe(
-        self, item: ScenarioItem, result: RunResult, record: LockEntry | None, identity: str, *, label: str = "", generated: bool = False
+        self,
+        item: ScenarioItem,
+        result: RunResult,
+        record: LockEntry | None,
+        identity: str,
+        *,
+        label: str = "",
+        generated: bool = False,
     ) -> None:
         """JUnit properties, and the payload that travels to the controller with the test's report.
 
@@ -282,7 +315,9 @@ class FleetsimState:
             "cells": list(summary_cells(label or item.spec.name, "", result)),
             "generated": generated,
             "interrupted": result.ended == "interrupted",
-            "record": None if record is None else {"hash": record.hash, "steps": record.steps, "checkpoints": list(record.checkpoints)},
+            "record": None
+            if record is None
+            else {"hash": record.hash, "steps": record.steps, "checkpoints": list(record.checkpoints)},
         }
 
     # -- the controller -----------------------------------------------------------------------------
@@ -328,7 +363,9 @@ class FleetsimState:
 
     def _metrics(self, outcome: _Outcome) -> ScenarioMetrics:
         # Only the report says how the test ended (an xfail marker turns a failure into "xfailed").
-        return ScenarioMetrics.from_dict({**outcome.payload["metrics"], "outcome": outcome.outcome}, where=outcome.nodeid)
+        return ScenarioMetrics.from_dict(
+            {**outcome.payload["metrics"], "outcome": outcome.outcome}, where=outcome.nodeid
+        )
 
     def _record_hashes(self, ordered: list[_Outcome]) -> None:
         by_suite: dict[str, list[_Outcome]] = {}
@@ -356,7 +393,9 @@ class FleetsimState:
             parts = [f"{sum(counts.values())} hash(es) recorded ({', '.join(f'{n} {k}' for k, n in counts.items())})"]
             if pruned:
                 parts.append(f"{len(pruned)} stale entr{'y' if len(pruned) == 1 else 'ies'} pruned ({_pairs(pruned)})")
-            self.notes.append(f"{_relative(self.config, path)}: {', '.join(parts)}{'' if written else ' (file unchanged)'}")
+            self.notes.append(
+                f"{_relative(self.config, path)}: {', '.join(parts)}{'' if written else ' (file unchanged)'}"
+            )
 
     def _prune(self, lock: HashLock, suite: Path) -> list[tuple[str, str]]:
         try:

@@ -181,7 +181,9 @@ def fleetsim_planner(request: pytest.FixtureRequest) -> object:
 
 
 @pytest.hookimpl(wrapper=True)
-def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]) -> Generator[None, pytest.TestReport, pytest.TestReport]:
+def pytest_runtest_makereport(
+    item: pytest.Item, call: pytest.CallInfo[None]
+) -> Generator[None, pytest.TestReport, pytest.TestReport]:
     report = yield
     payload = getattr(item, "fleetsim_payload", None)
     if call.when == "call" and payload is not None:

@@ -171,8 +171,9 @@ def convert(args: argparse.Namespace) -> int:
     """
     from fleetsim.load.convert import convert_map  # only this command writes maps
 
-    site, written = convert_map(Path(args.map), Path(args.output), map_options(args),
-                                connection_tolerance=args.connection_tolerance)
+    site, written = convert_map(
+        Path(args.map), Path(args.output), map_options(args), connection_tolerance=args.connection_tolerance
+    )
     for warning in site.warnings:
         print(warning)
     part = f" ({site.part})" if site.part else ""

@@ -60,7 +60,9 @@ def _add_layout_options(parser: argparse.ArgumentParser) -> None:
         help="vehicle circle radius in metres for conflicts (default: %(default).3f, the default "
         "vehicle type's half diagonal)",
     )
-    parser.add_argument("--safety-margin", type=_non_negative, default=_DEFAULTS.safety_margin, help="metres (default: %(default)s)")
+    parser.add_argument(
+        "--safety-margin", type=_non_negative, default=_DEFAULTS.safety_margin, help="metres (default: %(default)s)"
+    )
     parser.add_argument(
         "--conflict-model",
         choices=[m.value for m in ConflictModel],
@@ -68,17 +70,29 @@ def _add_layout_options(parser: argparse.ArgumentParser) -> None:
         help="swept circles or the thesis's bounding boxes (default: %(default)s)",
     )
     parser.add_argument(
-        "--connection-tolerance", type=_positive, default=_DEFAULTS.connection_tolerance, help="metres (default: %(default)s)"
+        "--connection-tolerance",
+        type=_positive,
+        default=_DEFAULTS.connection_tolerance,
+        help="metres (default: %(default)s)",
     )
     parser.add_argument(
-        "--joint-angle-tolerance", type=_positive, default=_DEFAULTS.joint_angle_tolerance, help="degrees (default: %(default)s)"
+        "--joint-angle-tolerance",
+        type=_positive,
+        default=_DEFAULTS.joint_angle_tolerance,
+        help="degrees (default: %(default)s)",
     )
 
 
 def _add_map_options(parser: argparse.ArgumentParser) -> None:
-    group = parser.add_argument_group("map options", "which part of a LIF or Open-RMF map to read (as map_options in a suite)")
+    group = parser.add_argument_group(
+        "map options", "which part of a LIF or Open-RMF map to read (as map_options in a suite)"
+    )
     group.add_argument("--layout", metavar="ID", help="LIF: the layoutId (required when the file has several)")
-    group.add_argument("--robot-type", metavar="TYPE", help="LIF: manufacturer/seriesName (or a 1.0 vehicleTypeId) whose edges form the map")
+    group.add_argument(
+        "--robot-type",
+        metavar="TYPE",
+        help="LIF: manufacturer/seriesName (or a 1.0 vehicleTypeId) whose edges form the map",
+    )
     group.add_argument("--level", metavar="NAME", help="RMF: the level (default: the first)")
     group.add_argument("--graph", type=int, metavar="N", help="RMF: the lane graph_idx (default: 0)")
 
@@ -113,11 +127,19 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"fleetsim {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=_CommandParser)
 
-    validate = sub.add_parser("validate", help="load suites completely and print layout lint", command="fleetsim.cli.commands:validate")
+    validate = sub.add_parser(
+        "validate", help="load suites completely and print layout lint", command="fleetsim.cli.commands:validate"
+    )
     validate.add_argument("suites", nargs="+", metavar="SUITE", help="*.fleetsim.yaml files or folders holding them")
 
-    inspect = sub.add_parser("inspect", help="segments, connections and conflicts of a map", command="fleetsim.cli.commands:inspect")
-    inspect.add_argument("map", metavar="MAP", help="a Tiled map (.json, .tmj, .tmx), LIF file (.lif.json) or RMF building map (.building.yaml)")
+    inspect = sub.add_parser(
+        "inspect", help="segments, connections and conflicts of a map", command="fleetsim.cli.commands:inspect"
+    )
+    inspect.add_argument(
+        "map",
+        metavar="MAP",
+        help="a Tiled map (.json, .tmj, .tmx), LIF file (.lif.json) or RMF building map (.building.yaml)",
+    )
     inspect.add_argument("--json", action="store_true", help="print one JSON document instead of text")
     _add_layout_options(inspect)
     _add_map_options(inspect)
@@ -128,7 +150,9 @@ def build_parser() -> argparse.ArgumentParser:
         command="fleetsim.cli.commands:render",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    render.add_argument("map", nargs="?", metavar="MAP", help="a Tiled map (.json, .tmj or .tmx); leave out with --trace")
+    render.add_argument(
+        "map", nargs="?", metavar="MAP", help="a Tiled map (.json, .tmj or .tmx); leave out with --trace"
+    )
     render.add_argument("-o", "--output", required=True, metavar="OUT.svg", help="where to write the picture")
     render.add_argument(
         "--highlight", type=int, metavar="ID", help="draw this segment yellow, its successors green, its conflicts grey"
@@ -137,20 +161,30 @@ def build_parser() -> argparse.ArgumentParser:
         "--trace", metavar="PATH", help="draw a step of a recorded run: its artifact folder or its trace.jsonl"
     )
     render.add_argument(
-        "--step", type=int, metavar="N", help="with --trace: the step to draw (default: the first failure's, else the last)"
+        "--step",
+        type=int,
+        metavar="N",
+        help="with --trace: the step to draw (default: the first failure's, else the last)",
     )
     render.add_argument(
-        "--suite", metavar="SUITE::SCENARIO",
+        "--suite",
+        metavar="SUITE::SCENARIO",
         help="with --trace: the scenario the run was of (default: the suite and scenario named in result.json)",
     )
     _add_layout_options(render)
     _add_map_options(render)
 
-    convert = sub.add_parser("convert", help="write a map as Tiled JSON/TMX or LIF 1.0", command="fleetsim.cli.commands:convert")
+    convert = sub.add_parser(
+        "convert", help="write a map as Tiled JSON/TMX or LIF 1.0", command="fleetsim.cli.commands:convert"
+    )
     convert.add_argument("map", metavar="IN", help="any map fleetsim loads (Tiled, LIF, RMF building map)")
-    convert.add_argument("output", metavar="OUT", help="OUT.lif.json for LIF 1.0; OUT.json, OUT.tmj or OUT.tmx for Tiled")
     convert.add_argument(
-        "--connection-tolerance", type=_positive, default=_DEFAULTS.connection_tolerance,
+        "output", metavar="OUT", help="OUT.lif.json for LIF 1.0; OUT.json, OUT.tmj or OUT.tmx for Tiled"
+    )
+    convert.add_argument(
+        "--connection-tolerance",
+        type=_positive,
+        default=_DEFAULTS.connection_tolerance,
         help="LIF: segment ends this close (metres) share a node (default: %(default)s)",
     )
     _add_map_options(convert)
@@ -161,44 +195,70 @@ def build_parser() -> argparse.ArgumentParser:
         command="fleetsim.cli.recorded:record",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    record_parser.add_argument("--trace", required=True, metavar="PATH", help="the run's artifact folder or its trace.jsonl")
+    record_parser.add_argument(
+        "--trace", required=True, metavar="PATH", help="the run's artifact folder or its trace.jsonl"
+    )
     record_parser.add_argument(
         "-o", "--output", metavar="OUT.mcap", help="where to write the recording (default: run.mcap beside the trace)"
     )
     record_parser.add_argument(
-        "--suite", metavar="SUITE::SCENARIO",
+        "--suite",
+        metavar="SUITE::SCENARIO",
         help="the scenario the run was of (default: the suite and scenario named in result.json or run.json)",
     )
     record_parser.add_argument(
-        "--record-every", type=_steps, default=1, metavar="N",
+        "--record-every",
+        type=_steps,
+        default=1,
+        metavar="N",
         help="record every N-th step in full (steps with new plans, alerts or events always; default: 1)",
     )
 
-    run_parser = sub.add_parser("run", help="simulate scenarios with a planner and judge the runs", command="fleetsim.cli.run:run")
-    run_parser.add_argument(
-        "suites", nargs="+", metavar="SUITE[::SCENARIO]", help="*.fleetsim.yaml files or folders; FILE::NAME runs one scenario"
+    run_parser = sub.add_parser(
+        "run", help="simulate scenarios with a planner and judge the runs", command="fleetsim.cli.run:run"
     )
     run_parser.add_argument(
-        "--planner", required=True, metavar="SPEC", help="module:attribute naming a planner class or zero-argument factory, "
-        "e.g. fleetsim.planners:ReservingPlanner (the current directory is importable)"
+        "suites",
+        nargs="+",
+        metavar="SUITE[::SCENARIO]",
+        help="*.fleetsim.yaml files or folders; FILE::NAME runs one scenario",
     )
-    run_parser.add_argument("--json", action="store_true", help="print one result object per scenario per line; the table goes to stderr")
     run_parser.add_argument(
-        "--planner-timeout", type=_non_negative, default=10.0, metavar="SECONDS",
+        "--planner",
+        required=True,
+        metavar="SPEC",
+        help="module:attribute naming a planner class or zero-argument factory, "
+        "e.g. fleetsim.planners:ReservingPlanner (the current directory is importable)",
+    )
+    run_parser.add_argument(
+        "--json", action="store_true", help="print one result object per scenario per line; the table goes to stderr"
+    )
+    run_parser.add_argument(
+        "--planner-timeout",
+        type=_non_negative,
+        default=10.0,
+        metavar="SECONDS",
         help="wall-clock limit per planner call; 0 switches it off (default: %(default)g)",
     )
     run_parser.add_argument(
-        "--record", metavar="DIR", help="write each run's artifacts to DIR/<suite>/<scenario>/: run.mcap (RViz 2, Foxglove), "
-        "fleetsim.rviz, failure.svg when it failed, trace.jsonl, result.json"
+        "--record",
+        metavar="DIR",
+        help="write each run's artifacts to DIR/<suite>/<scenario>/: run.mcap (RViz 2, Foxglove), "
+        "fleetsim.rviz, failure.svg when it failed, trace.jsonl, result.json",
     )
     run_parser.add_argument(
-        "--record-every", type=_steps, default=1, metavar="N",
+        "--record-every",
+        type=_steps,
+        default=1,
+        metavar="N",
         help="with --record: record every N-th step (steps with new plans, alerts or events always; default: 1)",
     )
 
     # Its own parsers (a sweep, or "sweep report RESULTS") live in fleetsim.cli.sweep; imported when used.
     sweep_parser = sub.add_parser(
-        "sweep", add_help=False, help="run planners x scenarios on Dask, or 'sweep report RESULTS' to compare them",
+        "sweep",
+        add_help=False,
+        help="run planners x scenarios on Dask, or 'sweep report RESULTS' to compare them",
         description="fleetsim sweep SPEC.yaml [--scheduler ADDRESS] [--resume]; fleetsim sweep report RESULTS [--fail-if ...]",
         command="fleetsim.cli.sweep:sweep",
     )

@@ -20,7 +20,15 @@ from fleetsim.load.scenario import load_scenario
 from fleetsim.load.scenario_files import did_you_mean
 from fleetsim.load.suite import load_suite
 from fleetsim.load.text import json_problem, write_text_atomically
-from fleetsim.recording.artifacts import MCAP_FILE, RESULT_FILE, RUN_FILE, RVIZ_CONFIG, RVIZ_FILE, TRACE_FILE, stuck_overlay
+from fleetsim.recording.artifacts import (
+    MCAP_FILE,
+    RESULT_FILE,
+    RUN_FILE,
+    RVIZ_CONFIG,
+    RVIZ_FILE,
+    TRACE_FILE,
+    stuck_overlay,
+)
 from fleetsim.recording.picture import failure_caption, failure_step, picture_overlays, render_frame_svg
 from fleetsim.recording.recorder import partial_path, record_mcap
 from fleetsim.recording.replay import Frame, TraceError, frame_at
@@ -50,7 +58,11 @@ class RecordedRun:
 
     @property
     def failures(self) -> list[Failure]:
-        return _failures(self.document, self.trace_path.parent / RESULT_FILE) if self.document.get("status") == "failed" else []
+        return (
+            _failures(self.document, self.trace_path.parent / RESULT_FILE)
+            if self.document.get("status") == "failed"
+            else []
+        )
 
 
 def read_recorded_run(path: Path, suite: str | None) -> RecordedRun:
@@ -71,7 +83,9 @@ def read_recorded_run(path: Path, suite: str | None) -> RecordedRun:
     end = f"step {len(lines) - 2} (t = {(len(lines) - 1) * dt:.2f} s)"
     unfinished = not document and run_path.is_file()
     if unfinished:
-        notes.append(f"{trace_path}: the trace ends early, at {end}: the run did not end (no {RESULT_FILE}; was it killed?)")
+        notes.append(
+            f"{trace_path}: the trace ends early, at {end}: the run did not end (no {RESULT_FILE}; was it killed?)"
+        )
     elif document.get("ended") == "interrupted":
         notes.append(f"{trace_path}: the trace ends early, at {end}: the run was interrupted")
     elif isinstance(document.get("steps"), int) and document["steps"] > len(lines) - 1:
@@ -93,7 +107,9 @@ def render_step(args: argparse.Namespace) -> int:
     elif 0 <= args.step <= last_step:
         step = args.step
     else:
-        raise UsageError(f"{run.trace_path}: --step={args.step!r} must be between 0 and {last_step} (the run's last step)")
+        raise UsageError(
+            f"{run.trace_path}: --step={args.step!r} must be between 0 and {last_step} (the run's last step)"
+        )
     frame = _frame(run, step)
     stuck = rejected = None
     if found is not None and found[0] == step:
@@ -152,7 +168,9 @@ def record(args: argparse.Namespace) -> int:
     partial = partial_path(output)
     left_over = partial.exists()
     try:  # a trace that does not fit the scenario stops the writer, which then leaves nothing behind
-        written = record_mcap(output, run.scenario, run.lines, every=args.record_every, stuck=stuck_overlay(run.failures))
+        written = record_mcap(
+            output, run.scenario, run.lines, every=args.record_every, stuck=stuck_overlay(run.failures)
+        )
     except TraceError as error:
         raise UsageError(f"{run.trace_path}: {error}; name the run's scenario with --suite SUITE::SCENARIO") from None
     rviz = output.with_name(RVIZ_FILE)
@@ -160,9 +178,13 @@ def record(args: argparse.Namespace) -> int:
         write_text_atomically(rviz, rviz_config(run.scenario, RVIZ_CONFIG.read_text(encoding="utf-8")))
     _print_notes(run, None)
     if left_over:
-        print(f"note: {partial} (a recording cut short when its writer was stopped) was replaced by the complete {output.name}")
+        print(
+            f"note: {partial} (a recording cut short when its writer was stopped) was replaced by the complete {output.name}"
+        )
     end = (run.last_step + 1) * run.scenario.settings.time_step
-    print(f"wrote {output} ({run.scenario.name}, steps 0-{run.last_step} up to t = {end:.2f} s, {written.messages} messages) and {rviz}")
+    print(
+        f"wrote {output} ({run.scenario.name}, steps 0-{run.last_step} up to t = {end:.2f} s, {written.messages} messages) and {rviz}"
+    )
     return 0
 
 
@@ -170,7 +192,9 @@ def _print_notes(run: RecordedRun, partial: Path | None) -> None:
     for note in run.notes:
         print(f"note: {note}")
     if partial is not None and partial.exists():
-        print(f"note: {partial} is a recording cut short when its writer was stopped; `fleetsim record --trace {run.trace_path.parent}` rebuilds it")
+        print(
+            f"note: {partial} is a recording cut short when its writer was stopped; `fleetsim record --trace {run.trace_path.parent}` rebuilds it"
+        )
 
 
 # -- reading the folder --------------------------------------------------------------------------
@@ -214,7 +238,12 @@ def _read_object(path: Path) -> dict[str, Any]:
 def _failures(document: dict[str, Any], path: Path | None) -> list[Failure]:
     try:
         return [
-            Failure(str(f["kind"]), float(f["time"]), str(f["message"]), {k: v for k, v in f.items() if k not in ("kind", "time", "message")})
+            Failure(
+                str(f["kind"]),
+                float(f["time"]),
+                str(f["message"]),
+                {k: v for k, v in f.items() if k not in ("kind", "time", "message")},
+            )
             for f in document.get("failures", [])
         ]
     except (KeyError, TypeError, ValueError):
@@ -233,7 +262,9 @@ def _recorded_scenario(selector: str | None, document: dict[str, Any], source: P
     else:
         recorded_suite, recorded_name = document.get("suite"), document.get("scenario")
         if not isinstance(recorded_suite, str) or not isinstance(recorded_name, str):
-            raise UsageError(f"{source}: does not name the run's suite and scenario; name them with --suite SUITE::SCENARIO")
+            raise UsageError(
+                f"{source}: does not name the run's suite and scenario; name them with --suite SUITE::SCENARIO"
+            )
         suite_text, name, where = recorded_suite, recorded_name, str(source)
     suite_path = Path(suite_text)
     if not suite_path.is_file():

@@ -126,7 +126,10 @@ def _run_all(args: argparse.Namespace, stop: StopSignals) -> int:
             print(json.dumps(_document(outcome)), flush=True)
     _print_summary(outcomes, table)
     if record is not None and outcomes:
-        print(f"artifacts: {record[0]}/<suite>/<scenario>/ (run.mcap with fleetsim.rviz, failure.svg, trace.jsonl, result.json)", file=table)
+        print(
+            f"artifacts: {record[0]}/<suite>/<scenario>/ (run.mcap with fleetsim.rviz, failure.svg, trace.jsonl, result.json)",
+            file=table,
+        )
     if stop.signum is not None:
         left = len(targets) - len(outcomes)
         not_run = f"; {left} scenario(s) not run" if left else ""
@@ -207,7 +210,9 @@ def _run_target(
     extra = {"suite": str(target.suite_path), "line": target.spec.line}
     folder = artifact_folder(record[0], target.suite_path, target.spec.name) if record is not None else None
     # The trace goes into the artifact folder while the run goes: a run killed outright leaves it.
-    trace_file = start_run_folder(folder, {**extra, "scenario": target.spec.name, "planner": factory.spec}) if folder else None
+    trace_file = (
+        start_run_folder(folder, {**extra, "scenario": target.spec.name, "planner": factory.spec}) if folder else None
+    )
     result = run_scenario(
         scenario, factory(), planner_name=factory.spec, planner_timeout=timeout, on_progress=on_progress,
         keep_trace=record is not None, stop=stop, trace_file=trace_file,
@@ -219,25 +224,44 @@ def _run_target(
 
 
 def _hunt_target(
-    target: _Target, factory: PlannerFactory, timeout: float | None, counterexamples: tuple[Path, int], stop: StopSignals | None
+    target: _Target,
+    factory: PlannerFactory,
+    timeout: float | None,
+    counterexamples: tuple[Path, int],
+    stop: StopSignals | None,
 ) -> _Outcome:
     """A generated entry: hunt for a failing scenario; a shrunk counterexample is always saved (under
     ``--record``'s folder, else the default artifact folder) and its suite entry printed."""
     assert target.suite is not None and target.spec is not None and target.spec.hunts
     root, every = counterexamples
     folder = artifact_folder(root, target.suite_path, target.spec.name)
-    about = {"suite": str(target.suite_path), "line": target.spec.line, "scenario": target.spec.name, "planner": factory.spec}
+    about = {
+        "suite": str(target.suite_path),
+        "line": target.spec.line,
+        "scenario": target.spec.name,
+        "planner": factory.spec,
+    }
     found = hunt(
-        target.spec, target.suite, factory, identity=factory.spec, planner_timeout=timeout, stop=stop, record_to=(folder, about)
+        target.spec,
+        target.suite,
+        factory,
+        identity=factory.spec,
+        planner_timeout=timeout,
+        stop=stop,
+        record_to=(folder, about),
     )
     if found.result is None:  # examples: 0
-        return _Outcome(target, _unrun(target.spec.name, factory.spec, "passed", "no-counterexample", ()), loaded=True, hunt=found)
+        return _Outcome(
+            target, _unrun(target.spec.name, factory.spec, "passed", "no-counterexample", ()), loaded=True, hunt=found
+        )
     result = found.result
     if found.counterexample is not None:
         extra = {"suite": str(target.suite_path), "line": target.spec.line, **hunt_facts(found)}
         paths = record_counterexample(found, folder, extra, record_every=every, streamed=True)
         result = replace(result, artifacts={**result.artifacts, **paths})
-        entry = counterexample_entry(target.spec, Path(paths["scenario"]), target.suite_path, found.counterexample.disturbances)
+        entry = counterexample_entry(
+            target.spec, Path(paths["scenario"]), target.suite_path, found.counterexample.disturbances
+        )
         story = counterexample_story(found, target.spec.hunt_examples, paths["scenario"], str(target.suite_path), entry)
         print(f"{target.label}: {story}", file=sys.stderr)
     return _Outcome(target, result, loaded=True, hunt=found)
@@ -250,7 +274,9 @@ def _load_failure(name: str, planner: str, error: LoadError | PlannerSpecError) 
     return _unrun(name, planner, "failed", "load-error", (Failure("load-error", 0.0, str(error), details),))
 
 
-def _unrun(name: str, planner: str, status: Literal["passed", "failed"], ended: Ending, failures: tuple[Failure, ...]) -> RunResult:
+def _unrun(
+    name: str, planner: str, status: Literal["passed", "failed"], ended: Ending, failures: tuple[Failure, ...]
+) -> RunResult:
     """A result without a run of its own (a load error, or a hunt that found nothing)."""
     metrics = Metrics(None, {}, {}, planner_calls=0, planner_wall_time=0.0, wall_time=0.0, sim_time=0.0)
     return RunResult(
@@ -345,7 +371,9 @@ def _print_summary(outcomes: list[_Outcome], stream: TextIO) -> None:
     for line in format_table(rows):
         print(line, file=stream)
     words = [o.word for o in outcomes]
-    counts = ", ".join(f"{words.count(w)} {w}" for w in ("passed", "failed", "interrupted", "xfailed", "xpassed") if w in words)
+    counts = ", ".join(
+        f"{words.count(w)} {w}" for w in ("passed", "failed", "interrupted", "xfailed", "xpassed") if w in words
+    )
     planners = ", ".join(dict.fromkeys(o.result.planner for o in outcomes))  # first-seen order
     print(f"\n{len(outcomes)} scenario(s) with {planners}: {counts}", file=stream)
     for outcome in outcomes:

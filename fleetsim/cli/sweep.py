@@ -29,22 +29,42 @@ __all__ = ["sweep"]
 
 
 def _sweep_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="fleetsim sweep", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("spec", metavar="SPEC.yaml", help="the sweep spec: planners, sources (suites, generate blocks), repetitions")
+    parser = argparse.ArgumentParser(
+        prog="fleetsim sweep", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    parser.add_argument(
+        "spec", metavar="SPEC.yaml", help="the sweep spec: planners, sources (suites, generate blocks), repetitions"
+    )
     parser.add_argument("-o", "--output", default="fleetsim-sweep/results.jsonl", metavar="RESULTS",
                         help="the results file, JSON lines (default: %(default)s); failing runs' folders go beside it, in RESULTS.runs/")  # fmt: skip
-    parser.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler, e.g. tcp://host:8786 (default: a local cluster)")
-    parser.add_argument("--workers", type=int, metavar="N", help="local cluster: worker processes (default: one per core)")
-    parser.add_argument("--resume", action="store_true", help="keep the rows RESULTS holds and run only what is missing")
+    parser.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="a running Dask scheduler, e.g. tcp://host:8786 (default: a local cluster)",
+    )
+    parser.add_argument(
+        "--workers", type=int, metavar="N", help="local cluster: worker processes (default: one per core)"
+    )
+    parser.add_argument(
+        "--resume", action="store_true", help="keep the rows RESULTS holds and run only what is missing"
+    )
     return parser
 
 
 def _report_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="fleetsim sweep report", description="Compare the planners of a sweep's results.")
+    parser = argparse.ArgumentParser(
+        prog="fleetsim sweep report", description="Compare the planners of a sweep's results."
+    )
     parser.add_argument("results", metavar="RESULTS", help="a results file written by fleetsim sweep")
-    parser.add_argument("--baseline", metavar="PLANNER", help="the planner spec the others are compared with (default: the sweep's baseline)")
+    parser.add_argument(
+        "--baseline",
+        metavar="PLANNER",
+        help="the planner spec the others are compared with (default: the sweep's baseline)",
+    )
     parser.add_argument("--html", metavar="OUT.html", help="where to write the page (default: RESULTS with .html)")
-    parser.add_argument("--markdown", metavar="OUT.md", help="also write the Markdown summary here (it is printed either way)")
+    parser.add_argument(
+        "--markdown", metavar="OUT.md", help="also write the Markdown summary here (it is printed either way)"
+    )
     parser.add_argument("--fail-if", action="append", default=[], metavar="CONDITION",
                         help="e.g. 'throughput < baseline - 2%%': exit 1 when it holds beyond the 95%% bootstrap interval")  # fmt: skip
     return parser
@@ -67,7 +87,10 @@ def run_sweep(args: argparse.Namespace) -> int:
     header = {"name": spec.name, "spec": str(spec.path), "planners": list(spec.planners), "baseline": spec.baseline}
     with ResultsFile(output, header, resume=args.resume) as results:
         before = len(results.done & {item["key"] for item in items})
-        print(f"sweep {spec.name!r}: {len(items)} runs ({len(spec.planners)} planners), {before} done already", file=sys.stderr)
+        print(
+            f"sweep {spec.name!r}: {len(items)} runs ({len(spec.planners)} planners), {before} done already",
+            file=sys.stderr,
+        )
         bar = _Bar(sys.stderr)
         progress = run_items(items, results, scheduler=args.scheduler, workers=args.workers, on_progress=bar.show)
         bar.close()

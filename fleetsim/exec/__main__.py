@@ -10,7 +10,9 @@ from fleetsim.sim.planner_spec import PlannerSpecError, load_planner_factory
 
 def main(argv: list[str]) -> int:
     if len(argv) != 1 or argv[0].startswith("exec:"):
-        print("usage: python -m fleetsim.exec module:attr   (a planner class or zero-argument factory)", file=sys.stderr)
+        print(
+            "usage: python -m fleetsim.exec module:attr   (a planner class or zero-argument factory)", file=sys.stderr
+        )
         return 2
     try:
         planner = load_planner_factory(argv[0])()

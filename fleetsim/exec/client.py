@@ -53,7 +53,10 @@ def _layout(data: Mapping[str, Any]) -> Layout:
         conflict_model=ConflictModel(settings["conflict_model"]),
     )
     # The layout is rebuilt from the same segments and settings; it must come out the same.
-    connections = [[[c.from_segment, c.from_traverse.value], [c.to_segment, c.to_traverse.value], c.joint.value] for c in layout.connections]
+    connections = [
+        [[c.from_segment, c.from_traverse.value], [c.to_segment, c.to_traverse.value], c.joint.value]
+        for c in layout.connections
+    ]
     if connections != [[c["from"], c["to"], c["joint"]] for c in data["connections"]]:
         msg = "the rebuilt layout's connections differ from fleetsim's (different fleetsim versions?)"
         raise ProtocolError(msg)
@@ -123,7 +126,9 @@ class _Session:
         except RouteError as error:
             return {"id": request["id"], "route_error": error.message}
         plans = [encode_plan(item) for item in items if isinstance(item, FleetPlan)]
-        errors = [{"vehicle_id": item.vehicle_id, "message": item.message} for item in items if isinstance(item, RouteError)]
+        errors = [
+            {"vehicle_id": item.vehicle_id, "message": item.message} for item in items if isinstance(item, RouteError)
+        ]
         return {"id": request["id"], "plans": plans, "route_errors": errors}
 
 

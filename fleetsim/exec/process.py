@@ -174,7 +174,7 @@ class SubprocessPlanner:
         answer = self._receive(self.startup_timeout, "the init message")
         problem = _violation(load_schema("ready"), answer)
         if problem is not None:
-            raise self._fail(f"answered the init message with {_short(answer)}, not {{\"type\": \"ready\"}} ({problem})")
+            raise self._fail(f'answered the init message with {_short(answer)}, not {{"type": "ready"}} ({problem})')
         self._fleet = None
 
     def _call(self, method: str, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
@@ -215,7 +215,9 @@ class SubprocessPlanner:
         try:
             return json.loads(line)
         except (json.JSONDecodeError, UnicodeDecodeError) as error:
-            raise self._fail(f"answered {what} with invalid JSON ({getattr(error, 'msg', error)}): {_clip(line)}") from None
+            raise self._fail(
+                f"answered {what} with invalid JSON ({getattr(error, 'msg', error)}): {_clip(line)}"
+            ) from None
 
     def _read_line(self, timeout: float | None, what: str) -> bytes:
         process = self._process

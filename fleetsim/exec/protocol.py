@@ -173,11 +173,14 @@ def _state(state: VehicleState) -> dict[str, Any]:
 def encode_fleet(fleet: FleetSnapshot, previous: FleetSnapshot | None = None) -> dict[str, Any]:
     """The snapshot, or with ``previous`` (the fleet the planner last saw) only what differs from it:
     the vehicles whose state, the plans and the queues that changed (``time`` and ``routed`` always)."""
+
     def changed(mapping: Mapping[int, Any], before: Mapping[int, Any] | None) -> list[int]:
         if before is None:
             return sorted(mapping)
         # Unchanged states and plans are the same objects from one snapshot to the next.
-        return sorted(vid for vid, value in mapping.items() if before.get(vid) is not value and before.get(vid) != value)
+        return sorted(
+            vid for vid, value in mapping.items() if before.get(vid) is not value and before.get(vid) != value
+        )
 
     vehicles = changed(fleet.vehicles, None if previous is None else previous.vehicles)
     plans = changed(fleet.plans, None if previous is None else previous.plans)

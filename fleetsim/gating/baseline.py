@@ -179,7 +179,7 @@ def read_metrics(path: Path | str, planner: str | None = None) -> dict[str, Scen
         raise BaselineError(msg) from None
     found = document.get("format") if isinstance(document, dict) else None
     if found != METRICS_FORMAT:
-        msg = f"{path}: its \"format\" is {found!r}, not {METRICS_FORMAT!r}: this is not a metrics file written by --fleetsim-metrics-json"
+        msg = f'{path}: its "format" is {found!r}, not {METRICS_FORMAT!r}: this is not a metrics file written by --fleetsim-metrics-json'
         raise BaselineError(msg)
     if not isinstance(document.get("scenarios"), list):
         msg = f"{path}: scenarios={document.get('scenarios')!r} must be a list"

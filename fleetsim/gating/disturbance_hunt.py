@@ -39,12 +39,19 @@ def stop_schedules(scenario: Scenario, hunt: HuntDisturbances) -> st.SearchStrat
 
 def disturbed(scenarios: st.SearchStrategy[Scenario], hunt: HuntDisturbances) -> st.SearchStrategy[Scenario]:
     """Each scenario of ``scenarios`` with a schedule of stops drawn for it."""
-    return scenarios.flatmap(lambda scenario: stop_schedules(scenario, hunt).map(lambda ds: replace(scenario, disturbances=ds)))
+    return scenarios.flatmap(
+        lambda scenario: stop_schedules(scenario, hunt).map(lambda ds: replace(scenario, disturbances=ds))
+    )
 
 
 def disturbance_lines(disturbances: tuple[Disturbance, ...], indent: str = "    ") -> list[str]:
     """A ready-to-paste ``disturbances:`` list, one flow mapping per line."""
     if not disturbances:
         return []
-    items = [", ".join(f"{key}: {value:g}" if isinstance(value, float) else f"{key}: {value}" for key, value in d.entry().items()) for d in disturbances]
+    items = [
+        ", ".join(
+            f"{key}: {value:g}" if isinstance(value, float) else f"{key}: {value}" for key, value in d.entry().items()
+        )
+        for d in disturbances
+    ]
     return [f"{indent}disturbances:", *(f"{indent}  - {{{item}}}" for item in items)]

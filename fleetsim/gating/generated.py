@@ -40,7 +40,22 @@ from fleetsim.sim.loop import run_scenario
 from fleetsim.sim.result import RunResult
 from fleetsim.strategies import GenerationSpec, NoRoomError, save_scenario, scenarios
 
-__all__ = ["COUNTEREXAMPLE_FOLDER", "DEFAULT_ARTIFACTS", "Hunt", "check_generate_block", "counterexample_entry", "counterexample_story", "counts_story", "generation_spec", "hunt", "hunt_facts", "hunt_label", "hypothesis_storage_elsewhere", "in_ci", "record_counterexample"]
+__all__ = [
+    "COUNTEREXAMPLE_FOLDER",
+    "DEFAULT_ARTIFACTS",
+    "Hunt",
+    "check_generate_block",
+    "counterexample_entry",
+    "counterexample_story",
+    "counts_story",
+    "generation_spec",
+    "hunt",
+    "hunt_facts",
+    "hunt_label",
+    "hypothesis_storage_elsewhere",
+    "in_ci",
+    "record_counterexample",
+]
 
 COUNTEREXAMPLE_FOLDER = "counterexample"
 DEFAULT_ARTIFACTS = Path("fleetsim-results")  # under the working directory, as pytest's --fleetsim-artifacts
@@ -106,13 +121,19 @@ def _strategy(spec: ScenarioSpec, suite: Suite) -> SearchStrategy[Scenario]:
     if spec.generate is None:
         assert spec.hunt_disturbances is not None
         base = load_scenario(spec, suite)
-        return stop_schedules(base, spec.hunt_disturbances).map(lambda ds: replace(base, disturbances=base.disturbances + ds))
+        return stop_schedules(base, spec.hunt_disturbances).map(
+            lambda ds: replace(base, disturbances=base.disturbances + ds)
+        )
     try:
         generated = scenarios(generation_spec(spec, suite), name=spec.name)
         return generated if spec.hunt_disturbances is None else disturbed(generated, spec.hunt_disturbances)
     except NoRoomError as error:
-        problem = error.describe(f"generate.vehicles={list(error.vehicles)!r}", f"size {list(error.size)!r}", "larger layouts (size)")
-        raise SuiteError(f"scenario {spec.name!r}: {problem}", Location(spec.suite_path, spec.line, field="generate")) from None
+        problem = error.describe(
+            f"generate.vehicles={list(error.vehicles)!r}", f"size {list(error.size)!r}", "larger layouts (size)"
+        )
+        raise SuiteError(
+            f"scenario {spec.name!r}: {problem}", Location(spec.suite_path, spec.line, field="generate")
+        ) from None
 
 
 class _Stopped(BaseException):
@@ -169,7 +190,12 @@ def hunt(
         else:
             generated += 1
         last = run_scenario(
-            judged(scenario), make_planner(), planner_name=identity, planner_timeout=planner_timeout, keep_trace=False, stop=stop
+            judged(scenario),
+            make_planner(),
+            planner_name=identity,
+            planner_timeout=planner_timeout,
+            keep_trace=False,
+            stop=stop,
         )
         if last.ended == "interrupted":
             raise _Stopped
@@ -214,7 +240,9 @@ def _expect_lines(expect: Expectations) -> list[str]:
     return ["    expect:", *lines] if lines else []
 
 
-def counterexample_entry(spec: ScenarioSpec, folder: Path, suite_path: Path, disturbances: tuple[Disturbance, ...] = ()) -> str:
+def counterexample_entry(
+    spec: ScenarioSpec, folder: Path, suite_path: Path, disturbances: tuple[Disturbance, ...] = ()
+) -> str:
     """A suite entry for the saved counterexample, to paste under ``scenarios:`` (with the
     disturbances of its run as a ``disturbances:`` list)."""
     where = Path(os.path.relpath(folder, suite_path.parent)).as_posix()
@@ -255,9 +283,7 @@ def counts_story(found: Hunt, examples: int) -> str:
 
 def counterexample_story(found: Hunt, examples: int, saved: str, suite: str, entry: str) -> str:
     """What a report says about a saved counterexample (paths as the reader should see them)."""
-    return (
-        f"{counts_story(found, examples)} It is saved as {saved}/. To keep it as a regression scenario, add to {suite}:\n\n{entry}"
-    )
+    return f"{counts_story(found, examples)} It is saved as {saved}/. To keep it as a regression scenario, add to {suite}:\n\n{entry}"
 
 
 def hunt_label(name: str, found: Hunt) -> str:

@@ -214,8 +214,10 @@ def _entry(path: Path, name: str, raw: object, every: int) -> LockEntry:
         if not _is_hex(digest, CHECKPOINT_DIGITS):
             _fail(path, f"{name}['checkpoints'][{index}]", digest, "be 16 lowercase hexadecimal digits")
     if checkpoints and len(checkpoints) != steps // every:
-        msg = (f"{name}['checkpoints'] has {len(checkpoints)} digests; a run of {steps} steps must have "
-               f"{steps // every} (one every {every} steps) or none")
+        msg = (
+            f"{name}['checkpoints'] has {len(checkpoints)} digests; a run of {steps} steps must have "
+            f"{steps // every} (one every {every} steps) or none"
+        )
         raise LockFileError(msg, Location(path))
     return LockEntry(trace_hash, steps, tuple(checkpoints) if every == CHECKPOINT_EVERY else ())
 
@@ -268,11 +270,15 @@ class HashMismatch:
 
     @property
     def message(self) -> str:
-        text = (f"the trace hash {self.actual[:12]} differs from the recorded {self.recorded[:12]}: "
-                "the planner's behaviour changed")
+        text = (
+            f"the trace hash {self.actual[:12]} differs from the recorded {self.recorded[:12]}: "
+            "the planner's behaviour changed"
+        )
         if self.since_time is not None and self.until_time is not None:
-            return (f"{text} between t = {self.since_time:g} s and t = {self.until_time:g} s "
-                    f"(the first differing checkpoint is at step {self.checkpoint_step})")
+            return (
+                f"{text} between t = {self.since_time:g} s and t = {self.until_time:g} s "
+                f"(the first differing checkpoint is at step {self.checkpoint_step})"
+            )
         if self.since_time is not None:
             text += f" after t = {self.since_time:g} s, where every checkpoint both runs share agrees"
         else:

@@ -59,7 +59,13 @@ def run_checked(  # noqa: PLR0913 - the facts of a gated run, named
     def run(trace: Path | None = None) -> RunResult:
         keep = keep_trace or mode == "update"  # a second run is compared line by line
         return run_scenario(
-            scenario, make_planner(), planner_name=identity, planner_timeout=planner_timeout, keep_trace=keep, stop=stop, trace_file=trace
+            scenario,
+            make_planner(),
+            planner_name=identity,
+            planner_timeout=planner_timeout,
+            keep_trace=keep,
+            stop=stop,
+            trace_file=trace,
         )
 
     result = run(trace_file)
@@ -68,7 +74,9 @@ def run_checked(  # noqa: PLR0913 - the facts of a gated run, named
     if mode == "update":
         again = run()
         if again.ended == "interrupted":
-            return CheckedRun(replace(result, status="failed", failures=(*again.failures, *result.failures), ended="interrupted"))
+            return CheckedRun(
+                replace(result, status="failed", failures=(*again.failures, *result.failures), ended="interrupted")
+            )
         if again.trace_hash != result.trace_hash:
             return CheckedRun(_failed(result, _nondeterministic(result, again, scenario.settings.time_step)))
         return CheckedRun(result, LockEntry.from_run(result.trace_hash, result.steps, result.checkpoints))

@@ -168,9 +168,7 @@ def _as_sets(subs: SubSegments, pairs: IntArray) -> dict[int, frozenset[int]]:
     return {ids[k]: frozenset(members[bounds[k] : bounds[k + 1]]) for k in range(n)}
 
 
-def swept_conflicts(
-    segments: Sequence[Segment], threshold: float, touch: float = 0.0
-) -> dict[int, frozenset[int]]:
+def swept_conflicts(segments: Sequence[Segment], threshold: float, touch: float = 0.0) -> dict[int, frozenset[int]]:
     """Conflict sets under the swept model: polyline distance < ``threshold`` or <= ``touch``."""
     subs = SubSegments.of(segments)
     return _as_sets(subs, _close_segment_pairs(subs, threshold, touch))

@@ -175,9 +175,7 @@ def _allowed(segments: Sequence[Segment]) -> tuple[BoolArray, BoolArray]:
     return leaving, entering
 
 
-def find_connections(
-    segments: Sequence[Segment], tolerance: float, angle_tolerance: float
-) -> tuple[Connection, ...]:
+def find_connections(segments: Sequence[Segment], tolerance: float, angle_tolerance: float) -> tuple[Connection, ...]:
     """Every connection between ``segments``, sorted by (from state, to state).
 
     Each touching pair of endpoint rows is tried both ways (leave through one, enter through the other);
@@ -198,6 +196,4 @@ def find_connections(
     away = away_vectors(segments, tolerance)
     kinds = joint_kinds(away[leave[order]], away[enter[order]], angle_tolerance)
     columns = (c[order].tolist() for c in (from_id, from_rank, to_id, to_rank))
-    return tuple(
-        Connection(a, _BY_RANK[ra], b, _BY_RANK[rb], kind) for a, ra, b, rb, kind in zip(*columns, kinds)
-    )
+    return tuple(Connection(a, _BY_RANK[ra], b, _BY_RANK[rb], kind) for a, ra, b, rb, kind in zip(*columns, kinds))

@@ -159,9 +159,7 @@ def overlapping_box_pairs(boxes: FloatArray) -> IntArray:
     home = (np.maximum(lo[i, 0], lo[j, 0]) == cx[first]) & (np.maximum(lo[i, 1], lo[j, 1]) == cy[first])
     i, j = i[home], j[home]
     a, b = boxes[i], boxes[j]
-    overlap = (
-        (a[:, 0] <= b[:, 2]) & (b[:, 0] <= a[:, 2]) & (a[:, 1] <= b[:, 3]) & (b[:, 1] <= a[:, 3])
-    )
+    overlap = (a[:, 0] <= b[:, 2]) & (b[:, 0] <= a[:, 2]) & (a[:, 1] <= b[:, 3]) & (b[:, 1] <= a[:, 3])
     return np.stack([np.minimum(i, j)[overlap], np.maximum(i, j)[overlap]], axis=1)
 
 
@@ -184,9 +182,7 @@ def close_point_pairs(points: FloatArray, radius: float) -> tuple[IntArray, Floa
     return pairs[keep], gaps[keep]
 
 
-def away_direction(
-    waypoints: Sequence[tuple[float, float]], at_last: bool, skip: float
-) -> tuple[float, float] | None:
+def away_direction(waypoints: Sequence[tuple[float, float]], at_last: bool, skip: float) -> tuple[float, float] | None:
     """Unit vector from one end of a polyline towards its nearest other waypoint along the line.
 
     Waypoints within ``skip`` of the end are passed over (they give a noisy direction); if every waypoint

@@ -147,8 +147,7 @@ def _state_graph(segments: Mapping[int, Segment], connections: tuple[Connection,
     graph: StateGraph = nx.DiGraph()
     graph.add_nodes_from((sid, t) for sid, segment in segments.items() for t in Traverse if segment.allows(t))
     graph.add_edges_from(
-        ((c.from_segment, c.from_traverse), (c.to_segment, c.to_traverse), {"joint": c.joint})
-        for c in connections
+        ((c.from_segment, c.from_traverse), (c.to_segment, c.to_traverse), {"joint": c.joint}) for c in connections
     )
     frozen: StateGraph = nx.freeze(graph)
     return frozen

@@ -42,19 +42,28 @@ class Nurbs:
     weights: FloatArray  # (n,), all > 0
 
     @classmethod
-    def of(cls, degree: int, knots: Sequence[float], control: Sequence[tuple[float, float]],
-           weights: Sequence[float] | None = None) -> Nurbs:
+    def of(
+        cls,
+        degree: int,
+        knots: Sequence[float],
+        control: Sequence[tuple[float, float]],
+        weights: Sequence[float] | None = None,
+    ) -> Nurbs:
         """Check and build a curve from plain sequences (weights default to 1)."""
         if isinstance(degree, bool) or not isinstance(degree, int) or degree < 1:
             raise ValueError(f"degree={degree!r} must be a whole number >= 1")
         points = np.asarray(control, dtype=np.float64).reshape(-1, 2) if len(control) else np.empty((0, 2))
         count = len(points)
         if count < degree + 1:
-            raise ValueError(f"{count} control points are too few for degree {degree}: at least {degree + 1} are needed")
+            raise ValueError(
+                f"{count} control points are too few for degree {degree}: at least {degree + 1} are needed"
+            )
         knot_array = np.asarray(knots, dtype=np.float64)
         if len(knot_array) != count + degree + 1:
-            msg = (f"the knot vector has {len(knot_array)} values; {count} control points of degree {degree} "
-                   f"need {count + degree + 1} (control points + degree + 1)")
+            msg = (
+                f"the knot vector has {len(knot_array)} values; {count} control points of degree {degree} "
+                f"need {count + degree + 1} (control points + degree + 1)"
+            )
             raise ValueError(msg)
         if not np.all(np.isfinite(knot_array)) or np.any(np.diff(knot_array) < 0):
             raise ValueError(f"knots={list(knots)!r} must be finite and non-decreasing")

@@ -173,4 +173,3 @@ def _path(layout: Layout, starts: Iterable[State], goal: int) -> Sequence[State]
                 following_states.append(following)
         frontier = following_states
     return None
-

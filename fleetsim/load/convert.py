@@ -13,8 +13,9 @@ from fleetsim.load.tiled_writer import write_map
 __all__ = ["convert_map"]
 
 
-def convert_map(source: Path, target: Path, options: MapOptions | None = None, *,
-                connection_tolerance: float = 0.05) -> tuple[SiteMap, Path]:
+def convert_map(
+    source: Path, target: Path, options: MapOptions | None = None, *, connection_tolerance: float = 0.05
+) -> tuple[SiteMap, Path]:
     """Load ``source`` and write its segments to ``target`` in the format ``target``'s name asks for."""
     options = options if options is not None else MapOptions()
     name = target.name.lower()
@@ -24,9 +25,13 @@ def convert_map(source: Path, target: Path, options: MapOptions | None = None, *
     site = load_site_map(source, options)
     if name.endswith(".lif.json"):
         layout_id = options.layout or source.name.split(".")[0] or "layout"
-        written = write_lif(target, site.segments, layout_id=layout_id,
-                            robot_type=options.robot_type or DEFAULT_ROBOT_TYPE,
-                            connection_tolerance=connection_tolerance)
+        written = write_lif(
+            target,
+            site.segments,
+            layout_id=layout_id,
+            robot_type=options.robot_type or DEFAULT_ROBOT_TYPE,
+            connection_tolerance=connection_tolerance,
+        )
     else:
         written = write_map(target, site.segments)
     return site, written

@@ -42,7 +42,9 @@ def _range(raw: Mapping[str, Any], key: str, where: tuple[Any, ...], locate: Loc
     return (low, high)
 
 
-def declared_disturbances(raw: Sequence[Mapping[str, Any]], where: tuple[Any, ...], locate: Locate) -> tuple[Disturbance, ...]:
+def declared_disturbances(
+    raw: Sequence[Mapping[str, Any]], where: tuple[Any, ...], locate: Locate
+) -> tuple[Disturbance, ...]:
     """The ``disturbances`` list of an entry (the schema has checked types and bounds)."""
     found = []
     for index, item in enumerate(raw):
@@ -62,9 +64,15 @@ def declared_disturbances(raw: Sequence[Mapping[str, Any]], where: tuple[Any, ..
             raise suite_error(msg, (*here, key), locate((*here, key)))
         at = float(item["at"]) if "at" in item else None
         if "stop" in item:
-            found.append(Disturbance(item["vehicle"], "stop", float(item["stop"]), at, item.get("on_segment"), line=line))
+            found.append(
+                Disturbance(item["vehicle"], "stop", float(item["stop"]), at, item.get("on_segment"), line=line)
+            )
         else:
-            found.append(Disturbance(item["vehicle"], "slow", float(item["for"]), at, item.get("on_segment"), float(item["slow"]), line))
+            found.append(
+                Disturbance(
+                    item["vehicle"], "slow", float(item["for"]), at, item.get("on_segment"), float(item["slow"]), line
+                )
+            )
     return tuple(found)
 
 

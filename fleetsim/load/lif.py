@@ -40,25 +40,57 @@ SAME_PATH_TOLERANCE = 0.02
 
 _SILENT = {  # descriptive members: nothing to model, nothing to warn about
     "origin": {"originId", "originDescription", "originDescriptor", "layouts"},
-    "layout": {"layoutId", "layoutName", "layoutVersion", "layoutLevelId", "layoutDescription",
-               "layoutDescriptor", "nodes", "edges", "stations"},
-    "node": {"nodeId", "nodeName", "nodeDescription", "nodeDescriptor", "mapId", "nodePosition",
-             "vehicleTypeNodeProperties", "mobileRobotTypeNodeProperties"},
-    "edge": {"edgeId", "edgeName", "edgeDescription", "edgeDescriptor", "startNodeId", "endNodeId",
-             "vehicleTypeEdgeProperties", "mobileRobotTypeEdgeProperties"},
+    "layout": {
+        "layoutId",
+        "layoutName",
+        "layoutVersion",
+        "layoutLevelId",
+        "layoutDescription",
+        "layoutDescriptor",
+        "nodes",
+        "edges",
+        "stations",
+    },
+    "node": {
+        "nodeId",
+        "nodeName",
+        "nodeDescription",
+        "nodeDescriptor",
+        "mapId",
+        "nodePosition",
+        "vehicleTypeNodeProperties",
+        "mobileRobotTypeNodeProperties",
+    },
+    "edge": {
+        "edgeId",
+        "edgeName",
+        "edgeDescription",
+        "edgeDescriptor",
+        "startNodeId",
+        "endNodeId",
+        "vehicleTypeEdgeProperties",
+        "mobileRobotTypeEdgeProperties",
+    },
     "node property": {"vehicleTypeId", "mobileRobotTypes"},
     "edge property": {"vehicleTypeId", "mobileRobotTypes", "trajectory"},
     "node position": {"x", "y"},
 }
 # Values that restrict nothing (LIF's own defaults, or "anything goes"): fleetsim loses nothing by them.
-_HARMLESS: dict[str, object] = {"rotationAllowed": True, "reentryAllowed": True, "rotationAtStartNodeAllowed": "BOTH",
-                                "rotationAtEndNodeAllowed": "BOTH"}
+_HARMLESS: dict[str, object] = {
+    "rotationAllowed": True,
+    "reentryAllowed": True,
+    "rotationAtStartNodeAllowed": "BOTH",
+    "rotationAtEndNodeAllowed": "BOTH",
+}
 
 
 def is_lif_document(document: object) -> bool:
     """A JSON document is LIF when its top level has ``metaInformation`` and ``layouts`` or ``origins``."""
-    return isinstance(document, dict) and "metaInformation" in document and (
-        "layouts" in document or "origins" in document)
+    return (
+        isinstance(document, dict)
+        and "metaInformation" in document
+        and ("layouts" in document or "origins" in document)
+    )
 
 
 @dataclass(frozen=True, slots=True)
@@ -140,14 +172,19 @@ def _choose_layout(root: JsonAt, structure: _Structure, options: MapOptions, not
     if options.layout is None:
         if len(layouts) > 1:
             listed = ", ".join(map(repr, ids))
-            raise root.error(f"the file holds {len(ids)} layouts ({listed}); choose one with map_options: {{layout: ID}}")
+            raise root.error(
+                f"the file holds {len(ids)} layouts ({listed}); choose one with map_options: {{layout: ID}}"
+            )
         chosen = layouts[0]
     elif options.layout in ids:
         chosen = layouts[ids.index(options.layout)]
     else:
         listed = ", ".join(map(repr, ids))
-        raise MapError(f"map_options.layout={options.layout!r} is not a layout of this file ({listed})"
-                       f"{did_you_mean(options.layout, ids)}", Location(root.path))
+        raise MapError(
+            f"map_options.layout={options.layout!r} is not a layout of this file ({listed})"
+            f"{did_you_mean(options.layout, ids)}",
+            Location(root.path),
+        )
     for layout, layout_id in zip(layouts, ids):
         if layout is not chosen:
             notes.note("not-modelled", "another layout (another level or area)", f"{layout.pointer} ({layout_id!r})")
@@ -175,26 +212,33 @@ def _edge_properties(edge: JsonAt, structure: _Structure) -> dict[str, JsonAt]:
     return found
 
 
-def _choose_robot_type(edges: list[JsonAt], structure: _Structure, options: MapOptions, layout_id: str,
-                       path: Path) -> str:
+def _choose_robot_type(
+    edges: list[JsonAt], structure: _Structure, options: MapOptions, layout_id: str, path: Path
+) -> str:
     per_edge = [_edge_properties(edge, structure) for edge in edges]
     types = sorted({name for props in per_edge for name in props})
     if options.robot_type is not None:
         if options.robot_type not in types:
             listed = ", ".join(map(repr, types)) or "none"
-            msg = (f"map_options.robot_type={options.robot_type!r} has no edges in layout {layout_id!r} "
-                   f"(robot types there: {listed}){did_you_mean(options.robot_type, types)}")
+            msg = (
+                f"map_options.robot_type={options.robot_type!r} has no edges in layout {layout_id!r} "
+                f"(robot types there: {listed}){did_you_mean(options.robot_type, types)}"
+            )
             raise MapError(msg, Location(path))
         return options.robot_type
     if len(types) <= 1:
         return types[0] if types else ""
     for edge, props in zip(edges, per_edge):
-        trajectories = {json.dumps(p.value.get("trajectory") if isinstance(p.value, dict) else None, sort_keys=True)
-                        for p in props.values()}
+        trajectories = {
+            json.dumps(p.value.get("trajectory") if isinstance(p.value, dict) else None, sort_keys=True)
+            for p in props.values()
+        }
         if set(props) != set(types) or len(trajectories) > 1:
             listed = ", ".join(map(repr, types))
-            msg = (f"edges differ per robot type ({listed}; this edge first); choose whose edges form the "
-                   "map with map_options: {robot_type: MANUFACTURER/SERIES}")
+            msg = (
+                f"edges differ per robot type ({listed}; this edge first); choose whose edges form the "
+                "map with map_options: {robot_type: MANUFACTURER/SERIES}"
+            )
             raise edge.error(msg)
     return types[0]
 
@@ -218,8 +262,9 @@ def _nodes(layout: JsonAt, structure: _Structure, notes: ImportNotes) -> dict[st
     return nodes
 
 
-def _edge(at: JsonAt, structure: _Structure, robot_type: str, nodes: dict[str, Point],
-          notes: ImportNotes) -> _Edge | None:
+def _edge(
+    at: JsonAt, structure: _Structure, robot_type: str, nodes: dict[str, Point], notes: ImportNotes
+) -> _Edge | None:
     edge_id = at.need("edgeId").identifier()
     start, end = at.need("startNodeId"), at.need("endNodeId")
     start_id, end_id = start.identifier(), end.identifier()
@@ -245,8 +290,10 @@ def _edge(at: JsonAt, structure: _Structure, robot_type: str, nodes: dict[str, P
     for label, node_id, node, point in (("starts", start_id, a, points[0]), ("ends", end_id, b, points[-1])):
         gap = math.dist(node, point)
         if gap > END_TOLERANCE:
-            msg = (f"the trajectory {label} at ({point[0]:g}, {point[1]:g}), {gap:.3g} m from its node "
-                   f"{node_id!r} at ({node[0]:g}, {node[1]:g}); it must start and end at its nodes")
+            msg = (
+                f"the trajectory {label} at ({point[0]:g}, {point[1]:g}), {gap:.3g} m from its node "
+                f"{node_id!r} at ({node[0]:g}, {node[1]:g}); it must start and end at its nodes"
+            )
             raise trajectory.error(msg)
     return _Edge(at, edge_id, start_id, end_id, (a, *points[1:-1], b))
 

@@ -31,33 +31,51 @@ __all__ = ["DEFAULT_ROBOT_TYPE", "lif_document", "write_lif"]
 DEFAULT_ROBOT_TYPE = "fleetsim/vehicle"
 
 
-def write_lif(path: str | os.PathLike[str], segments: Iterable[Segment], *, layout_id: str = "layout",
-              robot_type: str = DEFAULT_ROBOT_TYPE, connection_tolerance: float = 0.05,
-              project: str = "fleetsim") -> Path:
+def write_lif(
+    path: str | os.PathLike[str],
+    segments: Iterable[Segment],
+    *,
+    layout_id: str = "layout",
+    robot_type: str = DEFAULT_ROBOT_TYPE,
+    connection_tolerance: float = 0.05,
+    project: str = "fleetsim",
+) -> Path:
     """Write ``segments`` as a LIF 1.0 file with one layout; returns the path."""
     out = Path(path)
-    document = lif_document(segments, layout_id=layout_id, robot_type=robot_type,
-                            connection_tolerance=connection_tolerance, project=project)
+    document = lif_document(
+        segments, layout_id=layout_id, robot_type=robot_type, connection_tolerance=connection_tolerance, project=project
+    )
     write_text_atomically(out, json.dumps(document, indent=1) + "\n")
     return out
 
 
 def _timestamp() -> str:
     epoch = os.environ.get("SOURCE_DATE_EPOCH")
-    moment = datetime.fromtimestamp(int(epoch), timezone.utc) if epoch and epoch.isdigit() else datetime.now(timezone.utc)
+    moment = (
+        datetime.fromtimestamp(int(epoch), timezone.utc) if epoch and epoch.isdigit() else datetime.now(timezone.utc)
+    )
     return moment.strftime("%Y-%m-%dT%H:%M:%S.") + f"{moment.microsecond // 10000:02d}Z"
 
 
-def lif_document(segments: Iterable[Segment], *, layout_id: str = "layout", robot_type: str = DEFAULT_ROBOT_TYPE,
-                 connection_tolerance: float = 0.05, project: str = "fleetsim") -> dict[str, Any]:
+def lif_document(
+    segments: Iterable[Segment],
+    *,
+    layout_id: str = "layout",
+    robot_type: str = DEFAULT_ROBOT_TYPE,
+    connection_tolerance: float = 0.05,
+    project: str = "fleetsim",
+) -> dict[str, Any]:
     """The LIF 1.0 document of ``segments`` (see the module docstring)."""
     ordered = sorted(segments, key=lambda segment: segment.id)
     if not ordered:
         raise ValueError("segments must not be empty: a LIF layout needs edges")
     node_of_end, positions = _nodes(ordered, connection_tolerance)
     nodes = [
-        {"nodeId": f"N{index + 1}", "nodePosition": {"x": x, "y": y},
-         "vehicleTypeNodeProperties": [{"vehicleTypeId": robot_type}]}
+        {
+            "nodeId": f"N{index + 1}",
+            "nodePosition": {"x": x, "y": y},
+            "vehicleTypeNodeProperties": [{"vehicleTypeId": robot_type}],
+        }
         for index, (x, y) in enumerate(positions)
     ]
     names = _edge_names(ordered)
@@ -70,8 +88,12 @@ def lif_document(segments: Iterable[Segment], *, layout_id: str = "layout", robo
         for (points, start, end), edge_id in zip(ways, names[segment.id]):
             edges.append(_edge(edge_id, start, end, points, robot_type))
     return {
-        "metaInformation": {"projectIdentification": project, "creator": "fleetsim",
-                            "exportTimestamp": _timestamp(), "lifVersion": "1.0.0"},
+        "metaInformation": {
+            "projectIdentification": project,
+            "creator": "fleetsim",
+            "exportTimestamp": _timestamp(),
+            "lifVersion": "1.0.0",
+        },
         "layouts": [{"layoutId": layout_id, "layoutVersion": "1", "nodes": nodes, "edges": edges, "stations": []}],
     }
 
@@ -136,5 +158,9 @@ def _edge(edge_id: str, start: int, end: int, points: tuple[Point, ...], robot_t
             "knotVector": [0.0, 0.0, *inner, 1.0, 1.0],
             "controlPoints": [{"x": x, "y": y} for x, y in points],
         }
-    return {"edgeId": edge_id, "startNodeId": f"N{start + 1}", "endNodeId": f"N{end + 1}",
-            "vehicleTypeEdgeProperties": [prop]}
+    return {
+        "edgeId": edge_id,
+        "startNodeId": f"N{start + 1}",
+        "endNodeId": f"N{end + 1}",
+        "vehicleTypeEdgeProperties": [prop],
+    }

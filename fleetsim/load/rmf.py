@@ -31,14 +31,44 @@ __all__ = ["load_building"]
 
 _SYSTEMS = ("reference_image", "cartesian_meters")
 # Building and level keys that describe the building's looks, not where vehicles drive: no warning.
-_QUIET_BUILDING = {"name", "building_name", "coordinate_system", "levels", "reference_level_name", "crowd_sim",
-                   "graphs", "version", "parameters"}
-_QUIET_LEVEL = {"vertices", "lanes", "measurements", "drawing", "elevation", "fiducials", "floors", "walls",
-                "models", "layers", "holes", "features", "constraints", "flattened_x_offset", "flattened_y_offset",
-                "x_meters", "y_meters"}
+_QUIET_BUILDING = {
+    "name",
+    "building_name",
+    "coordinate_system",
+    "levels",
+    "reference_level_name",
+    "crowd_sim",
+    "graphs",
+    "version",
+    "parameters",
+}
+_QUIET_LEVEL = {
+    "vertices",
+    "lanes",
+    "measurements",
+    "drawing",
+    "elevation",
+    "fiducials",
+    "floors",
+    "walls",
+    "models",
+    "layers",
+    "holes",
+    "features",
+    "constraints",
+    "flattened_x_offset",
+    "flattened_y_offset",
+    "x_meters",
+    "y_meters",
+}
 # Lane parameters whose default values mean "nothing to model".
-_LANE_DEFAULTS: dict[str, object] = {"orientation": "", "speed_limit": 0, "mutex": "", "demo_mock_floor_name": "",
-                                     "demo_mock_lift_name": ""}
+_LANE_DEFAULTS: dict[str, object] = {
+    "orientation": "",
+    "speed_limit": 0,
+    "mutex": "",
+    "demo_mock_floor_name": "",
+    "demo_mock_lift_name": "",
+}
 
 
 class _Building:
@@ -72,8 +102,10 @@ def load_building(path: Path, options: MapOptions) -> SiteMap:
     root = building.mapping(data, (), "the building map")
     system = root.get("coordinate_system", "reference_image")
     if system not in _SYSTEMS:
-        raise building.error(("coordinate_system",), f"coordinate_system {system!r} is not supported (fleetsim reads "
-                             f"{' and '.join(_SYSTEMS)})")
+        raise building.error(
+            ("coordinate_system",),
+            f"coordinate_system {system!r} is not supported (fleetsim reads {' and '.join(_SYSTEMS)})",
+        )
     levels = building.mapping(root.get("levels"), ("levels",), "levels")
     if not levels:
         raise building.error(("levels",), "the building has no levels")
@@ -97,8 +129,11 @@ def _choose_level(building: _Building, levels: dict[Any, Any], options: MapOptio
         return str(next(iter(levels)))
     if options.level not in levels:
         listed = ", ".join(map(repr, names))
-        raise building.error(("levels",), f"map_options.level={options.level!r} is not a level of this building "
-                             f"({listed}){did_you_mean(options.level, names)}")
+        raise building.error(
+            ("levels",),
+            f"map_options.level={options.level!r} is not a level of this building "
+            f"({listed}){did_you_mean(options.level, names)}",
+        )
     return options.level
 
 
@@ -144,26 +179,34 @@ def _scale(building: _Building, level: dict[Any, Any], name: str, vertices: list
         at = (*where, index)
         start, end = _ends(building, measurement, at, len(vertices), "measurement")
         params = building.mapping(measurement[2], (*at, 2), "measurement parameters")
-        distance = building.number(_param(building, params.get("distance"), (*at, 2, "distance")), (*at, 2, "distance"),
-                                   "measurement distance")
+        distance = building.number(
+            _param(building, params.get("distance"), (*at, 2, "distance")), (*at, 2, "distance"), "measurement distance"
+        )
         pixels = math.dist(vertices[start][0], vertices[end][0])
         if pixels == 0 or distance <= 0:
-            raise building.error(at, f"measurement {index} joins vertices {start} and {end} {pixels:g} px apart "
-                                 f"at distance {distance:g} m; both must be positive")
+            raise building.error(
+                at,
+                f"measurement {index} joins vertices {start} and {end} {pixels:g} px apart "
+                f"at distance {distance:g} m; both must be positive",
+            )
         ratios.append(distance / pixels)
     return math.fsum(ratios) / len(ratios) if ratios else None
 
 
-def _metres(building: _Building, level: dict[Any, Any], name: str, vertices: list[tuple[Point, str]],
-            system: str) -> tuple[list[Point], float | None]:
+def _metres(
+    building: _Building, level: dict[Any, Any], name: str, vertices: list[tuple[Point, str]], system: str
+) -> tuple[list[Point], float | None]:
     """The vertices in metres, and the scale (metres per pixel) of a level drawn on an image."""
     if system == "cartesian_meters":
         return [point for point, _ in vertices], None
     scale = _scale(building, level, name, vertices)
     if scale is None:
         # traffic-editor's tools then read pixels as metres, with a warning; so does fleetsim.
-        building.notes.note("not-modelled", "a level without measurements (its scale is unknown: pixels are read "
-                            "as metres)", building.line(("levels", name)))
+        building.notes.note(
+            "not-modelled",
+            "a level without measurements (its scale is unknown: pixels are read as metres)",
+            building.line(("levels", name)),
+        )
         scale = 1.0
     return [(x * scale, -y * scale) for (x, y), _ in vertices], scale
 
@@ -196,8 +239,9 @@ def _ends(building: _Building, edge: object, at: tuple[Hashable, ...], count: in
     return ends[0], ends[1]
 
 
-def _lanes(building: _Building, level: dict[Any, Any], name: str, graph: int, points: list[Point],
-           labels: list[str]) -> tuple[Segment, ...]:
+def _lanes(
+    building: _Building, level: dict[Any, Any], name: str, graph: int, points: list[Point], labels: list[str]
+) -> tuple[Segment, ...]:
     where: tuple[Hashable, ...] = ("levels", name, "lanes")
     segments: list[Segment] = []
     used: dict[str, int] = {}
@@ -231,6 +275,9 @@ def _lanes(building: _Building, level: dict[Any, Any], name: str, graph: int, po
         segments.append(Segment(len(segments) + 1, Shape.STRAIGHT, direction, (points[start], points[end]), names))
     if not segments:
         found = ", ".join(map(str, sorted(graphs))) or "none"
-        raise building.error(("levels", name), f"level {name!r} has no lanes in graph {graph} (graphs with lanes: {found}); "
-                             "choose one with map_options: {graph: N}")
+        raise building.error(
+            ("levels", name),
+            f"level {name!r} has no lanes in graph {graph} (graphs with lanes: {found}); "
+            "choose one with map_options: {graph: N}",
+        )
     return tuple(segments)

@@ -119,9 +119,7 @@ def _assemble(
     tiled = load_site_map(map_path, map_options)
     segments = {segment.id: segment for segment in tiled.segments}
     default_type = default_vehicle_type(vehicle_types, settings, origin)
-    located = read_vehicles_with_lines(
-        vehicles_path, segments, vehicle_types, default_type, map_name=map_path.name
-    )
+    located = read_vehicles_with_lines(vehicles_path, segments, vehicle_types, default_type, map_name=map_path.name)
     vehicles = tuple(vehicle for vehicle, _ in located)
     layout = build_layout(
         tiled.segments,
@@ -182,9 +180,7 @@ def _vehicle_radius(
     return max(vehicle_type.swept_radius for vehicle_type in used)
 
 
-def _reject_start_conflicts(
-    located: tuple[tuple[Vehicle, int], ...], layout: Layout, vehicles_path: Path
-) -> None:
+def _reject_start_conflicts(located: tuple[tuple[Vehicle, int], ...], layout: Layout, vehicles_path: Path) -> None:
     """Two vehicles may not start on conflicting segments: their very first plans would collide."""
     placed: dict[int, tuple[Vehicle, int]] = {}  # start segment → first vehicle on it, with its line
     for vehicle, line in located:
@@ -208,8 +204,5 @@ def _check_expected_collisions(
         return
     unknown = [segment for segment in expect.collisions if segment not in layout.segments]
     if unknown:
-        msg = (
-            f"scenario {name!r}: expect.collisions names segment {unknown[0]}, "
-            f"which is not in {map_path.name}"
-        )
+        msg = f"scenario {name!r}: expect.collisions names segment {unknown[0]}, which is not in {map_path.name}"
         raise SuiteError(msg, origin)

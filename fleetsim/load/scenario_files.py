@@ -65,9 +65,7 @@ class _Columns:
         return ",".join(self.required) + "".join(f"[,{name}]" for name in self.optional)
 
 
-VEHICLE_COLUMNS = _Columns(
-    ("vehicle_id", "start_segment_id", "segment_orientation"), ("progress_direction", "type")
-)
+VEHICLE_COLUMNS = _Columns(("vehicle_id", "start_segment_id", "segment_orientation"), ("progress_direction", "type"))
 TASK_COLUMNS = _Columns(("vehicle_id", "goal_segment_id"), ("goal_progress_direction",))
 
 _WHOLE_NUMBER = re.compile(r"[0-9]+")
@@ -231,8 +229,10 @@ class _SegmentCells:
         if _WHOLE_NUMBER.fullmatch(value):
             number = int(value)
             if named is not None and named.id != number and number in self.segments:
-                msg = (f"{value!r} is both the id of segment {number} and the name of segment {named.id}; "
-                       f"write 'id:{number}' or 'name:{value}'")
+                msg = (
+                    f"{value!r} is both the id of segment {number} and the name of segment {named.id}; "
+                    f"write 'id:{number}' or 'name:{value}'"
+                )
                 raise row.error(column, msg)
             if number in self.segments or named is None:
                 return self._by_id(row, column, number)
@@ -250,9 +250,7 @@ class _SegmentCells:
 # -- vehicles.csv ---------------------------------------------------------------------------------
 
 
-def _vehicle_type(
-    row: _Row, types_by_key: Mapping[str, VehicleType], default_type: VehicleType | None
-) -> VehicleType:
+def _vehicle_type(row: _Row, types_by_key: Mapping[str, VehicleType], default_type: VehicleType | None) -> VehicleType:
     name = row.get("type")
     if not name:
         if default_type is None:

@@ -36,8 +36,10 @@ def map_format(path: Path) -> str:
     if name.endswith((".json", ".tmj", ".tmx")):
         return "tiled"
     known = "a Tiled map (.json, .tmj, .tmx), a LIF file (.lif.json) or an RMF building map (.building.yaml)"
-    raise MapError(f"this is not a map file: a map is {known}, and this file ends in {path.suffix or 'no suffix'!r}",
-                   Location(path))
+    raise MapError(
+        f"this is not a map file: a map is {known}, and this file ends in {path.suffix or 'no suffix'!r}",
+        Location(path),
+    )
 
 
 def load_site_map(path: str | os.PathLike[str], options: MapOptions | None = None) -> SiteMap:

@@ -26,10 +26,24 @@ from fleetsim.load.scenario_files import (
 from fleetsim.load.map_options import MapOptions
 from fleetsim.load.suite_schema import check_against_schema, suite_error
 from fleetsim.load.yaml_source import Locate, load_yaml_with_marks
-from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Disturbance, Expectations, RandomDisturbances, ScenarioSettings, VehicleType
+from fleetsim.scenario import (
+    DEFAULT_VEHICLE_TYPE,
+    Disturbance,
+    Expectations,
+    RandomDisturbances,
+    ScenarioSettings,
+    VehicleType,
+)
 
 __all__ = [
-    "SUITE_SUFFIX", "Generation", "ScenarioSpec", "Suite", "discover_suites", "load_suite", "parse_scenario_entry", "parse_settings",
+    "SUITE_SUFFIX",
+    "Generation",
+    "ScenarioSpec",
+    "Suite",
+    "discover_suites",
+    "load_suite",
+    "parse_scenario_entry",
+    "parse_settings",
     "parse_vehicle_types",
 ]
 
@@ -290,21 +304,29 @@ def parse_scenario_entry(
     )
 
 
-def _disturbance_keys(entry: Mapping[str, Any], generated: bool, locate: Locate, where: tuple[Any, ...]) -> dict[str, Any]:
+def _disturbance_keys(
+    entry: Mapping[str, Any], generated: bool, locate: Locate, where: tuple[Any, ...]
+) -> dict[str, Any]:
     keys: dict[str, Any] = {}
     if "disturbances" in entry:
         if generated:
-            msg = "a generated scenario's vehicles are not known in advance: use random_disturbances or hunt_disturbances"
+            msg = (
+                "a generated scenario's vehicles are not known in advance: use random_disturbances or hunt_disturbances"
+            )
             raise suite_error(msg, (*where, "disturbances"), locate((*where, "disturbances"), key=True))
         keys["disturbances"] = declared_disturbances(entry["disturbances"], (*where, "disturbances"), locate)
     if "random_disturbances" in entry:
-        keys["random_disturbances"] = random_block(entry["random_disturbances"], (*where, "random_disturbances"), locate)
+        keys["random_disturbances"] = random_block(
+            entry["random_disturbances"], (*where, "random_disturbances"), locate
+        )
     if "hunt_disturbances" in entry:
         keys["hunt_disturbances"] = hunt_block(entry["hunt_disturbances"], (*where, "hunt_disturbances"), locate)
     return keys
 
 
-def _generation(raw: Mapping[str, Any], types: Mapping[str, VehicleType], locate: Locate, where: tuple[Any, ...]) -> Generation:
+def _generation(
+    raw: Mapping[str, Any], types: Mapping[str, VehicleType], locate: Locate, where: tuple[Any, ...]
+) -> Generation:
     ranges = {}
     for key in ("size", "vehicles", "tasks"):
         if key in raw:
@@ -314,7 +336,8 @@ def _generation(raw: Mapping[str, Any], types: Mapping[str, VehicleType], locate
                 raise suite_error(msg, (*where, key), locate((*where, key)))
             ranges[key] = (low, high)
     names = tuple(
-        _type_name(name, types, locate, (*where, "vehicle_types", k)) for k, name in enumerate(raw.get("vehicle_types", ()))
+        _type_name(name, types, locate, (*where, "vehicle_types", k))
+        for k, name in enumerate(raw.get("vehicle_types", ()))
     )
     return Generation(
         layout=raw.get("layout", "any"),

@@ -68,6 +68,4 @@ def _unreachable(
         f"vehicle {vehicle.id} cannot reach segment {task.goal_segment}{arrive}, the goal of task {task.id}, "
         f"{origin}: {reason}"
     )
-    return UnreachableTaskError(
-        msg, location, task_id=task.id, vehicle_id=vehicle.id, goal_segment=task.goal_segment
-    )
+    return UnreachableTaskError(msg, location, task_id=task.id, vehicle_id=vehicle.id, goal_segment=task.goal_segment)

@@ -55,7 +55,7 @@ def read_text_file(path: Path, error_type: type[LoadError], where: Location | No
         return raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         line = raw.count(b"\n", 0, exc.start) + 1
-        msg = f"not UTF-8 text: byte {raw[exc.start:exc.start + 1]!r} cannot be decoded"
+        msg = f"not UTF-8 text: byte {raw[exc.start : exc.start + 1]!r} cannot be decoded"
         raise error_type(msg, Location(path, line=line) if where is None else place) from None
 
 

@@ -43,10 +43,20 @@ __all__ = ["MAP_SUFFIXES", "TiledMap", "load_map", "parse_direction", "parse_sha
 
 MAP_SUFFIXES = (".json", ".tmj", ".tmx")
 
-_SHAPES = {"straight": Shape.STRAIGHT, "curve": Shape.CURVE, "s_curve": Shape.S_CURVE,
-           "scurve": Shape.S_CURVE, "path": Shape.PATH}
-_DIRECTIONS = {"both": Direction.BOTH, "bidirectional": Direction.BOTH, "two_way": Direction.BOTH,
-               "forward": Direction.FORWARD, "backward": Direction.BACKWARD}
+_SHAPES = {
+    "straight": Shape.STRAIGHT,
+    "curve": Shape.CURVE,
+    "s_curve": Shape.S_CURVE,
+    "scurve": Shape.S_CURVE,
+    "path": Shape.PATH,
+}
+_DIRECTIONS = {
+    "both": Direction.BOTH,
+    "bidirectional": Direction.BOTH,
+    "two_way": Direction.BOTH,
+    "forward": Direction.FORWARD,
+    "backward": Direction.BACKWARD,
+}
 # The order of the values of the `direction` enum in fleetsim.tiled-project (int storage = index).
 _DIRECTION_ENUM = (Direction.BOTH, Direction.FORWARD, Direction.BACKWARD)
 
@@ -142,8 +152,7 @@ def _positive_int(raw: object, name: str, where: Location) -> int:
     return value
 
 
-def _header(attrs: Mapping[str, object], properties: Mapping[str, PropertyValue],
-            path: Path) -> _Header:
+def _header(attrs: Mapping[str, object], properties: Mapping[str, PropertyValue], path: Path) -> _Header:
     where = Location(path)
     orientation = attrs.get("orientation")
     if orientation != "orthogonal":
@@ -154,8 +163,8 @@ def _header(attrs: Mapping[str, object], properties: Mapping[str, PropertyValue]
         msg = f"the map is infinite (infinite = {infinite!r}); fleetsim reads fixed-size maps only (untick Infinite in Tiled's map properties)"
         raise MapError(msg, where)
     width, height, tile_width, tile_height = (
-        _positive_int(attrs.get(name), name, where)
-        for name in ("width", "height", "tilewidth", "tileheight"))
+        _positive_int(attrs.get(name), name, where) for name in ("width", "height", "tilewidth", "tileheight")
+    )
     scale = 1.0 / tile_width  # default: one tile is one metre
     raw_scale = properties.get("meters_per_pixel")
     if raw_scale is not None:
@@ -176,8 +185,7 @@ def _read_tmx(text: str, path: Path) -> tuple[_Header, list[_Placed]]:
     return header, list(_tmx_layers(root, (0.0, 0.0), "", path))
 
 
-def _layer_offset(attrs: Mapping[str, object], offset: Point, name: str,
-                  where: Location) -> Point:
+def _layer_offset(attrs: Mapping[str, object], offset: Point, name: str, where: Location) -> Point:
     dx = as_number(attrs.get("offsetx", 0), f"layer {name!r} offsetx", where)
     dy = as_number(attrs.get("offsety", 0), f"layer {name!r} offsety", where)
     return (offset[0] + dx, offset[1] + dy)
@@ -217,8 +225,7 @@ def _json_list(container: Mapping[str, object], key: str, where: Location) -> li
     return value
 
 
-def _json_layers(parent: Mapping[str, object], offset: Point, prefix: str,
-                 path: Path) -> Iterator[_Placed]:
+def _json_layers(parent: Mapping[str, object], offset: Point, prefix: str, path: Path) -> Iterator[_Placed]:
     where = Location(path)
     for layer in _json_list(parent, "layers", where):
         if not isinstance(layer, dict):
@@ -251,22 +258,26 @@ def _check_unique_ids(placed: list[_Placed], path: Path) -> None:
         if object_id is None:
             continue
         if object_id in first_with:
-            msg = (f"id={object_id!r} is used by two objects ({_describe(first_with[object_id])} and "
-                   f"{_describe(item)}); object ids must be unique")
+            msg = (
+                f"id={object_id!r} is used by two objects ({_describe(first_with[object_id])} and "
+                f"{_describe(item)}); object ids must be unique"
+            )
             raise MapError(msg, Location(path, object_id=object_id))
         first_with[object_id] = item
 
 
-def _world_points(polyline: tuple[Point, ...], fields: ObjectFields, offset: Point,
-                  header: _Header) -> tuple[Point, ...]:
+def _world_points(
+    polyline: tuple[Point, ...], fields: ObjectFields, offset: Point, header: _Header
+) -> tuple[Point, ...]:
     """Rotate the polyline about the object's origin (clockwise on screen), shift, scale, flip y."""
     x = (fields.x or 0.0) + offset[0]
     y = (fields.y or 0.0) + offset[1]
     cos, sin = _cos_sin(fields.rotation or 0.0)
     half_w, half_h, s = header.width_px / 2, header.height_px / 2, header.meters_per_pixel
     # In Tiled's y-down frame the usual rotation matrix turns clockwise on screen.
-    return tuple(((x + px * cos - py * sin - half_w) * s, (half_h - (y + px * sin + py * cos)) * s)
-                 for px, py in polyline)
+    return tuple(
+        ((x + px * cos - py * sin - half_w) * s, (half_h - (y + px * sin + py * cos)) * s) for px, py in polyline
+    )
 
 
 _QUARTER_TURNS = {0.0: (1.0, 0.0), 90.0: (0.0, 1.0), 180.0: (-1.0, 0.0), 270.0: (0.0, -1.0)}
@@ -281,8 +292,7 @@ def _cos_sin(degrees: float) -> tuple[float, float]:
     return math.cos(radians), math.sin(radians)
 
 
-def _segment(fields: ObjectFields, shape: Shape, placed: _Placed, header: _Header,
-             path: Path) -> Segment:
+def _segment(fields: ObjectFields, shape: Shape, placed: _Placed, header: _Header, path: Path) -> Segment:
     if fields.id is None:
         raise MapError(f"{_describe(placed)} is a {shape.value} polyline without an id", Location(path))
     where = Location(path, object_id=fields.id)
@@ -300,8 +310,7 @@ def _segment(fields: ObjectFields, shape: Shape, placed: _Placed, header: _Heade
     other = fields.properties.get("other_name")  # the second name of a merged two-way LIF edge pair
     if names and isinstance(other, str) and other.strip():
         names += (other.strip(),)
-    return Segment(fields.id, shape, direction,
-                   _world_points(polyline, fields, placed.offset, header), names)
+    return Segment(fields.id, shape, direction, _world_points(polyline, fields, placed.offset, header), names)
 
 
 def _unknown_class(fields: ObjectFields, placed: _Placed, path: Path) -> MapError:
@@ -309,13 +318,14 @@ def _unknown_class(fields: ObjectFields, placed: _Placed, path: Path) -> MapErro
     shape_class = fields.shape_class or ""
     hint = did_you_mean(_word(shape_class), [shape.value for shape in Shape])
     what = "" if fields.id is not None else f"{_describe(placed)}: "  # the location names the id
-    msg = (f"{what}unknown class {shape_class!r} on a polyline{hint} (segments are polylines of class "
-           "straight, curve, s_curve or path; clear the class to have fleetsim ignore this polyline)")
+    msg = (
+        f"{what}unknown class {shape_class!r} on a polyline{hint} (segments are polylines of class "
+        "straight, curve, s_curve or path; clear the class to have fleetsim ignore this polyline)"
+    )
     return MapError(msg, Location(path, object_id=fields.id))
 
 
-def _segments(placed: list[_Placed], header: _Header,
-              path: Path) -> tuple[tuple[Segment, ...], tuple[str, ...]]:
+def _segments(placed: list[_Placed], header: _Header, path: Path) -> tuple[tuple[Segment, ...], tuple[str, ...]]:
     _check_unique_ids(placed, path)
     templates = TemplateCache(path)
     segments: list[Segment] = []
@@ -329,8 +339,7 @@ def _segments(placed: list[_Placed], header: _Header,
         if fields.geometry != "polyline":
             if shape is not None:
                 geometry = fields.geometry or "rectangle"
-                warnings.append(f"{name}: class {fields.shape_class!r} on a {geometry}, not a "
-                                "polyline; ignored")
+                warnings.append(f"{name}: class {fields.shape_class!r} on a {geometry}, not a polyline; ignored")
             continue
         if shape is None:
             if fields.shape_class:

@@ -221,8 +221,7 @@ def json_properties(raw: object, where: Location) -> dict[str, PropertyValue]:
 _XML_GEOMETRIES = ("polyline", "polygon", "ellipse", "point", "text")
 
 
-def _optional(raw: object, convert: Callable[[object, str, Location], T], name: str,
-              where: Location) -> T | None:
+def _optional(raw: object, convert: Callable[[object, str, Location], T], name: str, where: Location) -> T | None:
     return None if raw is None else convert(raw, name, where)
 
 
@@ -283,15 +282,13 @@ def _json_points(raw: object, where: Location) -> tuple[Point, ...]:
         flat = [point[axis] for point in raw for axis in ("x", "y")]
     except (TypeError, KeyError, IndexError):
         flat = []
-    if (len(flat) == 2 * len(raw) and set(map(type, flat)) <= {int, float}
-            and all(map(math.isfinite, flat))):
+    if len(flat) == 2 * len(raw) and set(map(type, flat)) <= {int, float} and all(map(math.isfinite, flat)):
         return tuple(zip(map(float, flat[::2]), map(float, flat[1::2])))
     points = []
     for point in raw:
         if not isinstance(point, dict):
             raise MapError(f"polyline point {point!r} must be an object with x and y", where)
-        points.append((as_number(point.get("x"), "point x", where),
-                       as_number(point.get("y"), "point y", where)))
+        points.append((as_number(point.get("x"), "point x", where), as_number(point.get("y"), "point y", where)))
     return tuple(points)
 
 
@@ -383,7 +380,7 @@ def _json_template(text: str, path: Path, owner_id: int | None) -> ObjectFields:
     document = parse_json(text, path, owner_id)
     where = Location(path, object_id=owner_id)
     if not isinstance(document, dict) or document.get("type", "template") != "template":
-        raise MapError("a JSON template must be an object with \"type\": \"template\"", where)
+        raise MapError('a JSON template must be an object with "type": "template"', where)
     if not isinstance(document.get("object"), dict):
         raise MapError(f"the template's object is {document.get('object')!r}; it must be a JSON object", where)
     return read_json_object(document["object"], path, owner_id)

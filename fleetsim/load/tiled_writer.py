@@ -37,12 +37,17 @@ class _Frame:
 
     def pixel(self, x: float, y: float) -> tuple[float, float]:
         s = self.meters_per_pixel
-        return (x / s + self.width_tiles * self.tile_size / 2,
-                self.height_tiles * self.tile_size / 2 - y / s)
+        return (x / s + self.width_tiles * self.tile_size / 2, self.height_tiles * self.tile_size / 2 - y / s)
 
 
-def write_map(path: str | os.PathLike[str], segments: Iterable[Segment], *, tile_size: int = 32,
-              meters_per_pixel: float | None = None, margin_tiles: int = 2) -> Path:
+def write_map(
+    path: str | os.PathLike[str],
+    segments: Iterable[Segment],
+    *,
+    tile_size: int = 32,
+    meters_per_pixel: float | None = None,
+    margin_tiles: int = 2,
+) -> Path:
     """Write ``segments`` as a map centred on the world origin; the format follows the suffix.
 
     Without ``meters_per_pixel`` one tile is one metre and no map property is written (the loader's
@@ -56,8 +61,7 @@ def write_map(path: str | os.PathLike[str], segments: Iterable[Segment], *, tile
     ordered = _checked(segments)
     frame = _frame(ordered, tile_size, meters_per_pixel, margin_tiles)
     explicit_scale = meters_per_pixel is not None
-    text = (_tmx_text(ordered, frame, explicit_scale) if suffix == ".tmx"
-            else _json_text(ordered, frame, explicit_scale))
+    text = _tmx_text(ordered, frame, explicit_scale) if suffix == ".tmx" else _json_text(ordered, frame, explicit_scale)
     out.write_text(text, encoding="utf-8")
     return out
 
@@ -77,15 +81,13 @@ def _checked(segments: Iterable[Segment]) -> list[Segment]:
     return ordered
 
 
-def _frame(segments: list[Segment], tile_size: int, meters_per_pixel: float | None,
-           margin_tiles: int) -> _Frame:
+def _frame(segments: list[Segment], tile_size: int, meters_per_pixel: float | None, margin_tiles: int) -> _Frame:
     if isinstance(tile_size, bool) or not isinstance(tile_size, int) or tile_size <= 0:
         raise ValueError(f"tile_size={tile_size!r} must be a positive integer")
     if isinstance(margin_tiles, bool) or not isinstance(margin_tiles, int) or margin_tiles < 0:
         raise ValueError(f"margin_tiles={margin_tiles!r} must be a non-negative integer")
     scale = 1.0 / tile_size if meters_per_pixel is None else meters_per_pixel
-    if (isinstance(scale, bool) or not isinstance(scale, (int, float)) or not math.isfinite(scale)
-            or scale <= 0):
+    if isinstance(scale, bool) or not isinstance(scale, (int, float)) or not math.isfinite(scale) or scale <= 0:
         raise ValueError(f"meters_per_pixel={meters_per_pixel!r} must be a positive number")
 
     def half_tiles(extent_m: float) -> int:
@@ -104,8 +106,7 @@ def _number(value: float) -> Number:
     return value
 
 
-def _pixel_polyline(segment: Segment,
-                    frame: _Frame) -> tuple[tuple[Number, Number], list[tuple[Number, Number]]]:
+def _pixel_polyline(segment: Segment, frame: _Frame) -> tuple[tuple[Number, Number], list[tuple[Number, Number]]]:
     """The object's position (the first waypoint) and its points relative to it, in pixels."""
     pixels = [frame.pixel(x, y) for x, y in segment.waypoints]
     ox, oy = pixels[0]
@@ -138,11 +139,20 @@ def _json_open(value: dict[str, object]) -> str:
 def _json_object(segment: Segment, frame: _Frame) -> dict[str, object]:
     (x, y), points = _pixel_polyline(segment, frame)
     return {
-        "id": segment.id, "name": segment.name or "", "type": segment.shape.value, "visible": True, "rotation": 0,
-        "width": 0, "height": 0, "x": x, "y": y,
+        "id": segment.id,
+        "name": segment.name or "",
+        "type": segment.shape.value,
+        "visible": True,
+        "rotation": 0,
+        "width": 0,
+        "height": 0,
+        "x": x,
+        "y": y,
         "polyline": [{"x": px, "y": py} for px, py in points],
-        "properties": [{"name": "direction", "propertytype": "direction", "type": "string",
-                        "value": segment.direction.value}, *_other_name(segment)],
+        "properties": [
+            {"name": "direction", "propertytype": "direction", "type": "string", "value": segment.direction.value},
+            *_other_name(segment),
+        ],
     }
 
 
@@ -154,18 +164,27 @@ def _other_name(segment: Segment) -> list[dict[str, str]]:
 
 
 def _json_text(segments: list[Segment], frame: _Frame, explicit_scale: bool) -> str:
-    header: dict[str, object] = {"type": "map", "compressionlevel": -1, "tilesets": [],
-                                 **_map_attributes(segments, frame)}
+    header: dict[str, object] = {
+        "type": "map",
+        "compressionlevel": -1,
+        "tilesets": [],
+        **_map_attributes(segments, frame),
+    }
     if explicit_scale:
-        header["properties"] = [{"name": "meters_per_pixel", "type": "float",
-                                 "value": frame.meters_per_pixel}]
-    layer = {"type": "objectgroup", "id": 1, "name": _LAYER_NAME, "draworder": "topdown",
-             "opacity": 1, "visible": True, "x": 0, "y": 0}
-    objects = ",\n".join("  " + json.dumps(_json_object(segment, frame), separators=(",", ":"))
-                         for segment in segments)
+        header["properties"] = [{"name": "meters_per_pixel", "type": "float", "value": frame.meters_per_pixel}]
+    layer = {
+        "type": "objectgroup",
+        "id": 1,
+        "name": _LAYER_NAME,
+        "draworder": "topdown",
+        "opacity": 1,
+        "visible": True,
+        "x": 0,
+        "y": 0,
+    }
+    objects = ",\n".join("  " + json.dumps(_json_object(segment, frame), separators=(",", ":")) for segment in segments)
     # One object per line: diffs of saved scenarios stay readable and dumping stays fast.
-    return (_json_open(header) + ',"layers":[\n ' + _json_open(layer) + ',"objects":[\n'
-            + objects + "\n ]}\n]}\n")
+    return _json_open(header) + ',"layers":[\n ' + _json_open(layer) + ',"objects":[\n' + objects + "\n ]}\n]}\n"
 
 
 # --- TMX -----------------------------------------------------------------------------------------
@@ -179,15 +198,17 @@ def _tmx_object(segment: Segment, frame: _Frame) -> str:
     (x, y), points = _pixel_polyline(segment, frame)
     point_text = " ".join(f"{_tmx_number(px)},{_tmx_number(py)}" for px, py in points)
     name = f"name={quoteattr(segment.name)} " if segment.name else ""
-    return (f'  <object id="{segment.id}" {name}type={quoteattr(segment.shape.value)} '
-            f'x="{_tmx_number(x)}" y="{_tmx_number(y)}">\n'
-            "   <properties>\n"
-            f'    <property name="direction" propertytype="direction" '
-            f"value={quoteattr(segment.direction.value)}/>\n"
-            + "".join(f'    <property name="other_name" value={quoteattr(p["value"])}/>\n' for p in _other_name(segment))
-            + "   </properties>\n"
-            f'   <polyline points="{point_text}"/>\n'
-            "  </object>\n")
+    return (
+        f'  <object id="{segment.id}" {name}type={quoteattr(segment.shape.value)} '
+        f'x="{_tmx_number(x)}" y="{_tmx_number(y)}">\n'
+        "   <properties>\n"
+        f'    <property name="direction" propertytype="direction" '
+        f"value={quoteattr(segment.direction.value)}/>\n"
+        + "".join(f'    <property name="other_name" value={quoteattr(p["value"])}/>\n' for p in _other_name(segment))
+        + "   </properties>\n"
+        f'   <polyline points="{point_text}"/>\n'
+        "  </object>\n"
+    )
 
 
 def _tmx_text(segments: list[Segment], frame: _Frame, explicit_scale: bool) -> str:
@@ -196,8 +217,10 @@ def _tmx_text(segments: list[Segment], frame: _Frame, explicit_scale: bool) -> s
     attribute_text = " ".join(f'{name}="{value}"' for name, value in attributes.items())
     parts = ['<?xml version="1.0" encoding="UTF-8"?>\n', f"<map {attribute_text}>\n"]
     if explicit_scale:
-        parts.append(" <properties>\n  <property name=\"meters_per_pixel\" type=\"float\" "
-                     f'value="{frame.meters_per_pixel!r}"/>\n </properties>\n')
+        parts.append(
+            ' <properties>\n  <property name="meters_per_pixel" type="float" '
+            f'value="{frame.meters_per_pixel!r}"/>\n </properties>\n'
+        )
     parts.append(f' <objectgroup id="1" name="{_LAYER_NAME}">\n')
     parts.extend(_tmx_object(segment, frame) for segment in segments)
     parts.append(" </objectgroup>\n</map>\n")

@@ -87,9 +87,7 @@ def _syntax_error(exc: yaml.YAMLError, text: str, path: Path, error_type: type[L
     return error_type(f"invalid YAML: {exc}", Location(path))
 
 
-def load_yaml_with_marks(
-    path: Path | str, *, error_type: type[LoadError] = SuiteError
-) -> tuple[Any, Locate]:
+def load_yaml_with_marks(path: Path | str, *, error_type: type[LoadError] = SuiteError) -> tuple[Any, Locate]:
     """Load one YAML document safely; return the data and ``locate(path, *, key=False) -> Location``.
 
     ``locate(("scenarios", 2, "expect", "tasks"))`` gives the line and column of that value;
@@ -125,9 +123,7 @@ def _locator(file: Path, root: yaml.Node | None, pairs: _Pairs) -> Locate:
     return locate
 
 
-def _child(
-    node: yaml.Node | None, step: Hashable, pairs: _Pairs
-) -> tuple[yaml.Node | None, yaml.Node] | None:
+def _child(node: yaml.Node | None, step: Hashable, pairs: _Pairs) -> tuple[yaml.Node | None, yaml.Node] | None:
     """(key node, value node) one step down, or None; sequence items have no key node."""
     if isinstance(node, yaml.MappingNode):
         return pairs.get(id(node), {}).get(step)

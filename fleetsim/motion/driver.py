@@ -284,12 +284,17 @@ class Driver:
         self.odometer += distance
         self._last_out = plan
         coordinate = track.length - along if track.backward else along
-        start, ax, ay, dx, dy, piece, _, forward, reverse = track.pieces[track.piece_of[bisect_right(track.along, coordinate)]]
+        start, ax, ay, dx, dy, piece, _, forward, reverse = track.pieces[
+            track.piece_of[bisect_right(track.along, coordinate)]
+        ]
         fraction = (coordinate - start) / piece if piece > 0 else 0.0
         x = self.x = ax + fraction * dx
         y = self.y = ay + fraction * dy
         heading = self.heading = reverse if leg.progress is _REVERSE else forward
-        state = _new(VehicleState, (self.id, leg.segment, leg.traverse, self.progress, along, speed, x, y, heading, self.type, self.disturbed))
+        state = _new(
+            VehicleState,
+            (self.id, leg.segment, leg.traverse, self.progress, along, speed, x, y, heading, self.type, self.disturbed),
+        )
         return state, distance
 
     def _track(self, leg: FleetLeg) -> Track:

@@ -126,7 +126,9 @@ class SpeedProfile:
                 min(self.peak, self.v0 + self.acceleration * t),
             )
         if t <= self.brake_from:
-            return min(self._cruised_distance, self._accelerated_distance + self.peak * (t - self.accelerate_until)), self.peak
+            return min(
+                self._cruised_distance, self._accelerated_distance + self.peak * (t - self.accelerate_until)
+            ), self.peak
         return max(self._cruised_distance, self._braked_at(t)), self._braking_speed(t)
 
     def advance(self, t0: float, t1: float) -> float:
@@ -159,9 +161,7 @@ class SpeedProfile:
         return max(accelerated, self._braked_at(self.brake_from))
 
 
-def _checked(
-    v0: float, acceleration: float, max_speed: float, distance: float
-) -> tuple[float, float, float, float]:
+def _checked(v0: float, acceleration: float, max_speed: float, distance: float) -> tuple[float, float, float, float]:
     for name, value, positive in (
         ("v0", v0, False),
         ("acceleration", acceleration, True),

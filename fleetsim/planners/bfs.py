@@ -38,5 +38,7 @@ class BFSPlanner:
 
     def fix_legs(self, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
         plan = fleet.plans[task.vehicle_id]
-        legs = tuple(replace(leg, fixed=True) if index < self.fix_horizon else leg for index, leg in enumerate(plan.legs))
+        legs = tuple(
+            replace(leg, fixed=True) if index < self.fix_horizon else leg for index, leg in enumerate(plan.legs)
+        )
         return [FleetPlan(plan.vehicle_id, legs)]

@@ -99,7 +99,9 @@ def _legs_to_goal(
     return distance
 
 
-def _moves(came_from: Mapping[Positions, tuple[Positions, int]], end: Positions, vehicles: Sequence[int]) -> list[tuple[int, State]]:
+def _moves(
+    came_from: Mapping[Positions, tuple[Positions, int]], end: Positions, vehicles: Sequence[int]
+) -> list[tuple[int, State]]:
     moves: list[tuple[int, State]] = []
     here = end
     while here in came_from:

@@ -114,7 +114,9 @@ class FleetIndex:
     def _tables(self) -> tuple[dict[object, Counts], ...]:
         return (self.fixed_near, self.ahead_near, self.route_near, self.drives)  # type: ignore[return-value]
 
-    def _add_all(self, table: dict[object, Counts], vehicle: int, changes: Iterable[tuple[object, int]], *, near: bool) -> None:
+    def _add_all(
+        self, table: dict[object, Counts], vehicle: int, changes: Iterable[tuple[object, int]], *, near: bool
+    ) -> None:
         conflicts = self._conflicts
         for key, amount in changes:
             if not amount:

@@ -77,4 +77,3 @@ def ways_out(
                 came_from[following] = state
                 heapq.heappush(heap, (total, state_key(following), following))
     return sorted(found, key=lambda way: (bool(way.crossing), way.routes_near, way.cost, state_key(way.path[-1])))
-

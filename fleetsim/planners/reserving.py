@@ -213,7 +213,9 @@ class ReservingPlanner:
         kind = fleet.vehicles[vehicle_id].type
         return kind.max_speed**2 / (2.0 * kind.acceleration) + self.fix_ahead
 
-    def _exits(self, vehicle_id: int, beyond: tuple[FleetLeg, ...], fleet: FleetSnapshot, index: FleetIndex) -> set[int]:
+    def _exits(
+        self, vehicle_id: int, beyond: tuple[FleetLeg, ...], fleet: FleetSnapshot, index: FleetIndex
+    ) -> set[int]:
         """Segments near the next legs of vehicles that stand (or will stand) in the way further along:
         stopping there would shut them in, and they have to move before this vehicle can pass."""
         exits: set[int] = set()
@@ -236,9 +238,7 @@ class ReservingPlanner:
         if segment in self._keep_clear(vehicle_id, fleet):
             return False  # it stepped aside for others: it waits off their way until they have moved
         return not any(
-            other != vehicle_id
-            and self._rank(other, fleet) < mine
-            and not self._keep_clear(other, fleet)
+            other != vehicle_id and self._rank(other, fleet) < mine and not self._keep_clear(other, fleet)
             for other in index.ahead(segment)
         )
 
@@ -255,7 +255,9 @@ class ReservingPlanner:
 
     # -- when nothing can be fixed -------------------------------------------------------------------
 
-    def _unblock(self, task: Task, plan: FleetPlan, fleet: FleetSnapshot, layout: Layout, index: FleetIndex) -> list[FleetPlan]:
+    def _unblock(
+        self, task: Task, plan: FleetPlan, fleet: FleetSnapshot, layout: Layout, index: FleetIndex
+    ) -> list[FleetPlan]:
         """Move lower-ranked standing blockers away, step aside for them, or look for another route."""
         vehicle_id = task.vehicle_id
         if not self._standing(vehicle_id, fleet):
@@ -296,12 +298,20 @@ class ReservingPlanner:
                     way = frozenset(self._near(plan, layout))
                     self._aside[vehicle_id] = (fleet.time + self.aside_for, frozenset(keep_clear), where, way)
                     return self._committed(plans, fleet)
-        if fleet.time - since >= self.dance_after - 1e-9 and self._dance is None and fleet.time >= self._no_dance.get(vehicle_id, -math.inf):
+        if (
+            fleet.time - since >= self.dance_after - 1e-9
+            and self._dance is None
+            and fleet.time >= self._no_dance.get(vehicle_id, -math.inf)
+        ):
             dance = self._start_dance(task, plan, fleet, layout, index)
             if dance:
                 return dance
             self._no_dance[vehicle_id] = fleet.time + self.dance_retry
-        if vehicle_id not in self._haven and not self._keep_clear(vehicle_id, fleet) and self._should_look_around(vehicle_id, fleet):
+        if (
+            vehicle_id not in self._haven
+            and not self._keep_clear(vehicle_id, fleet)
+            and self._should_look_around(vehicle_id, fleet)
+        ):
             # (Not while it makes way for others: a way round would undo its move.)
             detour = self._route(task, plan.fixed_legs[-1], fleet, layout, within=self._worth(plan))
             if detour is not None and detour != plan.legs[len(plan.fixed_legs) :]:
@@ -333,12 +343,19 @@ class ReservingPlanner:
     def _near(plan: FleetPlan, layout: Layout) -> set[int]:
         return {near for leg in plan.legs for near in layout.conflicts(leg.segment)}
 
-    def _clear_idle_ahead(self, vehicle_id: int, plan: FleetPlan, fleet: FleetSnapshot, layout: Layout, index: FleetIndex) -> list[FleetPlan]:
+    def _clear_idle_ahead(
+        self, vehicle_id: int, plan: FleetPlan, fleet: FleetSnapshot, layout: Layout, index: FleetIndex
+    ) -> list[FleetPlan]:
         """Vehicles with no tasks left standing near this vehicle's next legs are moved away early, and
         those it stepped aside for (they do not move by themselves once it is out of their way)."""
         moved: list[FleetPlan] = []
         taken: set[int] = {vehicle_id}
-        ahead = [other for leg in plan.legs[1 : self.ahead_legs] for other in index.holders(vehicle_id, leg.segment) if not fleet.tasks.get(other)]
+        ahead = [
+            other
+            for leg in plan.legs[1 : self.ahead_legs]
+            for other in index.holders(vehicle_id, leg.segment)
+            if not fleet.tasks.get(other)
+        ]
         near = self._near(plan, layout) if ahead else set()
         idle = [(other, near) for other in ahead]
         aside = self._aside.get(vehicle_id)
@@ -367,7 +384,12 @@ class ReservingPlanner:
     ) -> list[FleetPlan] | None:
         """Plans that take standing ``vehicle_id`` out of ``avoid`` (and on to its goal), moving standing
         vehicles ranked below ``above`` out of its way first (up to ``depth`` deep); None if it cannot."""
-        if vehicle_id in taken or vehicle_id in self._group or not self._standing(vehicle_id, fleet) or self._recently_moved(vehicle_id, fleet):
+        if (
+            vehicle_id in taken
+            or vehicle_id in self._group
+            or not self._standing(vehicle_id, fleet)
+            or self._recently_moved(vehicle_id, fleet)
+        ):
             return None
         taken = {*taken, vehicle_id}
 
@@ -385,7 +407,9 @@ class ReservingPlanner:
         start: State = (current.segment, current.traverse, current.progress)
         capability = fleet.vehicles[vehicle_id].type.turn_capability
         lengths, turnaround, limit = self._lengths, self.turnaround_penalty, self.search_limit
-        for way in ways_out(vehicle_id, start, capability, avoid, layout, index, lengths, movable, turnaround=turnaround, limit=limit):
+        for way in ways_out(
+            vehicle_id, start, capability, avoid, layout, index, lengths, movable, turnaround=turnaround, limit=limit
+        ):
             others: list[FleetPlan] = []
             replaced: list[tuple[int, FleetPlan | None]] = []  # what the index counted before, to undo
             region = avoid | {near for segment, _, _ in (start, *way.path) for near in layout.conflicts(segment)}
@@ -406,7 +430,9 @@ class ReservingPlanner:
                 index.restore(other, old)
         return None
 
-    def _way_out_past(self, vehicle_id: int, past: int, avoid: set[int], fleet: FleetSnapshot, layout: Layout, index: FleetIndex) -> set[int]:
+    def _way_out_past(
+        self, vehicle_id: int, past: int, avoid: set[int], fleet: FleetSnapshot, layout: Layout, index: FleetIndex
+    ) -> set[int]:
         """The segments near the way ``vehicle_id`` would take out of ``avoid`` if ``past`` were not there."""
         current = fleet.plans[vehicle_id].legs[0]
         start: State = (current.segment, current.traverse, current.progress)
@@ -417,7 +443,9 @@ class ReservingPlanner:
         )  # fmt: skip
         return {near for segment, _, _ in ways[0].path for near in layout.conflicts(segment)} if ways else set()
 
-    def _away_plan(self, vehicle_id: int, current: FleetLeg, way: WayOut, fleet: FleetSnapshot, layout: Layout) -> FleetPlan | None:
+    def _away_plan(
+        self, vehicle_id: int, current: FleetLeg, way: WayOut, fleet: FleetSnapshot, layout: Layout
+    ) -> FleetPlan | None:
         """The drive to the waiting place (fixed, unless others must move first), then on to the goal."""
         free = not way.crossing
         away = tuple(FleetLeg(segment, traverse, progress, fixed=free) for segment, traverse, progress in way.path)
@@ -442,7 +470,9 @@ class ReservingPlanner:
 
     # -- the last resort: a few vehicles moved leg by leg ----------------------------------------------
 
-    def _start_dance(self, task: Task, plan: FleetPlan, fleet: FleetSnapshot, layout: Layout, index: FleetIndex) -> list[FleetPlan]:
+    def _start_dance(
+        self, task: Task, plan: FleetPlan, fleet: FleetSnapshot, layout: Layout, index: FleetIndex
+    ) -> list[FleetPlan]:
         """Search joint moves that bring this vehicle to its goal, moving the standing vehicles that
         block it (and theirs); the plans that start the dance, or nothing when no such moves are found."""
         vehicle_id = task.vehicle_id
@@ -462,10 +492,28 @@ class ReservingPlanner:
         if len(group) < 2 or not all(self._standing(member, fleet) for member in group):
             return []
         members = sorted(group)
-        blocked = {near for other, other_plan in fleet.plans.items() if other not in group for leg in other_plan.fixed_legs for near in layout.conflicts(leg.segment)}
-        starts = {member: (leg.segment, leg.traverse, leg.progress) for member in members for leg in fleet.plans[member].legs[:1]}
+        blocked = {
+            near
+            for other, other_plan in fleet.plans.items()
+            if other not in group
+            for leg in other_plan.fixed_legs
+            for near in layout.conflicts(leg.segment)
+        }
+        starts = {
+            member: (leg.segment, leg.traverse, leg.progress)
+            for member in members
+            for leg in fleet.plans[member].legs[:1]
+        }
         capabilities = {member: fleet.vehicles[member].type.turn_capability for member in members}
-        moves = choreograph(layout, members, starts, capabilities, blocked, (vehicle_id, task.goal_segment, task.goal_progress), self.dance_limit)
+        moves = choreograph(
+            layout,
+            members,
+            starts,
+            capabilities,
+            blocked,
+            (vehicle_id, task.goal_segment, task.goal_progress),
+            self.dance_limit,
+        )
         if not moves:
             return []
         plans: list[FleetPlan] = []
@@ -500,7 +548,11 @@ class ReservingPlanner:
         if dance is None or self._dance_time == fleet.time:
             return []
         self._dance_time = fleet.time
-        current = {member: (leg.segment, leg.traverse, leg.progress) for member in self._group for leg in fleet.plans[member].legs[:1]}
+        current = {
+            member: (leg.segment, leg.traverse, leg.progress)
+            for member in self._group
+            for leg in fleet.plans[member].legs[:1]
+        }
         dance.advance(current, fleet.time)
         if dance.finished or fleet.time - dance.progressed > self.dance_patience:
             self._dance, self._group = None, frozenset()
@@ -554,7 +606,9 @@ class ReservingPlanner:
         start = (last.segment, last.traverse, last.progress)
         estimate = straight_line_estimate(layout, task.goal_segment)
         limit = self.detour_limit if avoid_held else None
-        path = shortest_route(layout, capability, start, task.goal_segment, task.goal_progress, cost, estimate, limit, within)
+        path = shortest_route(
+            layout, capability, start, task.goal_segment, task.goal_progress, cost, estimate, limit, within
+        )
         return None if path is None else legs_along(path, task, task.goal_progress)
 
     def _should_look_around(self, vehicle_id: int, fleet: FleetSnapshot) -> bool:

@@ -100,7 +100,9 @@ def goal_not_assigned(plan: FleetPlan, ctx: CheckContext) -> Rejection | None:
     for index, leg in _goal_legs(plan):
         if leg.goal_for_task not in queued:
             listing = ", ".join(str(task_id) for task_id in sorted(queued)) or "none"
-            msg = f"marks the goal of task {leg.goal_for_task}, which is not in this vehicle's queue (queued: {listing})"
+            msg = (
+                f"marks the goal of task {leg.goal_for_task}, which is not in this vehicle's queue (queued: {listing})"
+            )
             return _reject(RejectionCode.GOAL_NOT_ASSIGNED, plan, index, msg)
     return None
 
@@ -159,7 +161,12 @@ def goal_direction(plan: FleetPlan, ctx: CheckContext) -> Rejection | None:
 
 def empty_plan(plan: FleetPlan, ctx: CheckContext) -> Rejection | None:
     if not plan.legs:
-        return _reject(RejectionCode.EMPTY_PLAN, plan, None, "the plan has no legs; it must at least hold the leg the vehicle is on")
+        return _reject(
+            RejectionCode.EMPTY_PLAN,
+            plan,
+            None,
+            "the plan has no legs; it must at least hold the leg the vehicle is on",
+        )
     return None
 
 

@@ -27,7 +27,9 @@ Method = Literal["plan_routes", "fix_legs"]
 Invoke = Callable[[str, Callable[..., object], int, Task, FleetSnapshot, Layout], object]
 
 
-def _direct(method: str, call: Callable[..., object], vehicle_id: int, task: Task, fleet: FleetSnapshot, layout: Layout) -> object:
+def _direct(
+    method: str, call: Callable[..., object], vehicle_id: int, task: Task, fleet: FleetSnapshot, layout: Layout
+) -> object:
     return call(task, fleet, layout)
 
 
@@ -212,7 +214,9 @@ class FleetController:
                 self.tasks.complete(goal, time)  # already on the goal leg
                 completed.append(goal)
             accepted.append(result)
-        return CallOutcome(vehicle_id, method, task, previous, tuple(accepted), tuple(rejections), errors, tuple(completed))
+        return CallOutcome(
+            vehicle_id, method, task, previous, tuple(accepted), tuple(rejections), errors, tuple(completed)
+        )
 
     def bookkeeping(self) -> tuple[Task, ...]:
         """Step 1: completed tasks leave their queues and their goal markers leave the plans."""
@@ -222,7 +226,9 @@ class FleetController:
         for task in dropped:
             plan = self._plans[task.vehicle_id]
             if any(leg.goal_for_task == task.id for leg in plan.legs):
-                legs = tuple(replace(leg, goal_for_task=None) if leg.goal_for_task == task.id else leg for leg in plan.legs)
+                legs = tuple(
+                    replace(leg, goal_for_task=None) if leg.goal_for_task == task.id else leg for leg in plan.legs
+                )
                 self._put_plan(FleetPlan(task.vehicle_id, legs))
                 self._alerts = None
         return dropped

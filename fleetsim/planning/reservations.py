@@ -112,7 +112,9 @@ class ReservationIndex:
         """Bring the reservations up to ``plans``: out with what changed plans gave up, in with the new."""
         held = self._held
         gone = [vehicle for vehicle in held if vehicle not in plans]
-        changed = [vehicle for vehicle, plan in plans.items() if (entry := held.get(vehicle)) is None or entry[0] is not plan]
+        changed = [
+            vehicle for vehicle, plan in plans.items() if (entry := held.get(vehicle)) is None or entry[0] is not plan
+        ]
         if not gone and not changed:
             return
         touched: set[int] = set()

@@ -134,7 +134,11 @@ def write_run_artifacts(
             write_text_atomically(folder / PICTURE_FILE, picture[1])
             paths["picture"] = str(folder / PICTURE_FILE)
         _write_result(folder, result, paths, extra)  # in case the recording is cut short
-        paths["mcap"] = str(record_mcap(folder / MCAP_FILE, scenario, lines, every=record_every, stuck=stuck_overlay(result.failures)).path)
+        paths["mcap"] = str(
+            record_mcap(
+                folder / MCAP_FILE, scenario, lines, every=record_every, stuck=stuck_overlay(result.failures)
+            ).path
+        )
         write_text_atomically(folder / RVIZ_FILE, rviz_config(scenario, RVIZ_CONFIG.read_text(encoding="utf-8")))
         paths["rviz"] = str(folder / RVIZ_FILE)
     _write_result(folder, result, paths, extra)

@@ -139,7 +139,9 @@ class FleetTransforms:
             parent_bytes, child_bytes = parent.encode() + b"\0", child.encode() + b"\0"
             self._heads.append((len(parent_bytes), parent_bytes, len(child_bytes), child_bytes))
         sample = [(float(k), float(-k), 0.25 * k) for k in range(len(self.children))]
-        self._fast = bool(self.children) and self._pack(1_234_567_890_123, sample) == self._slow(1_234_567_890_123, sample)
+        self._fast = bool(self.children) and self._pack(1_234_567_890_123, sample) == self._slow(
+            1_234_567_890_123, sample
+        )
 
     def _pack(self, time_ns: int, poses: Sequence[tuple[float, float, float]]) -> bytes:
         seconds, nanoseconds = divmod(time_ns, 1_000_000_000)
@@ -151,7 +153,9 @@ class FleetTransforms:
 
     def _slow(self, time_ns: int, poses: Sequence[tuple[float, float, float]]) -> bytes:
         time = stamp(time_ns)
-        return serialise(tf_message([transform(time, self.parent, child, *pose) for child, pose in zip(self.children, poses)]))
+        return serialise(
+            tf_message([transform(time, self.parent, child, *pose) for child, pose in zip(self.children, poses)])
+        )
 
     def serialise(self, time_ns: int, poses: Sequence[tuple[float, float, float]]) -> bytes:
         """The message at ``time_ns`` with each frame at its ``(x, y, heading)``, in ``children`` order."""
@@ -276,9 +280,21 @@ def path_points(polyline: Sequence[Point], z: float = 0.0) -> list[Any]:
     return [point(x=float(x), y=float(y), z=float(z)) for x, y in polyline]
 
 
-def line_strip(time: Stamp, namespace: str, marker_id: int, path: Sequence[Any], width: float, rgba: RGBA, frame: str = "map") -> Any:
+def line_strip(
+    time: Stamp, namespace: str, marker_id: int, path: Sequence[Any], width: float, rgba: RGBA, frame: str = "map"
+) -> Any:
     """One LINE_STRIP marker in ``frame`` (locked to it unless ``map``) along ``path`` (from :func:`path_points`)."""
-    return _marker(time, frame, namespace, marker_id, 4, scale=(width, 0.0, 0.0), rgba=rgba, points=path, frame_locked=frame != "map")
+    return _marker(
+        time,
+        frame,
+        namespace,
+        marker_id,
+        4,
+        scale=(width, 0.0, 0.0),
+        rgba=rgba,
+        points=path,
+        frame_locked=frame != "map",
+    )
 
 
 def text_marker(
@@ -299,15 +315,29 @@ def text_marker(
     )  # fmt: skip
 
 
-def arrow(time: Stamp, namespace: str, marker_id: int, start: tuple[float, float, float], end: tuple[float, float, float],
-          shaft: float, rgba: RGBA) -> Any:
+def arrow(
+    time: Stamp,
+    namespace: str,
+    marker_id: int,
+    start: tuple[float, float, float],
+    end: tuple[float, float, float],
+    shaft: float,
+    rgba: RGBA,
+) -> Any:
     """An ARROW marker in ``map`` from ``start`` to ``end`` (head diameter and length follow the shaft)."""
     point = _type("geometry_msgs/msg/Point")
-    ends = [point(x=float(start[0]), y=float(start[1]), z=float(start[2])), point(x=float(end[0]), y=float(end[1]), z=float(end[2]))]
-    return _marker(time, "map", namespace, marker_id, 0, scale=(shaft, 2.5 * shaft, 3.0 * shaft), rgba=rgba, points=ends)
+    ends = [
+        point(x=float(start[0]), y=float(start[1]), z=float(start[2])),
+        point(x=float(end[0]), y=float(end[1]), z=float(end[2])),
+    ]
+    return _marker(
+        time, "map", namespace, marker_id, 0, scale=(shaft, 2.5 * shaft, 3.0 * shaft), rgba=rgba, points=ends
+    )
 
 
-def disc(time: Stamp, namespace: str, marker_id: int, at: tuple[float, float, float], diameter: float, rgba: RGBA) -> Any:
+def disc(
+    time: Stamp, namespace: str, marker_id: int, at: tuple[float, float, float], diameter: float, rgba: RGBA
+) -> Any:
     """A flat CYLINDER marker in ``map`` centred at ``at`` (a ring-like mark round a vehicle)."""
     return _marker(time, "map", namespace, marker_id, 3, pose=_pose(*at), scale=(diameter, diameter, 0.04), rgba=rgba)
 

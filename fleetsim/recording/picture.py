@@ -25,7 +25,14 @@ from fleetsim.scenario import Scenario, Vehicle
 from fleetsim.sim.report import first_line
 from fleetsim.sim.result import MOMENTLESS, Failure, RunResult
 
-__all__ = ["failure_caption", "failure_picture", "failure_step", "picture_overlays", "render_frame_svg", "stuck_details"]
+__all__ = [
+    "failure_caption",
+    "failure_picture",
+    "failure_step",
+    "picture_overlays",
+    "render_frame_svg",
+    "stuck_details",
+]
 
 _MAP = "#a8a8a8"
 _ALERT = "#ff8c00"
@@ -63,7 +70,11 @@ def render_frame_svg(
     rejection (its ``plan`` and ``leg_index``); the refused plan is drawn with its offending leg marked.
     """
     font = 0.4 * pixels_per_metre
-    legends = [_LEGEND, *([_STUCK_LEGEND] if stuck else []), *([_REJECTED_LEGEND] if rejected and rejected.get("plan") else [])]
+    legends = [
+        _LEGEND,
+        *([_STUCK_LEGEND] if stuck else []),
+        *([_REJECTED_LEGEND] if rejected and rejected.get("plan") else []),
+    ]
     legends += [_DISTURBED_LEGEND] if frame.disturbed else []
     view = _frame(scenario.layout, margin=1.5, pixels_per_metre=pixels_per_metre)
     width = max(view.width, _MIN_WIDTH)
@@ -72,16 +83,22 @@ def render_frame_svg(
     legend_lines = [part for legend in legends for part in _wrap(legend, width - 2 * font, 0.7 * font)]
     top = (0.8 + 1.25 * len(caption_lines) + 0.95 * len(legend_lines) + 0.6) * font
     # Centre the map when the picture is wider than it.
-    view = replace(view, min_x=view.min_x - (width - view.width) / 2 / view.scale, width=width, height=view.height + top, top=top)
+    view = replace(
+        view, min_x=view.min_x - (width - view.width) / 2 / view.scale, width=width, height=view.height + top, top=top
+    )
     colours = {vid: svg_colour(rgba) for vid, rgba in vehicle_colours(scenario).items()}
     y = 0.8 * font
     text = ['<g class="caption" font-family="sans-serif">']
     for line in caption_lines:
         y += 1.25 * font
-        text.append(f'<text class="caption-text" x="{font:.1f}" y="{y - 0.25 * font:.1f}" font-size="{font:.1f}" fill="{_INK}">{escape(line)}</text>')
+        text.append(
+            f'<text class="caption-text" x="{font:.1f}" y="{y - 0.25 * font:.1f}" font-size="{font:.1f}" fill="{_INK}">{escape(line)}</text>'
+        )
     for line in legend_lines:
         y += 0.95 * font
-        text.append(f'<text class="legend" x="{font:.1f}" y="{y:.1f}" font-size="{0.7 * font:.1f}" fill="#555555">{escape(line)}</text>')
+        text.append(
+            f'<text class="legend" x="{font:.1f}" y="{y:.1f}" font-size="{0.7 * font:.1f}" fill="#555555">{escape(line)}</text>'
+        )
     text.append("</g>")
     body = [
         *_alerts_svg(scenario, frame, view),
@@ -99,7 +116,9 @@ def render_frame_svg(
 
 def _wrap(text: str, width: float, font: float) -> list[str]:
     """``text`` in lines of at most ``width`` user units at ``font`` size (about 0.6 em a character)."""
-    return textwrap.wrap(" ".join(text.split()), width=max(20, int(width / (0.6 * font))), break_on_hyphens=False) or [""]
+    return textwrap.wrap(" ".join(text.split()), width=max(20, int(width / (0.6 * font))), break_on_hyphens=False) or [
+        ""
+    ]
 
 
 def _rejected_svg(scenario: Scenario, view: _Frame, rejected: Mapping[str, Any]) -> list[str]:
@@ -107,7 +126,9 @@ def _rejected_svg(scenario: Scenario, view: _Frame, rejected: Mapping[str, Any])
     layout = scenario.layout
     width = 0.12 * view.scale
     offending = rejected.get("leg_index")
-    parts = [f'<g class="rejected-plan" data-vehicle="{int(rejected.get("vehicle", 0))}" data-code="{escape(str(rejected.get("code", "")))}" fill="none">']
+    parts = [
+        f'<g class="rejected-plan" data-vehicle="{int(rejected.get("vehicle", 0))}" data-code="{escape(str(rejected.get("code", "")))}" fill="none">'
+    ]
     for index, leg in enumerate(rejected.get("plan", ())):
         segment = layout.segments.get(int(leg["segment"]))
         if segment is None:
@@ -171,7 +192,20 @@ def _waits_svg(scenario: Scenario, frame: Frame, view: _Frame, stuck: Mapping[st
                 continue
             cycle = (source, target) in in_cycle
             colour = _CYCLE if cycle else _WAITS
-            parts.append(_relation_arrow(view, frame.poses[source], frame.poses[target], radius[source], radius[target], colour, kind, cycle, source, target))
+            parts.append(
+                _relation_arrow(
+                    view,
+                    frame.poses[source],
+                    frame.poses[target],
+                    radius[source],
+                    radius[target],
+                    colour,
+                    kind,
+                    cycle,
+                    source,
+                    target,
+                )
+            )
     for root in stuck.get("roots", ()):
         for vid in root.get("vehicles", ()):
             pose = frame.poses.get(int(vid))
@@ -187,7 +221,16 @@ def _waits_svg(scenario: Scenario, frame: Frame, view: _Frame, stuck: Mapping[st
 
 
 def _relation_arrow(
-    view: _Frame, a: Pose, b: Pose, from_radius: float, to_radius: float, colour: str, kind: str, cycle: bool, source: int, target: int
+    view: _Frame,
+    a: Pose,
+    b: Pose,
+    from_radius: float,
+    to_radius: float,
+    colour: str,
+    kind: str,
+    cycle: bool,
+    source: int,
+    target: int,
 ) -> str:
     """A line from vehicle ``a``'s edge to vehicle ``b``'s edge with a head at ``b``."""
     dx, dy = b.x - a.x, b.y - a.y
@@ -235,11 +278,17 @@ def _plans_svg(scenario: Scenario, frame: Frame, view: _Frame, colours: dict[int
     parts: list[str] = []
     for vid in sorted(frame.plans):
         colour, opacity = colours[vid]
-        parts.append(f'<g class="plan" data-vehicle="{vid}" stroke="{colour}" stroke-opacity="{opacity:.3f}" fill="none">')
+        parts.append(
+            f'<g class="plan" data-vehicle="{vid}" stroke="{colour}" stroke-opacity="{opacity:.3f}" fill="none">'
+        )
         for index, leg in enumerate(frame.plans[vid].legs):
             segment = layout.segments[leg.segment]
             kind = "fixed" if leg.fixed else "planned"
-            style = f'stroke-width="{thick:.2f}"' if leg.fixed else f'stroke-width="{thin:.2f}" stroke-dasharray="{3 * thin:.2f} {2 * thin:.2f}"'
+            style = (
+                f'stroke-width="{thick:.2f}"'
+                if leg.fixed
+                else f'stroke-width="{thin:.2f}" stroke-dasharray="{3 * thin:.2f} {2 * thin:.2f}"'
+            )
             parts.append(
                 f'<polyline class="leg {kind}" data-segment="{leg.segment}" data-leg="{index}" '
                 f'points="{view.points(segment.waypoints)}" {style} stroke-linecap="round" stroke-linejoin="round"/>'
@@ -306,7 +355,12 @@ def _vehicle_outline(vehicle: Vehicle, pose: Pose) -> tuple[list[Point], list[Po
     def at(along: float, left: float) -> Point:
         return (pose.x + along * ax + left * nx, pose.y + along * ay + left * ny)
 
-    body = [at(half_length, half_width), at(-half_length, half_width), at(-half_length, -half_width), at(half_length, -half_width)]
+    body = [
+        at(half_length, half_width),
+        at(-half_length, half_width),
+        at(-half_length, -half_width),
+        at(half_length, -half_width),
+    ]
     depth = min(0.6 * half_length, 1.2 * half_width)
     nose = [at(half_length, 0.0), at(half_length - depth, 0.7 * half_width), at(half_length - depth, -0.7 * half_width)]
     return body, nose

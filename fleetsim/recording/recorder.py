@@ -127,7 +127,11 @@ def _frame_name(vehicle_id: int) -> str:
 def fleet_urdf(scenario: Scenario) -> str:
     """One robot for the whole fleet: root link ``fleet``, one floating-jointed link per vehicle."""
     colours = vehicle_colours(scenario)
-    parts = ['<?xml version="1.0"?>', f"<robot name={quoteattr('fleetsim_' + scenario.name)}>", '  <link name="fleet"/>']
+    parts = [
+        '<?xml version="1.0"?>',
+        f"<robot name={quoteattr('fleetsim_' + scenario.name)}>",
+        '  <link name="fleet"/>',
+    ]
     for vehicle in sorted(scenario.vehicles, key=lambda v: v.id):
         kind = vehicle.type
         name = _frame_name(vehicle.id)
@@ -162,7 +166,9 @@ class _Bag:
             if typename not in schemas:
                 schemas[typename] = self.writer.register_schema(typename, "ros2msg", m.schema_text(typename))
             qos = QOS_TRANSIENT_LOCAL if latched else QOS_VOLATILE
-            self.channels[topic] = self.writer.register_channel(topic, "cdr", schemas[typename], {"offered_qos_profiles": qos})
+            self.channels[topic] = self.writer.register_channel(
+                topic, "cdr", schemas[typename], {"offered_qos_profiles": qos}
+            )
             self.sequence[topic] = 0
 
     def write(self, topic: str, time_ns: int, message: Any) -> None:
@@ -222,7 +228,11 @@ class _Scene:
         for vehicle in sorted(self.scenario.vehicles, key=lambda v: v.id):
             at = (0.0, 0.0, vehicle.type.height + 0.4)
             size = max(0.25, 0.6 * vehicle.type.width)
-            markers.append(m.text_marker(time, _frame_name(vehicle.id), "labels", vehicle.id, str(vehicle.id), at, size, _WHITE, True))
+            markers.append(
+                m.text_marker(
+                    time, _frame_name(vehicle.id), "labels", vehicle.id, str(vehicle.id), at, size, _WHITE, True
+                )
+            )
         return m.marker_array(markers)
 
     def plans(self, time: m.Stamp, plans: Mapping[int, FleetPlan]) -> Any | None:
@@ -259,13 +269,17 @@ class _Scene:
         markers = [m.delete_all(time, "")]
         placed: list[tuple[float, float, float, float]] = []
         for number, alert in enumerate(alerts):
-            markers.append(m.line_list(time, "alert_segments", number, self.points([alert.segment], 0.05), _ALERT_WIDTH, _ORANGE))
+            markers.append(
+                m.line_list(time, "alert_segments", number, self.points([alert.segment], 0.05), _ALERT_WIDTH, _ORANGE)
+            )
             text = alert_label(alert)
             x, y = self._free_spot(self.scenario.layout.segments[alert.segment], text, placed)
             markers.append(m.text_marker(time, "map", "alert_text", number, text, (x, y, 1.0), self.letter, _ORANGE))
         return m.marker_array(markers)
 
-    def _free_spot(self, segment: Segment, text: str, placed: list[tuple[float, float, float, float]]) -> tuple[float, float]:
+    def _free_spot(
+        self, segment: Segment, text: str, placed: list[tuple[float, float, float, float]]
+    ) -> tuple[float, float]:
         """A spot beside ``segment``'s middle where ``text`` overlaps no box in ``placed`` (which it joins)."""
         mx, my, heading = segment.pose_at(segment.length / 2, Traverse.FORWARD)
         half_w, half_h = 0.3 * self.letter * len(text), 0.6 * self.letter
@@ -283,14 +297,19 @@ class _Scene:
     def stuck(self, time: m.Stamp, poses: Mapping[int, Any], stuck: Mapping[str, Any]) -> Any:
         """Who waits for whom at the end of a stuck run (the failure's details, as in result.json)."""
         markers = [m.delete_all(time, "")]
-        contested = sorted({int(s) for f in stuck.get("vehicles", ()) for s in f.get("contested", ())} & set(self.scenario.layout.segments))
+        contested = sorted(
+            {int(s) for f in stuck.get("vehicles", ()) for s in f.get("contested", ())}
+            & set(self.scenario.layout.segments)
+        )
         if contested:
             markers.append(m.line_list(time, "contested", 0, self.points(contested, 0.04), 0.4, _PURPLE))
         in_cycle = {(int(c[i]), int(c[(i + 1) % len(c)])) for c in stuck.get("cycles", ()) for i in range(len(c))}
         numbers: dict[str, int] = {}
         for finding in stuck.get("vehicles", ()):
             source = int(finding["vehicle"])
-            relations = [(int(b), True) for b in finding.get("blocked_by", ())] + [(int(b), False) for b in finding.get("planned_near", ())]
+            relations = [(int(b), True) for b in finding.get("blocked_by", ())] + [
+                (int(b), False) for b in finding.get("planned_near", ())
+            ]
             for target, waits in relations:
                 if source not in poses or target not in poses:
                     continue
@@ -300,15 +319,23 @@ class _Scene:
                 a, b = poses[source], poses[target]
                 start, end = (a.x, a.y, 0.6), (b.x, b.y, 0.6)
                 colour = _CYCLE_RED if cycle else _WAITS
-                markers.append(m.arrow(time, namespace, numbers[namespace], start, end, 0.12 if waits else 0.05, colour))
+                markers.append(
+                    m.arrow(time, namespace, numbers[namespace], start, end, 0.12 if waits else 0.05, colour)
+                )
         radius = {v.id: v.type.swept_radius for v in self.scenario.vehicles}
         roots = sorted({int(v) for root in stuck.get("roots", ()) for v in root.get("vehicles", ())} & set(poses))
         for number, vid in enumerate(roots):
-            markers.append(m.disc(time, "root_cause", number, (poses[vid].x, poses[vid].y, 0.02), 2 * radius[vid] + 0.5, _ROOT_RED))
+            markers.append(
+                m.disc(time, "root_cause", number, (poses[vid].x, poses[vid].y, 0.02), 2 * radius[vid] + 0.5, _ROOT_RED)
+            )
         x, y = self.top_left
         headline = str(stuck.get("headline", ""))
         if headline:
-            markers.append(m.text_marker(time, "map", "stuck_text", 0, headline, (x, y + 1.5 * self.letter, 0.0), self.letter, _CYCLE_RED))
+            markers.append(
+                m.text_marker(
+                    time, "map", "stuck_text", 0, headline, (x, y + 1.5 * self.letter, 0.0), self.letter, _CYCLE_RED
+                )
+            )
         return m.marker_array(markers)
 
     def disturbed(self, time: m.Stamp, disturbed: Mapping[int, str]) -> Any:
@@ -317,23 +344,34 @@ class _Scene:
         types = {v.id: v.type for v in self.scenario.vehicles}
         for vid, kind in disturbed.items():
             half_length, half_width = 0.5 * types[vid].length + 0.25, 0.5 * types[vid].width + 0.25
-            corners = [(half_length, half_width), (-half_length, half_width), (-half_length, -half_width), (half_length, -half_width)]
+            corners = [
+                (half_length, half_width),
+                (-half_length, half_width),
+                (-half_length, -half_width),
+                (half_length, -half_width),
+            ]
             outline = m.path_points([*corners, corners[0]], 0.05)
             markers.append(m.line_strip(time, "disturbed", vid, outline, 0.08, _MAGENTA, frame=_frame_name(vid)))
             at = (0.0, 0.0, types[vid].height + 0.9)
-            markers.append(m.text_marker(time, _frame_name(vid), "disturbed_label", vid, kind.upper(), at, 0.4, _MAGENTA, True))
+            markers.append(
+                m.text_marker(time, _frame_name(vid), "disturbed_label", vid, kind.upper(), at, 0.4, _MAGENTA, True)
+            )
         return m.marker_array(markers)
 
     def sim_time(self, time: m.Stamp, seconds: float) -> Any:
         x, y = self.top_left
-        return m.marker_array([m.text_marker(time, "map", "sim_time", 0, f"t = {seconds:.2f} s", (x, y, 0.0), self.letter, _WHITE)])
+        return m.marker_array(
+            [m.text_marker(time, "map", "sim_time", 0, f"t = {seconds:.2f} s", (x, y, 0.0), self.letter, _WHITE)]
+        )
 
 
 def alert_label(alert: CollisionAlert) -> str:
     """``segment 7: 1 ⟂ 2``: the segment, its primary holders, then the others (the short form)."""
     primary = ",".join(map(str, alert.primary))
     secondary = ",".join(map(str, alert.secondary))
-    return f"segment {alert.segment}: {primary} \u27c2 {secondary}" if secondary else f"segment {alert.segment}: {primary}"
+    return (
+        f"segment {alert.segment}: {primary} \u27c2 {secondary}" if secondary else f"segment {alert.segment}: {primary}"
+    )
 
 
 def _log_lines(event: Sequence[Any]) -> tuple[int, str] | None:
@@ -367,7 +405,9 @@ def _with_last(frames: Iterable[Frame]) -> Iterator[tuple[Frame, bool]]:
         yield previous, True
 
 
-def _write_frames(bag: _Bag, scenario: Scenario, frames: Iterable[Frame], every: int, stuck: Mapping[str, Any] | None = None) -> int:
+def _write_frames(
+    bag: _Bag, scenario: Scenario, frames: Iterable[Frame], every: int, stuck: Mapping[str, Any] | None = None
+) -> int:
     """Write the frames; the number written in full (with ``/tf``).
 
     Every ``every``-th step, the first and the last are written in full: the clock, every vehicle's
@@ -430,7 +470,12 @@ def partial_path(path: Path) -> Path:
 
 
 def record_mcap(
-    path: Path, scenario: Scenario, trace_lines: Sequence[str], *, every: int = 1, stuck: Mapping[str, Any] | None = None
+    path: Path,
+    scenario: Scenario,
+    trace_lines: Sequence[str],
+    *,
+    every: int = 1,
+    stuck: Mapping[str, Any] | None = None,
 ) -> Recording:
     """Write the run of ``scenario`` whose trace is ``trace_lines`` to ``path`` (``.mcap``).
 

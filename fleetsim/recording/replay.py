@@ -73,7 +73,15 @@ def _pose(record: Sequence[Any]) -> Pose:
     _, segment, traverse, progress, x, y, heading, speed = record
     return _new(
         Pose,
-        (segment, _TRAVERSE[traverse], _PROGRESS[progress], x / 1000.0, y / 1000.0, heading * _RADIANS_PER_CENTIDEGREE, speed / 1000.0),
+        (
+            segment,
+            _TRAVERSE[traverse],
+            _PROGRESS[progress],
+            x / 1000.0,
+            y / 1000.0,
+            heading * _RADIANS_PER_CENTIDEGREE,
+            speed / 1000.0,
+        ),
     )
 
 

@@ -53,7 +53,10 @@ def rviz_config(scenario: Scenario, template: str) -> str:
     """The shipped RViz layout with its view framing ``scenario``'s map."""
     view = framed_view(scenario)
     cx, cy = view.centre
-    framed = template.replace("      Scale: 20\n      X: 0\n      Y: 0\n", f"      Scale: {view.scale:.3f}\n      X: {cx:.3f}\n      Y: {cy:.3f}\n")
+    framed = template.replace(
+        "      Scale: 20\n      X: 0\n      Y: 0\n",
+        f"      Scale: {view.scale:.3f}\n      X: {cx:.3f}\n      Y: {cy:.3f}\n",
+    )
     if framed == template:
         msg = "the RViz layout template has no 'Scale: 20 / X: 0 / Y: 0' view to frame"
         raise ValueError(msg)

@@ -153,8 +153,12 @@ def _legend(frame: _Frame, font: float, highlight: int) -> list[str]:
     parts = []
     for row, (colour, text) in enumerate(entries):
         y = font * (1.5 + 1.4 * row)
-        parts.append(f'<rect x="{font:.1f}" y="{y - font * 0.5:.1f}" width="{font:.1f}" height="{font:.1f}" fill="{colour}"/>')
-        parts.append(f'<text x="{font * 2.5:.1f}" y="{y:.1f}" font-size="{font:.1f}" dominant-baseline="middle">{escape(text)}</text>')
+        parts.append(
+            f'<rect x="{font:.1f}" y="{y - font * 0.5:.1f}" width="{font:.1f}" height="{font:.1f}" fill="{colour}"/>'
+        )
+        parts.append(
+            f'<text x="{font * 2.5:.1f}" y="{y:.1f}" font-size="{font:.1f}" dominant-baseline="middle">{escape(text)}</text>'
+        )
     return parts
 
 

@@ -43,7 +43,10 @@ _GROUPS: dict[RootKind, tuple[str, str]] = {
     "idle": ("vehicle with no tasks left in the way", "vehicles with no tasks left in the way"),
     "no-route": ("vehicle without a route", "vehicles without a route"),
     "no-plan": ("vehicle whose plan ends before the goal", "vehicles whose plans end before the goal"),
-    "not-fixed": ("vehicle whose free next leg the planner does not fix", "vehicles whose free next leg the planner does not fix"),
+    "not-fixed": (
+        "vehicle whose free next leg the planner does not fix",
+        "vehicles whose free next leg the planner does not fix",
+    ),
     "moving": ("vehicle still driving", "vehicles still driving"),
 }
 # Cycles listed at most (a dense knot of waiting vehicles can hold exponentially many).
@@ -282,7 +285,9 @@ def diagnose(facts: StuckFacts) -> Diagnosis:
     cycles = _cycles(graph)
     roots = _roots(graph, findings, cycles)
     chains = _chains(graph, roots, findings)
-    ordered = tuple(replace(findings[vid], chain=chains[vid]) if vid in chains else findings[vid] for vid in sorted(findings))
+    ordered = tuple(
+        replace(findings[vid], chain=chains[vid]) if vid in chains else findings[vid] for vid in sorted(findings)
+    )
     return Diagnosis(
         kind=facts.kind,
         time=facts.time,
@@ -314,7 +319,13 @@ def _finding(facts: StuckFacts, vid: int, holders: Mapping[int, list[int]]) -> F
         changed = facts.plan_changed.get(vid, 0.0)
         errors = [e for e in facts.route_errors if e["vehicle"] == vid and e["time"] >= changed - 1e-9]
         if errors:
-            return replace(base, reason="no-route", since=errors[0]["time"], route_errors=len(errors), message=str(errors[-1]["message"]))
+            return replace(
+                base,
+                reason="no-route",
+                since=errors[0]["time"],
+                route_errors=len(errors),
+                message=str(errors[-1]["message"]),
+            )
         return replace(base, plan_end=plan.legs[-1].segment)
     index = len(plan.fixed_legs)
     if index >= len(plan.legs):
@@ -339,10 +350,20 @@ def _finding(facts: StuckFacts, vid: int, holders: Mapping[int, list[int]]) -> F
     since = facts.last_moved.get(vid, 0.0)
     near_set = set(near)
     planned_near = tuple(
-        other for other in sorted(facts.plans)
-        if other != vid and any(l.segment in near_set for l in facts.plans[other].legs[len(facts.plans[other].fixed_legs):])
+        other
+        for other in sorted(facts.plans)
+        if other != vid
+        and any(l.segment in near_set for l in facts.plans[other].legs[len(facts.plans[other].fixed_legs) :])
     )
-    return replace(base, reason="not-fixed", leg_index=index, leg=leg, since=since, standing=facts.time - since, planned_near=planned_near)
+    return replace(
+        base,
+        reason="not-fixed",
+        leg_index=index,
+        leg=leg,
+        since=since,
+        standing=facts.time - since,
+        planned_near=planned_near,
+    )
 
 
 def _moving(facts: StuckFacts, base: Finding, plan: FleetPlan, state: VehicleState, goal_index: int | None) -> Finding:
@@ -377,9 +398,9 @@ def _detail(finding: Finding) -> str:
     return f"still driving ({finding.remaining or 0.0:.1f} m to its goal leg)"
 
 
-
-
-def _roots(graph: nx.DiGraph[int], findings: Mapping[int, Finding], cycles: Sequence[tuple[int, ...]]) -> tuple[RootCause, ...]:
+def _roots(
+    graph: nx.DiGraph[int], findings: Mapping[int, Finding], cycles: Sequence[tuple[int, ...]]
+) -> tuple[RootCause, ...]:
     roots = []
     for component in (sorted(c) for c in nx.strongly_connected_components(graph)):
         members = set(component)
@@ -390,13 +411,17 @@ def _roots(graph: nx.DiGraph[int], findings: Mapping[int, Finding], cycles: Sequ
         behind = sorted(set().union(*(nx.ancestors(graph, v) for v in component)) - members)
         if cyclic:
             loop = next((c for c in cycles if members.issuperset(c)), tuple(component))
-            segments = sorted({s for v in component for other, held in findings[v].held if other in members for s in held})
+            segments = sorted(
+                {s for v in component for other, held in findings[v].held if other in members for s in held}
+            )
             roots.append(RootCause("cycle", tuple(component), tuple(segments), tuple(waiting), tuple(behind), "", loop))
             continue
         vehicle = component[0]
         finding = findings.get(vehicle)
         if finding is None:  # no tasks left: it will never move by itself
-            segments = sorted({s for w in waiting for other, held in findings[w].held if other == vehicle for s in held})
+            segments = sorted(
+                {s for w in waiting for other, held in findings[w].held if other == vehicle for s in held}
+            )
             roots.append(RootCause("idle", (vehicle,), tuple(segments), tuple(waiting), tuple(behind), ""))
             continue
         kind: RootKind = finding.reason  # type: ignore[assignment]  # a sink is never waits-for
@@ -405,7 +430,9 @@ def _roots(graph: nx.DiGraph[int], findings: Mapping[int, Finding], cycles: Sequ
     return tuple(sorted(roots, key=lambda r: (-len(r.behind), _ROOT_ORDER[r.kind], r.vehicles)))
 
 
-def _chains(graph: nx.DiGraph[int], roots: Sequence[RootCause], findings: Mapping[int, Finding]) -> dict[int, tuple[int, ...]]:
+def _chains(
+    graph: nx.DiGraph[int], roots: Sequence[RootCause], findings: Mapping[int, Finding]
+) -> dict[int, tuple[int, ...]]:
     """For each waiting vehicle, the shortest way along wait-for edges to a vehicle of a root cause."""
     at_root = {v for root in roots for v in root.vehicles}
     chains: dict[int, tuple[int, ...]] = {}

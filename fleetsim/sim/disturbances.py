@@ -76,7 +76,9 @@ class DisturbanceEvent:
         return "STOP" if self.kind == "stop" else f"SLOW ×{self.factor:g}"
 
 
-def draw_stops(spec: RandomDisturbances, vehicles: tuple[int, ...], time_limit: float, time_step: float) -> tuple[Disturbance, ...]:
+def draw_stops(
+    spec: RandomDisturbances, vehicles: tuple[int, ...], time_limit: float, time_step: float
+) -> tuple[Disturbance, ...]:
     """The stops ``spec`` draws for ``vehicles`` over ``time_limit`` (see the module's description)."""
     steps = max(1, round(time_limit / time_step))
     threshold = int(spec.stops_per_vehicle_hour / 3600.0 * time_step * 2**32)
@@ -180,7 +182,9 @@ class Disturber:
             ends = now + disturbance.duration
             factor = disturbance.factor
         index = len(self._happened)
-        self._happened.append(DisturbanceEvent(vehicle, disturbance.kind, now, None, state.segment, state.x, state.y, factor))
+        self._happened.append(
+            DisturbanceEvent(vehicle, disturbance.kind, now, None, state.segment, state.x, state.y, factor)
+        )
         self._going[(vehicle, disturbance.kind)] = _Going(disturbance, ends, index)
         events.append(["disturb", vehicle, disturbance.kind])
 
@@ -192,7 +196,9 @@ class Disturber:
         else:
             driver.limit_speed(driver.type.max_speed)
         event = self._happened[going.index]
-        self._happened[going.index] = DisturbanceEvent(event.vehicle, event.kind, event.start, now, event.segment, event.x, event.y, event.factor)
+        self._happened[going.index] = DisturbanceEvent(
+            event.vehicle, event.kind, event.start, now, event.segment, event.x, event.y, event.factor
+        )
         events.append(["resume", key[0], key[1]])
 
     def _show(self, vehicles: set[int]) -> None:

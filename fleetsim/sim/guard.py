@@ -111,7 +111,9 @@ class PlannerGuard:
                 signal.setitimer(signal.ITIMER_REAL, left, interval)
             self._armed = False
 
-    def __call__(self, method: str, call: Callable[..., object], vehicle_id: int, task: object, fleet: object, layout: object) -> object:
+    def __call__(
+        self, method: str, call: Callable[..., object], vehicle_id: int, task: object, fleet: object, layout: object
+    ) -> object:
         """``call(task, fleet, layout)``, timed and guarded; ``method`` and ``vehicle_id`` are for messages."""
         start = self._call_started = _clock()
         try:
@@ -124,7 +126,9 @@ class PlannerGuard:
             raise self._overrun(method, vehicle_id, call) from None
         except PlannerProcessError as exc:  # a planner process failed: its stderr says more than our frames
             self._account(start)
-            raise PlannerFault(f"{method}() for vehicle {vehicle_id}: {exc}", vehicle_id=vehicle_id, details=exc.details) from None
+            raise PlannerFault(
+                f"{method}() for vehicle {vehicle_id}: {exc}", vehicle_id=vehicle_id, details=exc.details
+            ) from None
         except Exception as exc:
             self._account(start)
             msg = f"{method}() for vehicle {vehicle_id} raised {type(exc).__name__}: {exc}"

@@ -64,7 +64,8 @@ class _Run:
         headings = HeadingTable(scenario.layout)
         states = self.controller.states
         self.drivers = {
-            v.id: Driver(v, scenario.layout, headings, states[v.id].heading) for v in sorted(scenario.vehicles, key=lambda v: v.id)
+            v.id: Driver(v, scenario.layout, headings, states[v.id].heading)
+            for v in sorted(scenario.vehicles, key=lambda v: v.id)
         }
         self.trace = Trace(keep_lines=keep_trace)
         # Only a scenario with disturbances has a disturber: without, the run (and its hash) is as before.
@@ -108,7 +109,9 @@ class _Run:
         self.planner_error = Failure("planner-error", stamp, str(fault), details)
         events.append(["planner-error", fault.vehicle_id])
 
-    def _note(self, outcome: CallOutcome, now: float, stamp: float, events: list[list[Any]], plans: list[list[Any]]) -> None:
+    def _note(
+        self, outcome: CallOutcome, now: float, stamp: float, events: list[list[Any]], plans: list[list[Any]]
+    ) -> None:
         for plan in outcome.accepted:
             plans.append(plan_record(plan))
             if plan.vehicle_id != outcome.vehicle_id or plan != outcome.previous:
@@ -295,7 +298,9 @@ def _simulate(
         else:
             run.trace.record(step, moved, plans, events)
             if on_progress is not None and step % 50 == 0:
-                on_progress(RunProgress(end, step + 1, len(run.controller.tasks.completed()), run.controller.tasks.total))
+                on_progress(
+                    RunProgress(end, step + 1, len(run.controller.tasks.completed()), run.controller.tasks.total)
+                )
             continue
         if ended == "interrupted":
             events.append(["interrupted", signal_name(stop.signum or 0) if stop is not None else "signal"])

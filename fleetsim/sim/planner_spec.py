@@ -220,8 +220,10 @@ def _public_names(obj: object) -> list[str]:
     return [
         name
         for name in names
-        if isinstance(name, str) and not name.startswith("_")
-        and callable(getattr(obj, name, None)) and not isinstance(getattr(obj, name, None), ModuleType)
+        if isinstance(name, str)
+        and not name.startswith("_")
+        and callable(getattr(obj, name, None))
+        and not isinstance(getattr(obj, name, None), ModuleType)
     ]
 
 
@@ -250,9 +252,7 @@ def _user_frames(exc: BaseException) -> list[traceback.FrameSummary]:
     """The traceback without this module's and the import machinery's frames."""
     frames = traceback.extract_tb(exc.__traceback__)
     return [
-        frame
-        for frame in frames
-        if frame.filename != __file__ and not frame.filename.startswith("<frozen importlib")
+        frame for frame in frames if frame.filename != __file__ and not frame.filename.startswith("<frozen importlib")
     ]
 
 

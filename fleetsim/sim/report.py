@@ -38,7 +38,17 @@ _BROKEN = {
     "load-error": "loading the scenario",
 }
 
-SUMMARY_COLUMNS = ("scenario", "outcome", "tasks", "makespan", "alerts", "rejections", "route errors", "hash", "realtime")
+SUMMARY_COLUMNS = (
+    "scenario",
+    "outcome",
+    "tasks",
+    "makespan",
+    "alerts",
+    "rejections",
+    "route errors",
+    "hash",
+    "realtime",
+)
 
 
 def summary_cells(label: str, outcome: str, result: RunResult | None) -> tuple[str, ...]:
@@ -134,7 +144,9 @@ def failure_report(result: RunResult, *, heading: str, shown: int = 5) -> str:
         lines.append("")
         # What a reviewer opens first comes first: the picture, the recording and its RViz layout.
         rank = {kind: index for index, kind in enumerate(_ARTIFACT_ORDER)}
-        kinds = sorted((kind for kind in result.artifacts if kind != "folder"), key=lambda kind: (rank.get(kind, len(rank)), kind))
+        kinds = sorted(
+            (kind for kind in result.artifacts if kind != "folder"), key=lambda kind: (rank.get(kind, len(rank)), kind)
+        )
         files = [result.artifacts[kind] for kind in kinds]
         lines += [("artifacts: " if i == 0 else "           ") + path for i, path in enumerate(files)]
     return "\n".join(lines)
@@ -168,7 +180,11 @@ def route_error_lines(result: RunResult, shown: int = 10) -> list[str]:
     for message, group in list(distinct.items())[:shown]:
         vehicles = sorted({int(e["vehicle"]) for e in group if e["vehicle"] is not None})
         who = "vehicle " if len(vehicles) == 1 else "vehicles "
-        span = f"t = {group[0]['time']:.2f} s" if len(group) == 1 else f"t = {group[0]['time']:.2f}-{group[-1]['time']:.2f} s"
+        span = (
+            f"t = {group[0]['time']:.2f} s"
+            if len(group) == 1
+            else f"t = {group[0]['time']:.2f}-{group[-1]['time']:.2f} s"
+        )
         lines.append(f"  {len(group)}x, {who}{', '.join(map(str, vehicles))}, {span}: {message}")
     if len(distinct) > shown:
         lines.append(f"  ... and {len(distinct) - shown} more distinct messages (all in result.json)")

@@ -22,7 +22,17 @@ from fleetsim.sim.diagnosis import Diagnosis
 from fleetsim.sim.disturbances import DisturbanceEvent
 from fleetsim.sim.trace import Trace
 
-__all__ = ["MOMENTLESS", "AlertEvent", "DeadlockReport", "Failure", "Metrics", "RejectionEvent", "RunResult", "judge", "plan_legs"]
+__all__ = [
+    "MOMENTLESS",
+    "AlertEvent",
+    "DeadlockReport",
+    "Failure",
+    "Metrics",
+    "RejectionEvent",
+    "RunResult",
+    "judge",
+    "plan_legs",
+]
 
 # "no-counterexample": a generated suite entry whose hunt found no scenario the planner fails.
 # "interrupted": SIGINT or SIGTERM ended the run at the end of a step (fleetsim.sim.interrupt).
@@ -253,7 +263,14 @@ def judge(  # noqa: PLR0913 - the facts of a run, named
         stuck = {"waiting": list(deadlock.waiting), "cycle": list(deadlock.cycle), **deadlock.diagnosis.to_dict()}
         failures.append(Failure("deadlock", deadlock.time, deadlock.message, stuck))
     if expect.deadlock and deadlock is None:
-        failures.append(Failure("expectation", end_time, "the scenario expects a deadlock, but the run ended without one", {"expect": "deadlock"}))
+        failures.append(
+            Failure(
+                "expectation",
+                end_time,
+                "the scenario expects a deadlock, but the run ended without one",
+                {"expect": "deadlock"},
+            )
+        )
     wanted = tasks_total if expect.tasks == "all" else expect.tasks
     if tasks_completed < wanted and planner_error is None and (deadlock is None or not expect.deadlock):
         listing = ", ".join(f"task {t.id} (vehicle {t.vehicle_id} to segment {t.goal_segment})" for t in pending[:5])
@@ -273,7 +290,12 @@ def judge(  # noqa: PLR0913 - the facts of a run, named
 
 
 def _interrupted(
-    signal: str, end_time: float, tasks_total: int, tasks_completed: int, pending: tuple[Task, ...], diagnosis: Diagnosis | None
+    signal: str,
+    end_time: float,
+    tasks_total: int,
+    tasks_completed: int,
+    pending: tuple[Task, ...],
+    diagnosis: Diagnosis | None,
 ) -> Failure:
     msg = f"stopped by {signal} at the end of the step, with {tasks_completed} of {tasks_total} tasks completed"
     details: dict[str, Any] = {"signal": signal, "pending": [t.id for t in pending]}
@@ -296,12 +318,34 @@ def _rejection_details(rejection: Rejection) -> dict[str, Any]:
 
 def _judge_rejections(expect: Expectations, rejections: tuple[RejectionEvent, ...]) -> list[Failure]:
     if expect.rejections == "none":
-        return [Failure("rejection", e.time, f"plan rejected: {e.rejection}", _rejection_details(e.rejection)) for e in rejections]
+        return [
+            Failure("rejection", e.time, f"plan rejected: {e.rejection}", _rejection_details(e.rejection))
+            for e in rejections
+        ]
     if expect.rejections == "any":
-        return [] if rejections else [Failure("expectation", 0.0, "the scenario expects plan rejections, but there were none", {"expect": "rejections"})]
+        return (
+            []
+            if rejections
+            else [
+                Failure(
+                    "expectation",
+                    0.0,
+                    "the scenario expects plan rejections, but there were none",
+                    {"expect": "rejections"},
+                )
+            ]
+        )
     seen = {e.rejection.code.value for e in rejections}
     missing = [code for code in expect.rejections if code not in seen]
-    return [Failure("expectation", _first(rejections), f"the scenario expects a {code} rejection, but there was none", {"expect": "rejections"}) for code in missing]
+    return [
+        Failure(
+            "expectation",
+            _first(rejections),
+            f"the scenario expects a {code} rejection, but there was none",
+            {"expect": "rejections"},
+        )
+        for code in missing
+    ]
 
 
 def _judge_collisions(expect: Expectations, collisions: tuple[AlertEvent, ...]) -> list[Failure]:
@@ -311,7 +355,18 @@ def _judge_collisions(expect: Expectations, collisions: tuple[AlertEvent, ...]) 
             for e in collisions
         ]
     if expect.collisions == "any":
-        return [] if collisions else [Failure("expectation", 0.0, "the scenario expects collision alerts, but there were none", {"expect": "collisions"})]
+        return (
+            []
+            if collisions
+            else [
+                Failure(
+                    "expectation",
+                    0.0,
+                    "the scenario expects collision alerts, but there were none",
+                    {"expect": "collisions"},
+                )
+            ]
+        )
     seen = {e.alert.segment for e in collisions}
     missing = [segment for segment in expect.collisions if segment not in seen]
     return [

@@ -78,7 +78,10 @@ def plan_record(plan: FleetPlan) -> list[Any]:
     """[vehicle id, [[segment, traverse, progress, fixed 0/1, goal task or None], ...]]."""
     return [
         plan.vehicle_id,
-        [[leg.segment, _TRAVERSE[leg.traverse], _PROGRESS[leg.progress], int(leg.fixed), leg.goal_for_task] for leg in plan.legs],
+        [
+            [leg.segment, _TRAVERSE[leg.traverse], _PROGRESS[leg.progress], int(leg.fixed), leg.goal_for_task]
+            for leg in plan.legs
+        ],
     ]
 
 
@@ -249,5 +252,7 @@ def first_divergence(a: Sequence[str], b: Sequence[str], time_step: float) -> Di
         return Divergence(step_a, (step_a + 1) * time_step, tuple(notes) or ("the step records differ",))
     if len(a) != len(b):
         step = min(len(a), len(b)) - 1
-        return Divergence(step, step * time_step, (f"one run ended after {len(a) - 1} steps, the other after {len(b) - 1}",))
+        return Divergence(
+            step, step * time_step, (f"one run ended after {len(a) - 1} steps, the other after {len(b) - 1}",)
+        )
     return None

@@ -8,7 +8,16 @@ from hypothesis.strategies import SearchStrategy
 from fleetsim.layout.segment import Segment
 from fleetsim.strategies import geometry
 
-__all__ = ["LAYOUT_KINDS", "SMALLEST_FIRST", "check_kind", "check_range", "draw_kind_layout", "draw_layout", "layouts", "plainest_layout"]
+__all__ = [
+    "LAYOUT_KINDS",
+    "SMALLEST_FIRST",
+    "check_kind",
+    "check_range",
+    "draw_kind_layout",
+    "draw_layout",
+    "layouts",
+    "plainest_layout",
+]
 
 LAYOUT_KINDS = ("warehouse", "loop", "corridor")
 # For "any", the kind whose smallest layout is smallest comes first: Hypothesis shrinks a sampled value
@@ -86,7 +95,9 @@ def _corridor(draw: st.DrawFn, between: int) -> list[Segment]:
     return geometry.corridor(between, bays)
 
 
-def layouts(kind: str = "any", size: tuple[int, int] = (1, 3), one_way: bool | None = None) -> SearchStrategy[list[Segment]]:
+def layouts(
+    kind: str = "any", size: tuple[int, int] = (1, 3), one_way: bool | None = None
+) -> SearchStrategy[list[Segment]]:
     """Valid, connected layouts of ``kind`` (or any kind); ``size`` is an inclusive range.
 
     Size means junctions per side (warehouse), straights per side (loop) or straights between the two

@@ -61,7 +61,9 @@ def _startable(layout: Layout, segment: int, capabilities: Collection[TurnCapabi
     )
 
 
-def spare_starts(layout: Layout, capabilities: Collection[TurnCapability], among: Iterable[int] | None = None) -> frozenset[int]:
+def spare_starts(
+    layout: Layout, capabilities: Collection[TurnCapability], among: Iterable[int] | None = None
+) -> frozenset[int]:
     """Start segments pairwise apart and usable by every capability: greedily, fewest clashes first.
 
     With ``among``, only those segments are candidates.

@@ -153,14 +153,21 @@ class _Whereabouts:
         self.reach = (anywhere, alone)
         self.here = (frozenset({start}), frozenset({start}))
 
-    def goals(self, progress: Progress | None, here: tuple[frozenset[State], frozenset[State]] | None = None) -> list[int]:
+    def goals(
+        self, progress: Progress | None, here: tuple[frozenset[State], frozenset[State]] | None = None
+    ) -> list[int]:
         """Goals for the next task from ``here`` (default: where the vehicle is now), sorted."""
         anywhere, alone = here or self.here
-        return sorted(self.reach[0].goals(anywhere, progress, every=True) & self.reach[1].goals(alone, progress, every=False))
+        return sorted(
+            self.reach[0].goals(anywhere, progress, every=True) & self.reach[1].goals(alone, progress, every=False)
+        )
 
     def after(self, goal: int, progress: Progress | None) -> tuple[frozenset[State], frozenset[State]]:
         """Where the vehicle may be once it has reached ``goal``."""
-        return (self.reach[0].arrivals(self.here[0], goal, progress), self.reach[1].arrivals(self.here[1], goal, progress))
+        return (
+            self.reach[0].arrivals(self.here[0], goal, progress),
+            self.reach[1].arrivals(self.here[1], goal, progress),
+        )
 
 
 def _starts(layout: Layout, taken: set[int], capability: TurnCapability) -> list[State]:
@@ -263,7 +270,13 @@ class _Sizing:
         """Refuse a spec none of whose layouts has room for its largest number of vehicles."""
         most = self.spec.vehicles[1]
         if not any(self.room.smallest(kind, self.sizes, most) is not None for kind in self.kinds):
-            raise NoRoomError(self.spec.layout, self.spec.size, self.spec.vehicles, self.room.most(self.kinds, self.sizes), self.radius)
+            raise NoRoomError(
+                self.spec.layout,
+                self.spec.size,
+                self.spec.vehicles,
+                self.room.most(self.kinds, self.sizes),
+                self.radius,
+            )
 
     def draw(self, draw: st.DrawFn) -> tuple[str, int, list[Segment]]:
         """Kind, size and segments, drawn as :func:`fleetsim.strategies.layouts` draws them."""
@@ -271,7 +284,9 @@ class _Sizing:
         size = draw(st.integers(*self.spec.size))
         return kind, size, draw_kind_layout(draw, kind, size, self.spec.one_way)
 
-    def fit(self, kind: str, size: int, segments: list[Segment], count: int) -> tuple[list[Segment], Layout, frozenset[int]]:
+    def fit(
+        self, kind: str, size: int, segments: list[Segment], count: int
+    ) -> tuple[list[Segment], Layout, frozenset[int]]:
         """A layout with room for ``count`` vehicles: its segments, its largest-radius layout, a spare set.
 
         The drawn layout when it has room; else the plainest layout of the next kind (in smallest-first
@@ -288,7 +303,11 @@ class _Sizing:
             sizes = [n for n in self.sizes if n >= size] if other == kind else self.sizes
             fitting = self.room.smallest(other, sizes, count) or self.room.smallest(other, self.sizes, count)
             if fitting is not None:
-                return plainest_layout(other, fitting, self.spec.one_way), self.room.layout(other, fitting), self.room.spare(other, fitting)
+                return (
+                    plainest_layout(other, fitting, self.spec.one_way),
+                    self.room.layout(other, fitting),
+                    self.room.spare(other, fitting),
+                )
         raise AssertionError("check() found room for the most vehicles in some kind")
 
 

@@ -48,7 +48,9 @@ Vector = tuple[float, float]
 def quantized(segments: Sequence[Segment]) -> list[Segment]:
     """``segments`` with every waypoint rounded to :data:`GRID`; ends that met still meet exactly."""
     return [
-        Segment(s.id, s.shape, s.direction, tuple((round(x / GRID) * GRID, round(y / GRID) * GRID) for x, y in s.waypoints))
+        Segment(
+            s.id, s.shape, s.direction, tuple((round(x / GRID) * GRID, round(y / GRID) * GRID) for x, y in s.waypoints)
+        )
         for s in segments
     ]
 

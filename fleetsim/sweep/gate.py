@@ -69,7 +69,9 @@ class Verdict:
         )
 
 
-def judge(rows: Sequence[Mapping[str, Any]], conditions: Sequence[Condition], baseline: str, candidates: Sequence[str]) -> list[Verdict]:
+def judge(
+    rows: Sequence[Mapping[str, Any]], conditions: Sequence[Condition], baseline: str, candidates: Sequence[str]
+) -> list[Verdict]:
     """Every condition for every candidate. With no paired runs a condition holds (nothing shows the
     candidate is not worse, and a gate must not pass on no evidence)."""
     verdicts = []
@@ -77,7 +79,9 @@ def judge(rows: Sequence[Mapping[str, Any]], conditions: Sequence[Condition], ba
         for candidate in candidates:
             comparison = paired(rows, condition.metric, candidate, baseline)
             limit = condition.offset * abs(comparison.baseline_mean) / 100 if condition.relative else condition.offset
-            verdicts.append(Verdict(condition, candidate, comparison, limit, _holds(condition.operator, comparison, limit)))
+            verdicts.append(
+                Verdict(condition, candidate, comparison, limit, _holds(condition.operator, comparison, limit))
+            )
     return verdicts
 
 

@@ -106,7 +106,15 @@ def _cases(spec: SweepSpec) -> list[Case]:
                         cases.append((scenario_id(file, entry.name), "suite", None, None, str(error)))
         else:
             for index, scenario in enumerate(generate_scenarios(source)):
-                cases.append((f"{scenario_id(spec.path, source.entry.name)}#{index}", "generated", source.seed + index, scenario, None))
+                cases.append(
+                    (
+                        f"{scenario_id(spec.path, source.entry.name)}#{index}",
+                        "generated",
+                        source.seed + index,
+                        scenario,
+                        None,
+                    )
+                )
     return cases if spec.disturbances is None else _disturbed(cases, spec.disturbances)
 
 

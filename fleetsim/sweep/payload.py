@@ -39,12 +39,15 @@ def scenario_payload(scenario: Scenario) -> dict[str, Any]:
         "name": scenario.name,
         "files": files,
         "vehicle_types": [
-            {f.name: _plain(getattr(vt, f.name)) for f in dataclasses.fields(vt)} for vt in scenario.vehicle_types.values()
+            {f.name: _plain(getattr(vt, f.name)) for f in dataclasses.fields(vt)}
+            for vt in scenario.vehicle_types.values()
         ],
         "settings": {f.name: _plain(getattr(scenario.settings, f.name)) for f in dataclasses.fields(scenario.settings)},
         "expect": {f.name: _plain(getattr(scenario.expect, f.name)) for f in dataclasses.fields(scenario.expect)},
         "disturbances": [dataclasses.asdict(d) for d in scenario.disturbances],
-        "random_disturbances": None if scenario.random_disturbances is None else dataclasses.asdict(scenario.random_disturbances),
+        "random_disturbances": None
+        if scenario.random_disturbances is None
+        else dataclasses.asdict(scenario.random_disturbances),
     }
 
 
@@ -61,7 +64,9 @@ def scenario_from_payload(payload: dict[str, Any]) -> Scenario:
         for data in payload["vehicle_types"]
     }
     raw = payload["settings"]
-    settings = ScenarioSettings(**{**raw, "stop_on": tuple(raw["stop_on"]), "conflict_model": ConflictModel(raw["conflict_model"])})
+    settings = ScenarioSettings(
+        **{**raw, "stop_on": tuple(raw["stop_on"]), "conflict_model": ConflictModel(raw["conflict_model"])}
+    )
     expect = Expectations(**{key: _tuple(value) for key, value in payload["expect"].items()})
     with tempfile.TemporaryDirectory(prefix="fleetsim-sweep-") as folder:
         for name, text in payload["files"].items():

@@ -32,7 +32,9 @@ def _axis(x0: float, per: float, low: float, high: float, y: float) -> list[str]
     parts = [f'<line x1="{LEFT}" y1="{y}" x2="{WIDTH - RIGHT}" y2="{y}" stroke="#999"/>']
     for tick in _ticks(low, high):
         x = LEFT + (tick - x0) * per
-        parts.append(f'<text x="{x:.1f}" y="{y + 14}" font-size="10" text-anchor="middle" fill="#555">{tick:.4g}</text>')
+        parts.append(
+            f'<text x="{x:.1f}" y="{y + 14}" font-size="10" text-anchor="middle" fill="#555">{tick:.4g}</text>'
+        )
     return parts
 
 
@@ -53,7 +55,9 @@ def distribution_plot(title: str, groups: Mapping[str, Sequence[float]]) -> str:
     for index, (name, vs) in enumerate(groups.items()):
         y = TOP + index * ROW + ROW / 2
         colour = PALETTE[index % len(PALETTE)]
-        body.append(f'<text x="{LEFT - 6}" y="{y + 4}" font-size="11" text-anchor="end">{escape(name[-30:])} (n={len(vs)})</text>')
+        body.append(
+            f'<text x="{LEFT - 6}" y="{y + 4}" font-size="11" text-anchor="end">{escape(name[-30:])} (n={len(vs)})</text>'
+        )
         if not vs:
             continue
         q0, q1, q2, q3, q4 = (float(q) for q in np.percentile(vs, [0, 25, 50, 75, 100]))
@@ -89,7 +93,10 @@ def differences_plot(title: str, differences: Sequence[float], low: float, high:
         f'<text x="{LEFT - 6}" y="{y(lo):.1f}" font-size="10" text-anchor="end">{lo:.4g}</text>',
         f'<text x="{LEFT}" y="{height - 8}" font-size="10" fill="#555">{len(values)} scenarios, sorted; band: 95% CI of the mean</text>',
     ]
-    body += [f'<circle cx="{LEFT + step * (k + 0.5):.1f}" cy="{y(v):.1f}" r="2.5" fill="{PALETTE[1] if v < 0 else PALETTE[0]}"/>' for k, v in enumerate(values)]
+    body += [
+        f'<circle cx="{LEFT + step * (k + 0.5):.1f}" cy="{y(v):.1f}" r="2.5" fill="{PALETTE[1] if v < 0 else PALETTE[0]}"/>'
+        for k, v in enumerate(values)
+    ]
     return _svg("paired-differences", title, height, body)
 
 
@@ -109,7 +116,11 @@ def fleet_size_plot(title: str, series: Mapping[str, Mapping[int, float]]) -> st
         path = " ".join(f"{px:.1f},{py:.1f}" for px, py in coords)
         body.append(f'<polyline points="{path}" fill="none" stroke="{colour}" stroke-width="2"/>')
         body += [f'<circle cx="{px:.1f}" cy="{py:.1f}" r="3" fill="{colour}"/>' for px, py in coords]
-        body.append(f'<text x="8" y="{TOP + 14 * index + 12}" font-size="11" fill="{colour}">{escape(name[-28:])}</text>')
-    body.append(f'<text x="8" y="{TOP + 14 * len(series) + 12}" font-size="10" fill="#555">y: {min(ys):.4g} .. {max(ys):.4g}</text>')
+        body.append(
+            f'<text x="8" y="{TOP + 14 * index + 12}" font-size="11" fill="{colour}">{escape(name[-28:])}</text>'
+        )
+    body.append(
+        f'<text x="8" y="{TOP + 14 * len(series) + 12}" font-size="10" fill="#555">y: {min(ys):.4g} .. {max(ys):.4g}</text>'
+    )
     body += _axis(x0, per_x, xs[0], xs[-1], height - 30)
     return _svg("fleet-size", title, height, body)

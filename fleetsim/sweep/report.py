@@ -17,7 +17,16 @@ from fleetsim.sweep.stats import METRICS, Paired, PlannerSummary, paired, summar
 
 __all__ = ["COMPARED", "Report", "Worst", "build_report", "markdown"]
 
-COMPARED = ("success", "throughput", "makespan", "waiting_share", "alerts", "rejections", "deadlocks", "planner_time_per_call")
+COMPARED = (
+    "success",
+    "throughput",
+    "makespan",
+    "waiting_share",
+    "alerts",
+    "rejections",
+    "deadlocks",
+    "planner_time_per_call",
+)
 WORST_SHOWN = 5
 
 
@@ -45,7 +54,9 @@ class Report:
     verdicts: tuple[Verdict, ...]
 
 
-def build_report(title: str, rows: Sequence[Mapping[str, Any]], baseline: str, verdicts: Sequence[Verdict], where: Path) -> Report:
+def build_report(
+    title: str, rows: Sequence[Mapping[str, Any]], baseline: str, verdicts: Sequence[Verdict], where: Path
+) -> Report:
     """``where``: the folder the report is written to (links are relative to it)."""
     ordered = tuple(sorted(rows, key=lambda r: str(r["key"])))
     summaries = tuple(summarise(ordered))
@@ -70,7 +81,14 @@ def _worst(rows: Sequence[Mapping[str, Any]], candidate: str, baseline: str, whe
     ranked.sort(key=lambda entry: entry[:3])
     shown = [entry for entry in ranked if not entry[0] or entry[1] < 0][:WORST_SHOWN]
     return tuple(
-        Worst(str(row["id"]), candidate, difference, str(row["status"]), (row.get("failures") or [""])[0], _links(row, where))
+        Worst(
+            str(row["id"]),
+            candidate,
+            difference,
+            str(row["status"]),
+            (row.get("failures") or [""])[0],
+            _links(row, where),
+        )
         for _, difference, _, row in shown
     )
 
@@ -93,7 +111,12 @@ def figure(value: float | None, digits: int = 4) -> str:
 
 
 def summary_table(report: Report) -> tuple[list[str], list[list[str]]]:
-    head = ["planner", "runs", "errors", *(f"{METRICS[m].label}" + (f" ({METRICS[m].unit})" if METRICS[m].unit else "") for m in COMPARED)]
+    head = [
+        "planner",
+        "runs",
+        "errors",
+        *(f"{METRICS[m].label}" + (f" ({METRICS[m].unit})" if METRICS[m].unit else "") for m in COMPARED),
+    ]
     body = []
     for s in report.summaries:
         cells = [short(s.planner), str(s.runs), str(s.errors)]
@@ -135,7 +158,12 @@ def _markdown_table(head: list[str], body: list[list[str]]) -> list[str]:
 
 def markdown(report: Report) -> str:
     """The summary for CI logs and job summaries (GitHub's $GITHUB_STEP_SUMMARY renders it)."""
-    lines = [f"# Sweep report: {report.title}", "", f"{len(report.rows)} runs; baseline **{short(report.baseline)}**.", ""]
+    lines = [
+        f"# Sweep report: {report.title}",
+        "",
+        f"{len(report.rows)} runs; baseline **{short(report.baseline)}**.",
+        "",
+    ]
     lines += ["## Planners", "", *_markdown_table(*summary_table(report)), ""]
     for candidate in report.candidates:
         lines += [f"## {short(candidate)} against {short(report.baseline)}", "",
@@ -146,7 +174,10 @@ def markdown(report: Report) -> str:
             lines += ["Where it does worst:", ""]
             for w in worst:
                 link = f" ([run]({w.links['folder']}))" if "folder" in w.links else ""
-                lines.append(f"- `{w.id}`: {w.status}, throughput {w.difference:+.4g} tasks/h{link}" + (f" — {w.failure[:120]}" if w.failure else ""))
+                lines.append(
+                    f"- `{w.id}`: {w.status}, throughput {w.difference:+.4g} tasks/h{link}"
+                    + (f" — {w.failure[:120]}" if w.failure else "")
+                )
             lines.append("")
     if report.verdicts:
         lines += ["## Gate", "", *(f"- {v.line()}" for v in report.verdicts), ""]

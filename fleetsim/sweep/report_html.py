@@ -32,7 +32,10 @@ def _table(head: list[str], body: list[list[str]], css_id: str) -> str:
     cells = "".join(f"<th>{escape(h)}</th>" for h in head)
     rows = []
     for row in body:
-        tds = "".join(f'<td class="{escape(c)}">{escape(c)}</td>' if c in ("worse", "better") else f"<td>{escape(c)}</td>" for c in row)
+        tds = "".join(
+            f'<td class="{escape(c)}">{escape(c)}</td>' if c in ("worse", "better") else f"<td>{escape(c)}</td>"
+            for c in row
+        )
         rows.append(f"<tr>{tds}</tr>")
     return f'<table id="{css_id}"><thead><tr>{cells}</tr></thead><tbody>{"".join(rows)}</tbody></table>'
 
@@ -41,7 +44,12 @@ def _distributions(report: Report) -> list[str]:
     plots = []
     for name in ("throughput", "makespan", "waiting_share"):
         metric = METRICS[name]
-        groups = {short(s.planner): [v for v in map(metric.read, (r for r in report.rows if r["planner"] == s.planner)) if v is not None] for s in report.summaries}
+        groups = {
+            short(s.planner): [
+                v for v in map(metric.read, (r for r in report.rows if r["planner"] == s.planner)) if v is not None
+            ]
+            for s in report.summaries
+        }
         plots.append(distribution_plot(f"{metric.label} ({metric.unit}) per run", groups))
     return plots
 
@@ -52,7 +60,9 @@ def _fleet_size(report: Report) -> str:
         value = METRICS["throughput"].read(row)
         if value is not None and row.get("vehicles"):
             sums[short(str(row["planner"]))][int(row["vehicles"])].append(value)
-    series = {planner: {size: sum(vs) / len(vs) for size, vs in sorted(sizes.items())} for planner, sizes in sums.items()}
+    series = {
+        planner: {size: sum(vs) / len(vs) for size, vs in sorted(sizes.items())} for planner, sizes in sums.items()
+    }
     return fleet_size_plot("mean throughput (tasks/h) by fleet size (vehicles)", series)
 
 
@@ -61,13 +71,15 @@ def _worst(report: Report, candidate: str) -> str:
     for w in report.worst[candidate]:
         links = " ".join(f'<a href="{escape(path)}">{kind}</a>' for kind, path in w.links.items())
         failure = f"<br><small>{escape(w.failure[:200])}</small>" if w.failure else ""
-        items.append(f"<li><code>{escape(w.id)}</code>: {escape(w.status)}, throughput {w.difference:+.4g} tasks/h {links}{failure}</li>")
+        items.append(
+            f"<li><code>{escape(w.id)}</code>: {escape(w.status)}, throughput {w.difference:+.4g} tasks/h {links}{failure}</li>"
+        )
     return f'<ul class="worst">{"".join(items)}</ul>' if items else "<p>No scenario where it is worse.</p>"
 
 
 def html_page(report: Report) -> str:
     parts = [
-        f"<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\">"
+        f'<!DOCTYPE html><html lang="en"><head><meta charset="utf-8">'
         f'<meta http-equiv="Content-Security-Policy" content="{_CSP}">'
         f"<title>Sweep report: {escape(report.title)}</title><style>{_STYLE}</style></head><body>",
         f"<h1>Sweep report: {escape(report.title)}</h1>",
@@ -80,11 +92,20 @@ def html_page(report: Report) -> str:
     parts += ['<h2>Distributions</h2><div class="plots">', *_distributions(report), _fleet_size(report), "</div>"]
     for index, candidate in enumerate(report.candidates):
         parts.append(f"<h2>{escape(short(candidate))} against {escape(short(report.baseline))}</h2>")
-        parts.append("<p>Paired by scenario; 95% percentile bootstrap interval of the mean difference (2000 resamples, fixed seed).</p>")
+        parts.append(
+            "<p>Paired by scenario; 95% percentile bootstrap interval of the mean difference (2000 resamples, fixed seed).</p>"
+        )
         parts.append(_table(*comparison_table(report, candidate), f"comparison-{index}"))
         throughput = next(c for c in report.comparisons[candidate] if c.metric == "throughput")
         parts.append('<div class="plots">')
-        parts.append(differences_plot(f"throughput difference per scenario (tasks/h), {short(candidate)} - baseline", throughput.differences, throughput.low, throughput.high))
+        parts.append(
+            differences_plot(
+                f"throughput difference per scenario (tasks/h), {short(candidate)} - baseline",
+                throughput.differences,
+                throughput.low,
+                throughput.high,
+            )
+        )
         parts.append("</div><h3>Where it does worst</h3>")
         parts.append(_worst(report, candidate))
     parts.append("</body></html>")

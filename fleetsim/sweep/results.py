@@ -38,7 +38,9 @@ def read_results(path: Path | str) -> tuple[dict[str, Any], list[dict[str, Any]]
         raise ResultsError(f"{path}: cannot read the results file: {error}") from None
     header = _parse(lines[0], path, 1) if lines and lines[0] else None
     if not isinstance(header, dict) or header.get("format") != RESULTS_FORMAT:
-        raise ResultsError(f"{Location(path, 1)}: not a sweep results file (its first line must be the header with \"format\": {RESULTS_FORMAT!r})")
+        raise ResultsError(
+            f'{Location(path, 1)}: not a sweep results file (its first line must be the header with "format": {RESULTS_FORMAT!r})'
+        )
     rows: dict[str, dict[str, Any]] = {}
     # Every row ends with a newline: text after the last one is a row cut short by a kill (not done).
     for number, line in enumerate(lines[1:-1], start=2):
@@ -46,7 +48,7 @@ def read_results(path: Path | str) -> tuple[dict[str, Any], list[dict[str, Any]]
             continue
         row = _parse(line, path, number)
         if not isinstance(row, dict) or not isinstance(row.get("key"), str):
-            raise ResultsError(f"{Location(path, number)}: row={line[:80]!r} must be a JSON object with a \"key\"")
+            raise ResultsError(f'{Location(path, number)}: row={line[:80]!r} must be a JSON object with a "key"')
         rows.setdefault(row["key"], row)
     return header, list(rows.values())
 
@@ -70,7 +72,9 @@ class ResultsFile:
             _cut_partial_line(path)
             self._file: IO[str] = path.open("a", encoding="utf-8")
         elif path.exists():
-            raise ResultsError(f"{path} exists; pass --resume to run only what it lacks, or choose another file with -o")
+            raise ResultsError(
+                f"{path} exists; pass --resume to run only what it lacks, or choose another file with -o"
+            )
         else:
             path.parent.mkdir(parents=True, exist_ok=True)
             self._file = path.open("w", encoding="utf-8")

@@ -32,17 +32,44 @@ from typing import Any, Literal
 
 from fleetsim.errors import Location, LoadError, SuiteError
 from fleetsim.gating.generated import check_generate_block
-from fleetsim.load.suite import ScenarioSpec, Suite, load_suite, parse_scenario_entry, parse_settings, parse_vehicle_types
+from fleetsim.load.suite import (
+    ScenarioSpec,
+    Suite,
+    load_suite,
+    parse_scenario_entry,
+    parse_settings,
+    parse_vehicle_types,
+)
 from fleetsim.load.suite_schema import check_against_schema
 from fleetsim.load.yaml_source import Locate, YamlPath, load_yaml_with_marks
 from fleetsim.scenario import ScenarioSettings
 
-__all__ = ["FORMAT", "GeneratedSource", "SuiteSource", "SweepDisturbances", "SweepSpec", "SweepSpecError", "load_sweep_spec"]
+__all__ = [
+    "FORMAT",
+    "GeneratedSource",
+    "SuiteSource",
+    "SweepDisturbances",
+    "SweepSpec",
+    "SweepSpecError",
+    "load_sweep_spec",
+]
 
 FORMAT = 1
 Record = Literal["failed", "all", "none"]
-_KEYS = {"fleetsim-sweep", "name", "description", "planners", "baseline", "repetitions", "planner_timeout", "record",
-         "vehicle_types", "defaults", "sources", "disturbances"}
+_KEYS = {
+    "fleetsim-sweep",
+    "name",
+    "description",
+    "planners",
+    "baseline",
+    "repetitions",
+    "planner_timeout",
+    "record",
+    "vehicle_types",
+    "defaults",
+    "sources",
+    "disturbances",
+}
 _SOURCE_KEYS = ("count", "seed")  # what a generated source adds to a suite entry
 
 
@@ -100,20 +127,31 @@ def load_sweep_spec(path: Path | str) -> SweepSpec:
     path = Path(path)
     data, locate = load_yaml_with_marks(path, error_type=SweepSpecError)
     if not isinstance(data, dict):
-        raise SweepSpecError(f"a sweep spec must be a mapping with 'fleetsim-sweep: {FORMAT}', 'planners' and 'sources'", Location(path, 1))
+        raise SweepSpecError(
+            f"a sweep spec must be a mapping with 'fleetsim-sweep: {FORMAT}', 'planners' and 'sources'",
+            Location(path, 1),
+        )
     for key in data:
         if key not in _KEYS:
             raise _error(f"unknown key {key!r}; known: {', '.join(sorted(_KEYS))}", locate, (key,), key=True)
     if data.get("fleetsim-sweep") != FORMAT:
-        raise _error(f"fleetsim-sweep={data.get('fleetsim-sweep')!r} must be {FORMAT} (the sweep format version)", locate, ("fleetsim-sweep",))
+        raise _error(
+            f"fleetsim-sweep={data.get('fleetsim-sweep')!r} must be {FORMAT} (the sweep format version)",
+            locate,
+            ("fleetsim-sweep",),
+        )
     planners = _planners(data.get("planners"), locate)
     baseline = data.get("baseline", planners[0])
     if baseline not in planners:
-        raise _error(f"baseline={baseline!r} must be one of the planners ({', '.join(planners)})", locate, ("baseline",))
+        raise _error(
+            f"baseline={baseline!r} must be one of the planners ({', '.join(planners)})", locate, ("baseline",)
+        )
     repetitions = _whole(data, "repetitions", 1, 1, locate)
     timeout = data.get("planner_timeout", 10)
     if isinstance(timeout, bool) or not isinstance(timeout, (int, float)) or not timeout >= 0:
-        raise _error(f"planner_timeout={timeout!r} must be a number of seconds >= 0 (0: none)", locate, ("planner_timeout",))
+        raise _error(
+            f"planner_timeout={timeout!r} must be a number of seconds >= 0 (0: none)", locate, ("planner_timeout",)
+        )
     record = data.get("record", "failed")
     if record not in ("failed", "all", "none"):
         raise _error(f"record={record!r} must be failed, all or none", locate, ("record",))
@@ -143,10 +181,16 @@ def _disturbances(raw: Any, locate: Locate) -> SweepDisturbances | None:
         return None
     where: YamlPath = ("disturbances",)
     if not isinstance(raw, dict) or set(raw) - {"stops_per_vehicle_hour", "stop", "seeds"} or "seeds" not in raw:
-        raise _error(f"disturbances={raw!r} must be {{stops_per_vehicle_hour: R, stop: [MIN, MAX], seeds: [S, ...]}}", locate, where)
+        raise _error(
+            f"disturbances={raw!r} must be {{stops_per_vehicle_hour: R, stop: [MIN, MAX], seeds: [S, ...]}}",
+            locate,
+            where,
+        )
     rate = raw.get("stops_per_vehicle_hour", 6)
     if not _number(rate) or not rate > 0:
-        raise _error(f"stops_per_vehicle_hour={rate!r} must be a number > 0", locate, (*where, "stops_per_vehicle_hour"))
+        raise _error(
+            f"stops_per_vehicle_hour={rate!r} must be a number > 0", locate, (*where, "stops_per_vehicle_hour")
+        )
     stop = raw.get("stop", [5, 30])
     if not (isinstance(stop, list) and len(stop) == 2 and all(map(_number, stop)) and 0 < stop[0] <= stop[1]):
         raise _error(f"stop={stop!r} must be [MIN, MAX] seconds with 0 < MIN <= MAX", locate, (*where, "stop"))
@@ -155,16 +199,26 @@ def _disturbances(raw: Any, locate: Locate) -> SweepDisturbances | None:
         raise _error(f"seeds={seeds!r} must be a non-empty list of whole numbers >= 0", locate, (*where, "seeds"))
     for index, seed in enumerate(seeds):
         if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0 or seeds.index(seed) != index:
-            raise _error(f"seeds[{index}]={seed!r} must be a whole number >= 0, listed once", locate, (*where, "seeds", index))
+            raise _error(
+                f"seeds[{index}]={seed!r} must be a whole number >= 0, listed once", locate, (*where, "seeds", index)
+            )
     return SweepDisturbances(float(rate), (float(stop[0]), float(stop[1])), tuple(seeds))
 
 
 def _planners(raw: Any, locate: Locate) -> tuple[str, ...]:
     if not isinstance(raw, list) or not raw:
-        raise _error(f"planners={raw!r} must be a non-empty list of planner specs (module:attr or exec:COMMAND)", locate, ("planners",))
+        raise _error(
+            f"planners={raw!r} must be a non-empty list of planner specs (module:attr or exec:COMMAND)",
+            locate,
+            ("planners",),
+        )
     for index, spec in enumerate(raw):
         if not isinstance(spec, str) or not (spec.startswith("exec:") or re.fullmatch(r"[\w.]+:[\w.]+", spec)):
-            raise _error(f"planners[{index}]={spec!r} must be a planner spec: module:attr or exec:COMMAND", locate, ("planners", index))
+            raise _error(
+                f"planners[{index}]={spec!r} must be a planner spec: module:attr or exec:COMMAND",
+                locate,
+                ("planners", index),
+            )
         if raw.index(spec) != index:
             raise _error(f"planners[{index}]={spec!r} is listed twice", locate, ("planners", index))
     return tuple(raw)
@@ -180,7 +234,11 @@ def _whole(data: Mapping[str, Any], key: str, default: int, minimum: int, locate
 def _sources(path: Path, data: Mapping[str, Any], locate: Locate) -> tuple[SuiteSource | GeneratedSource, ...]:
     raw = data.get("sources")
     if not isinstance(raw, list) or not raw:
-        raise _error(f"sources={raw!r} must be a non-empty list of suites ('suite: PATH') and generated sources", locate, ("sources",))
+        raise _error(
+            f"sources={raw!r} must be a non-empty list of suites ('suite: PATH') and generated sources",
+            locate,
+            ("sources",),
+        )
     generated = [index for index, source in enumerate(raw) if isinstance(source, dict) and "generate" in source]
     suite = _as_suite(path, data, generated, locate)
     sources: list[SuiteSource | GeneratedSource] = []
@@ -193,7 +251,11 @@ def _sources(path: Path, data: Mapping[str, Any], locate: Locate) -> tuple[Suite
         elif isinstance(source, dict) and set(source) == {"suite"} and isinstance(source["suite"], str):
             sources.append(_suite_source(path, source["suite"], locate, ("sources", index, "suite")))
         else:
-            raise _error(f"sources[{index}]={source!r} must be 'suite: PATH' or a suite entry with 'generate', 'count' and 'seed'", locate, ("sources", index))
+            raise _error(
+                f"sources[{index}]={source!r} must be 'suite: PATH' or a suite entry with 'generate', 'count' and 'seed'",
+                locate,
+                ("sources", index),
+            )
     return tuple(sources)
 
 
@@ -208,7 +270,9 @@ def _suite_source(path: Path, text: str, locate: Locate, where: YamlPath) -> Sui
         except LoadError as error:
             raise SweepSpecError(f"suite={text!r} does not load: {error}", locate(where)) from None
         if name not in names:
-            raise _error(f"suite={text!r}: {file} has no scenario {name!r} (its scenarios: {', '.join(names)})", locate, where)
+            raise _error(
+                f"suite={text!r}: {file} has no scenario {name!r} (its scenarios: {', '.join(names)})", locate, where
+            )
     return SuiteSource(target, name or None)
 
 
@@ -228,7 +292,9 @@ def _as_suite(path: Path, data: Mapping[str, Any], generated: list[int], locate:
         check_against_schema(as_suite, remapped)
         types = parse_vehicle_types(data.get("vehicle_types"), remapped)
         base = parse_settings(ScenarioSettings(), data.get("defaults", {}), types, remapped, ("defaults",))
-        specs = tuple(parse_scenario_entry(path, k, entry, base, types, remapped, {}) for k, entry in enumerate(entries))
+        specs = tuple(
+            parse_scenario_entry(path, k, entry, base, types, remapped, {}) for k, entry in enumerate(entries)
+        )
         suite = Suite(path, str(data.get("name", "sweep")), "", types, specs)
         for spec in specs:
             check_generate_block(spec, suite)
@@ -236,4 +302,3 @@ def _as_suite(path: Path, data: Mapping[str, Any], generated: list[int], locate:
         problem = re.sub(r"^scenarios\[(\d+)\]", lambda m: f"sources[{generated[int(m.group(1))]}]", error.problem)
         raise SweepSpecError(problem, error.location) from None
     return suite
-

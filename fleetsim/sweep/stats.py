@@ -46,12 +46,23 @@ METRICS: Mapping[str, SweepMetric] = {
         SweepMetric("success", "success rate", "%", "higher", lambda r: 100.0 if r.get("status") == "passed" else 0.0),
         SweepMetric("throughput", "throughput", "tasks/h", "higher", _field("throughput")),
         SweepMetric("makespan", "makespan", "s", "lower", _field("makespan")),
-        SweepMetric("waiting_share", "waiting share", "%", "lower", lambda r: None if r.get("waiting_share") is None else 100 * float(r["waiting_share"])),
+        SweepMetric(
+            "waiting_share",
+            "waiting share",
+            "%",
+            "lower",
+            lambda r: None if r.get("waiting_share") is None else 100 * float(r["waiting_share"]),
+        ),
         SweepMetric("alerts", "alerts", "", "lower", _field("alerts")),
         SweepMetric("rejections", "rejections", "", "lower", _field("rejections")),
         SweepMetric("deadlocks", "deadlocks", "", "lower", lambda r: 1.0 if r.get("deadlock") else 0.0),
-        SweepMetric("planner_time_per_call", "planner time per call", "ms", "lower",
-                    lambda r: None if r.get("planner_time_per_call") is None else 1000 * float(r["planner_time_per_call"])),
+        SweepMetric(
+            "planner_time_per_call",
+            "planner time per call",
+            "ms",
+            "lower",
+            lambda r: None if r.get("planner_time_per_call") is None else 1000 * float(r["planner_time_per_call"]),
+        ),
     )
 }
 
@@ -75,8 +86,13 @@ def summarise(rows: Sequence[Mapping[str, Any]]) -> list[PlannerSummary]:
         for name, metric in METRICS.items():
             values = [v for v in map(metric.read, mine) if v is not None]
             means[name] = math.fsum(values) / len(values) if values else None
-        totals = {name: math.fsum(v for v in map(METRICS[name].read, mine) if v is not None) for name in ("alerts", "rejections", "deadlocks")}
-        summaries.append(PlannerSummary(planner, len(mine), sum(row.get("error") is not None for row in mine), means, totals))
+        totals = {
+            name: math.fsum(v for v in map(METRICS[name].read, mine) if v is not None)
+            for name in ("alerts", "rejections", "deadlocks")
+        }
+        summaries.append(
+            PlannerSummary(planner, len(mine), sum(row.get("error") is not None for row in mine), means, totals)
+        )
     return summaries
 
 
@@ -118,7 +134,17 @@ def paired(rows: Sequence[Mapping[str, Any]], metric: str, candidate: str, basel
     if not ids:
         return Paired(metric, candidate, baseline, ids, (), 0.0, math.nan, math.nan, math.nan)
     low, high = _bootstrap(differences, f"{metric}|{candidate}|{baseline}")
-    return Paired(metric, candidate, baseline, ids, tuple(float(d) for d in differences), float(before.mean()), float(differences.mean()), low, high)
+    return Paired(
+        metric,
+        candidate,
+        baseline,
+        ids,
+        tuple(float(d) for d in differences),
+        float(before.mean()),
+        float(differences.mean()),
+        low,
+        high,
+    )
 
 
 def _bootstrap(differences: np.ndarray[Any, np.dtype[np.float64]], label: str) -> tuple[float, float]:

@@ -76,7 +76,9 @@ def result_row(item: RunItem, result: RunResult) -> dict[str, Any]:
         "ended": result.ended,
         "deadlock": result.deadlock is not None,
         "throughput": round(result.tasks_completed / hours, 6) if hours > 0 else 0.0,
-        "waiting_share": round(metrics["waiting_time"] / (vehicles * result.sim_time), 6) if result.sim_time > 0 else 0.0,
+        "waiting_share": round(metrics["waiting_time"] / (vehicles * result.sim_time), 6)
+        if result.sim_time > 0
+        else 0.0,
         "planner_time_per_call": round(result.metrics.planner_wall_time / calls, 9) if calls else None,
         "failures": [f"{f.kind}: {f.message}" for f in result.failures[:FAILURES_KEPT]],
         "error": None,
@@ -104,4 +106,3 @@ def failed_row(item: RunItem, error: str, ended: str = "planner-error") -> dict[
         "error": error,
         "artifacts": {},
     }
-

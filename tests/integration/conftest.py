@@ -25,12 +25,15 @@ class TiledCli:
     def run(self, *args: str | os.PathLike[str]) -> subprocess.CompletedProcess[str]:
         # offscreen: no display needed; a private XDG config home keeps the user's Tiled session
         # (and any project it would load) out of the test and keeps the test out of it.
-        env = {**os.environ, "QT_QPA_PLATFORM": "offscreen",
-               "XDG_CONFIG_HOME": str(self.config_home), "XDG_RUNTIME_DIR": str(self.config_home)}
+        env = {
+            **os.environ,
+            "QT_QPA_PLATFORM": "offscreen",
+            "XDG_CONFIG_HOME": str(self.config_home),
+            "XDG_RUNTIME_DIR": str(self.config_home),
+        }
         command = [self.executable, *map(str, args)]
         try:
-            result = subprocess.run(command, env=env, capture_output=True, text=True,
-                                    timeout=self.timeout, check=False)
+            result = subprocess.run(command, env=env, capture_output=True, text=True, timeout=self.timeout, check=False)
         except subprocess.TimeoutExpired as exc:
             msg = f"{' '.join(command)} did not finish within {self.timeout} s"
             raise RuntimeError(msg) from exc
@@ -39,8 +42,9 @@ class TiledCli:
             raise RuntimeError(msg)
         return result
 
-    def export_map(self, source: Path, target: Path, *, detach_templates: bool = False,
-                   extra: Sequence[str] = ()) -> Path:
+    def export_map(
+        self, source: Path, target: Path, *, detach_templates: bool = False, extra: Sequence[str] = ()
+    ) -> Path:
         """Let Tiled load ``source`` and write it as ``target`` (format from the target's suffix)."""
         file_format = "tmx" if target.suffix == ".tmx" else "json"
         options = ["--detach-templates"] if detach_templates else []

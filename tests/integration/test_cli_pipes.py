@@ -12,7 +12,13 @@ from fleetsim.strategies.geometry import grid
 
 def test_a_reader_that_stops_early_ends_fleetsim_quietly_with_the_sigpipe_status(tmp_path: Path) -> None:
     write_map(tmp_path / "map.json", grid(21))  # 840 segments: far more output than a pipe buffers
-    command = [sys.executable, "-c", "from fleetsim.cli import main; raise SystemExit(main())", "inspect", str(tmp_path / "map.json")]
+    command = [
+        sys.executable,
+        "-c",
+        "from fleetsim.cli import main; raise SystemExit(main())",
+        "inspect",
+        str(tmp_path / "map.json"),
+    ]
     process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     assert process.stdout is not None and process.stderr is not None
     first = process.stdout.readline()  # `| head -1`
@@ -25,6 +31,12 @@ def test_a_reader_that_stops_early_ends_fleetsim_quietly_with_the_sigpipe_status
 
 def test_a_reader_that_reads_everything_sees_status_0(tmp_path: Path) -> None:
     write_map(tmp_path / "map.json", grid(3))
-    command = [sys.executable, "-c", "from fleetsim.cli import main; raise SystemExit(main())", "inspect", str(tmp_path / "map.json")]
+    command = [
+        sys.executable,
+        "-c",
+        "from fleetsim.cli import main; raise SystemExit(main())",
+        "inspect",
+        str(tmp_path / "map.json"),
+    ]
     done = subprocess.run(command, capture_output=True, text=True, timeout=120, check=False)
     assert (done.returncode, done.stderr) == (0, "") and "12 segments" in done.stdout

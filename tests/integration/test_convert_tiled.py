@@ -22,12 +22,16 @@ SITES = Path(__file__).resolve().parents[2] / "scenario_suites" / "sites"
 TOLERANCE_M = 1e-3  # TMX keeps about 6 significant digits
 
 
-@pytest.mark.parametrize(("source", "options"), [
-    (SITES / "packing-hall" / "map.lif.json", MapOptions(robot_type="Acme.Tug")),
-    (SITES / "clinic" / "map.building.yaml", MapOptions()),
-])
+@pytest.mark.parametrize(
+    ("source", "options"),
+    [
+        (SITES / "packing-hall" / "map.lif.json", MapOptions(robot_type="Acme.Tug")),
+        (SITES / "clinic" / "map.building.yaml", MapOptions()),
+    ],
+)
 def test_a_converted_site_is_opened_and_saved_by_tiled_with_its_segments_intact(
-        tiled: TiledCli, tmp_path: Path, source: Path, options: MapOptions) -> None:
+    tiled: TiledCli, tmp_path: Path, source: Path, options: MapOptions
+) -> None:
     site = load_site_map(source, options)
     _, written = convert_map(source, tmp_path / "converted.json", options)
     as_tmx = tiled.export_map(written, tmp_path / "by_tiled.tmx")

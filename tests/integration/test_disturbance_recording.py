@@ -60,11 +60,15 @@ def test_the_failure_picture_outlines_and_labels_the_stopped_vehicle(late_crossi
     _, svg = drawn
     assert svg.count('class="vehicle-disturbed"') == 1 and 'data-disturbed="stop"' in svg
     assert ">STOP</text>" in svg and "magenta dashed outline" in svg
-    undisturbed = run_scenario(replace(scenario, disturbances=(), settings=replace(scenario.settings, stop_on=("collision",))), BFSPlanner())
+    undisturbed = run_scenario(
+        replace(scenario, disturbances=(), settings=replace(scenario.settings, stop_on=("collision",))), BFSPlanner()
+    )
     assert undisturbed.passed and failure_picture(scenario, undisturbed) is None
 
 
-def test_the_recording_marks_disturbed_vehicles_for_two_readers(late_crossing: tuple[Scenario, RunResult], tmp_path: Path) -> None:
+def test_the_recording_marks_disturbed_vehicles_for_two_readers(
+    late_crossing: tuple[Scenario, RunResult], tmp_path: Path
+) -> None:
     scenario, result = late_crossing
     assert result.trace is not None
     path = tmp_path / "run.mcap"
@@ -72,7 +76,10 @@ def test_the_recording_marks_disturbed_vehicles_for_two_readers(late_crossing: t
     with path.open("rb") as stream:
         reader = make_reader(stream, decoder_factories=[DecoderFactory()])
         decoded = [(m.log_time / 1e9, v) for _, c, m, v in reader.iter_decoded_messages(topics=["/fleetsim/disturbed"])]
-    shown = [(t, sorted((k.ns, k.id, k.text, k.header.frame_id, k.frame_locked) for k in v.markers if k.action == 0)) for t, v in decoded]
+    shown = [
+        (t, sorted((k.ns, k.id, k.text, k.header.frame_id, k.frame_locked) for k in v.markers if k.action == 0))
+        for t, v in decoded
+    ]
     stop, slow = sorted(result.disturbances, key=lambda d: d.kind)
     assert stop.end is not None and slow.end is not None
     # one message per change: when each disturbance begins and when it ends (a step later: frames end steps)
@@ -86,5 +93,7 @@ def test_the_recording_marks_disturbed_vehicles_for_two_readers(late_crossing: t
     with AnyReader([path], default_typestore=typestore) as bag:
         connections = [c for c in bag.connections if c.topic == "/fleetsim/disturbed"]
         again = [bag.deserialize(raw, c.msgtype) for c, _, raw in bag.messages(connections=connections)]
-    assert [sorted(k.text for k in msg.markers if k.action == 0) for msg in again] == [sorted(k[2] for k in marks) for _, marks in shown]
+    assert [sorted(k.text for k in msg.markers if k.action == 0) for msg in again] == [
+        sorted(k[2] for k in marks) for _, marks in shown
+    ]
     assert all(k.color.a > 0 for msg in again for k in msg.markers if k.action == 0)

@@ -56,14 +56,18 @@ class Raises(BFSPlanner):
         return super().fix_legs(task, fleet, layout)
 
 
-def recorded(tmp_path: Path, scenario: Scenario, planner: Any) -> tuple[dict[str, Any], list[tuple[str, int, Any]], Path]:
+def recorded(
+    tmp_path: Path, scenario: Scenario, planner: Any
+) -> tuple[dict[str, Any], list[tuple[str, int, Any]], Path]:
     result = run_scenario(scenario, planner)
     paths = write_run_artifacts(tmp_path / "run", result, scenario=scenario)
     document = json.loads(Path(paths["result"]).read_text(encoding="utf-8"))
     with open(paths["mcap"], "rb") as stream:
         messages = [
             (channel.topic, message.log_time, decoded)
-            for _, channel, message, decoded in make_reader(stream, decoder_factories=[DecoderFactory()]).iter_decoded_messages()
+            for _, channel, message, decoded in make_reader(
+                stream, decoder_factories=[DecoderFactory()]
+            ).iter_decoded_messages()
         ]
     return document, messages, Path(paths["folder"])
 
@@ -123,7 +127,10 @@ def test_the_rviz_layout_frames_the_scenarios_map_and_says_to_use_sim_time(tmp_p
     view = yaml.safe_load(text)["Visualization Manager"]["Views"]["Current"]
     xs = [x for s in scenario.layout.segments.values() for x, _ in s.waypoints]
     ys = [y for s in scenario.layout.segments.values() for _, y in s.waypoints]
-    assert (view["X"], view["Y"]) == (pytest.approx((min(xs) + max(xs)) / 2, abs=1e-3), pytest.approx((min(ys) + max(ys)) / 2, abs=1e-3))
+    assert (view["X"], view["Y"]) == (
+        pytest.approx((min(xs) + max(xs)) / 2, abs=1e-3),
+        pytest.approx((min(ys) + max(ys)) / 2, abs=1e-3),
+    )
     # The whole map fits the render area, and fills a good part of it.
     span = max((max(xs) - min(xs)) * view["Scale"] / 1050, (max(ys) - min(ys)) * view["Scale"] / 800)
     assert 0.5 < span <= 1.0
@@ -131,7 +138,13 @@ def test_the_rviz_layout_frames_the_scenarios_map_and_says_to_use_sim_time(tmp_p
 
 def test_a_large_map_far_from_the_origin_is_framed_too(tmp_path: Path) -> None:
     scenario = example("mixed-shapes")
-    moved = replace(scenario.layout, segments={sid: replace(s, waypoints=tuple((x + 500.0, y - 300.0) for x, y in s.waypoints)) for sid, s in scenario.layout.segments.items()})
+    moved = replace(
+        scenario.layout,
+        segments={
+            sid: replace(s, waypoints=tuple((x + 500.0, y - 300.0) for x, y in s.waypoints))
+            for sid, s in scenario.layout.segments.items()
+        },
+    )
     view = framed_view(replace(scenario, layout=moved))
     assert view.centre[0] > 400 and view.centre[1] < -200
     assert view.letter * view.scale >= 14.0  # legible at the framed view

@@ -48,7 +48,7 @@ def test_fleetsim_run_takes_an_exec_planner(capsys: pytest.CaptureFixture[str]) 
 # -- faults ---------------------------------------------------------------------------------------
 
 # A minimal planner process that changes nothing, with one fault chosen by its first argument.
-FAULTY = '''
+FAULTY = """
 import json, os, sys, time
 fault, at = sys.argv[1], int(sys.argv[2]) if len(sys.argv) > 2 else 1
 print("faulty planner starting", file=sys.stderr, flush=True)
@@ -81,7 +81,7 @@ for line in sys.stdin:
 if fault == "ignore-close":
     print(os.getpid(), file=sys.stderr, flush=True)
     time.sleep(600)  # never exits on its own after stdin closes
-'''
+"""
 
 
 @pytest.fixture
@@ -123,7 +123,9 @@ def _run_faulty(faulty: Path, *args: str, timeout: float = 10.0) -> tuple[object
         (("id", "2"), "answered request 2 (plan_routes for vehicle 2) with the answer to request 43"),
     ],
 )
-def test_each_fault_fails_the_run_with_a_planner_error_and_the_stderr_tail(faulty: Path, args: tuple[str, ...], message: str) -> None:
+def test_each_fault_fails_the_run_with_a_planner_error_and_the_stderr_tail(
+    faulty: Path, args: tuple[str, ...], message: str
+) -> None:
     result, planner = _run_faulty(faulty, *args)
 
     assert result.ended == "planner-error"

@@ -24,7 +24,9 @@ pytestmark = pytest.mark.integration
 # Tiled keeps JSON coordinates as doubles; TMX keeps about 6 significant digits of pixels.
 TOLERANCE_M = {".json": 1e-9, ".tmx": 1e-3}
 
-any_kind = st.sampled_from(LAYOUT_KINDS).flatmap(lambda kind: scenarios(GenerationSpec(layout=kind, size=(1, 2), vehicles=(1, 2))))
+any_kind = st.sampled_from(LAYOUT_KINDS).flatmap(
+    lambda kind: scenarios(GenerationSpec(layout=kind, size=(1, 2), vehicles=(1, 2)))
+)
 
 
 @settings(max_examples=10, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -36,7 +38,8 @@ def test_saved_generated_map_exported_by_tiled_loads_to_the_same_layout(tiled: T
         for suffix, tolerance in TOLERANCE_M.items():
             exported = load_map(tiled.export_map(folder / "map.json", Path(tmp) / f"by_tiled{suffix}")).segments
             assert [(s.id, s.shape, s.direction) for s in exported] == [
-                (s.id, s.shape, s.direction) for s in layout.segments.values()]
+                (s.id, s.shape, s.direction) for s in layout.segments.values()
+            ]
             for got, want in zip(exported, layout.segments.values()):
                 assert len(got.waypoints) == len(want.waypoints)
                 assert all(abs(g - w) <= tolerance for p, q in zip(got.waypoints, want.waypoints) for g, w in zip(p, q))

@@ -27,12 +27,22 @@ scenarios:
     generate: {layout: loop, size: [1, 2], vehicles: [1, 2], tasks: [1, 2], examples: 5}
 """
 FLEETSIM = [sys.executable, "-c", "import sys; from fleetsim.cli import main; sys.exit(main())"]
-PYTEST = [sys.executable, "-m", "pytest", "-p", "no:cacheprovider", "-p", "no:benchmark"]  # both write folders of their own
+PYTEST = [
+    sys.executable,
+    "-m",
+    "pytest",
+    "-p",
+    "no:cacheprovider",
+    "-p",
+    "no:benchmark",
+]  # both write folders of their own
 
 
 def _run(command: list[str], cwd: Path) -> subprocess.CompletedProcess[str]:
     env = {key: value for key, value in os.environ.items() if key != "HYPOTHESIS_STORAGE_DIRECTORY"}
-    return subprocess.run(command, cwd=cwd, env={**env, "CI": "1"}, capture_output=True, text=True, timeout=300, check=False)
+    return subprocess.run(
+        command, cwd=cwd, env={**env, "CI": "1"}, capture_output=True, text=True, timeout=300, check=False
+    )
 
 
 @pytest.mark.parametrize("planner", ["BFSPlanner", "ReservingPlanner"])

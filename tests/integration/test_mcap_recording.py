@@ -61,7 +61,10 @@ def read_mcap(path: Path) -> tuple[Any, list[Decoded]]:
 
 def raw_messages(path: Path, topics: tuple[str, ...]) -> list[tuple[str, int, bytes]]:
     with path.open("rb") as stream:
-        return [(channel.topic, message.log_time, message.data) for _, channel, message in make_reader(stream).iter_messages(topics=list(topics))]
+        return [
+            (channel.topic, message.log_time, message.data)
+            for _, channel, message in make_reader(stream).iter_messages(topics=list(topics))
+        ]
 
 
 @pytest.fixture(scope="module")
@@ -136,7 +139,9 @@ def _stamps(message: Decoded) -> list[int]:
     return []
 
 
-def test_log_time_is_the_header_stamp_and_the_clock_never_zero_never_decreasing(collision_run: Any, long_run: Any) -> None:
+def test_log_time_is_the_header_stamp_and_the_clock_never_zero_never_decreasing(
+    collision_run: Any, long_run: Any
+) -> None:
     for _, path in both_runs(collision_run, long_run):
         _, messages = read_mcap(path)
         clock = {message.log_time for message in messages if message.topic == "/clock"}
@@ -215,7 +220,9 @@ def test_the_urdf_has_a_root_and_one_floating_jointed_link_per_vehicle(long_run:
 def test_collision_alerts_show_orange_segments_and_are_logged(collision_run: Any) -> None:
     _, path, _ = collision_run
     _, messages = read_mcap(path)
-    alert_markers = [marker for topic, marker in _markers(messages) if topic == "/fleetsim/alerts" and marker.action == 0]
+    alert_markers = [
+        marker for topic, marker in _markers(messages) if topic == "/fleetsim/alerts" and marker.action == 0
+    ]
     assert any(marker.ns == "alert_segments" for marker in alert_markers)
     texts = [marker.text for marker in alert_markers if marker.type == 9]
     assert texts and all(re.fullmatch(r"segment \d+: [\d,]+( \u27c2 [\d,]+)?", text) for text in texts)
@@ -306,7 +313,9 @@ def test_a_recording_killed_midway_never_leaves_a_half_written_file(tmp_path: Pa
     assert result.trace is not None
     previous = record_mcap(target, scenario, result.trace.lines[:20])  # an earlier, complete recording
     before = target.read_bytes()
-    process = subprocess.run([sys.executable, "-c", KILLER, str(EXAMPLES), str(target)], capture_output=True, text=True, timeout=120)
+    process = subprocess.run(
+        [sys.executable, "-c", KILLER, str(EXAMPLES), str(target)], capture_output=True, text=True, timeout=120
+    )
     assert process.returncode == -signal.SIGKILL, process.stderr
     assert target.read_bytes() == before, "the complete file is untouched"
     _, messages = read_mcap(target)

@@ -113,8 +113,9 @@ class NodePlanner:
     def __init__(self, executable: str, stderr_path: Path) -> None:
         self._stderr_path = stderr_path
         with stderr_path.open("wb") as stderr:
-            self.process = subprocess.Popen([executable, str(PLANNER_JS)], stdin=subprocess.PIPE,
-                                            stdout=subprocess.PIPE, stderr=stderr, cwd=ROOT)
+            self.process = subprocess.Popen(
+                [executable, str(PLANNER_JS)], stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=stderr, cwd=ROOT
+            )
         self._buffer = b""
 
     @property
@@ -147,7 +148,9 @@ class NodePlanner:
     def ask(self, message: dict[str, Any]) -> dict[str, Any]:
         self.write_line(json.dumps(message))
         line = self.read_line()
-        assert line is not None, f"node closed stdout instead of answering; exit {self.process.poll()}; stderr:\n{self.stderr}"
+        assert line is not None, (
+            f"node closed stdout instead of answering; exit {self.process.poll()}; stderr:\n{self.stderr}"
+        )
         answer = json.loads(line)
         assert isinstance(answer, dict), answer
         return answer
@@ -187,8 +190,14 @@ def start_node(node: str, tmp_path: Path):  # noqa: ANN201 - a factory fixture
 
 def comparable(items: Sequence[ResponseItem]) -> list[tuple[Any, ...]]:
     """Response items as plain tuples: plans field by field, route errors by vehicle and message."""
-    return [(("plan", item.vehicle_id, item.legs) if isinstance(item, FleetPlan)
-             else ("route error", item.vehicle_id, item.message)) for item in items]
+    return [
+        (
+            ("plan", item.vehicle_id, item.legs)
+            if isinstance(item, FleetPlan)
+            else ("route error", item.vehicle_id, item.message)
+        )
+        for item in items
+    ]
 
 
 def replay(planner: NodePlanner, calls: Sequence[Call]) -> int:
@@ -202,8 +211,12 @@ def replay(planner: NodePlanner, calls: Sequence[Call]) -> int:
     previous: FleetSnapshot | None = None
     for number, made in enumerate(calls, start=1):
         assert made.layout is calls[0].layout, "one run, one layout"
-        request: dict[str, Any] = {"type": made.method, "id": number, "vehicle": made.task.vehicle_id,
-                                   "task": encode_task(made.task)}
+        request: dict[str, Any] = {
+            "type": made.method,
+            "id": number,
+            "vehicle": made.task.vehicle_id,
+            "task": encode_task(made.task),
+        }
         if made.fleet is not previous:
             request["fleet"] = encode_fleet(made.fleet)
             previous = made.fleet
@@ -244,8 +257,12 @@ def test_the_runs_exercise_both_methods_and_the_fleet_omission_rule(start_node) 
 
 def vehicle_types() -> dict[str, VehicleType]:
     """Every vehicle type the examples use (an in-place turner and a curve-only tugger)."""
-    return {state.type.name: state.type for name in EXAMPLES for made in recorded(name)
-            for state in made.fleet.vehicles.values()}
+    return {
+        state.type.name: state.type
+        for name in EXAMPLES
+        for made in recorded(name)
+        for state in made.fleet.vehicles.values()
+    }
 
 
 def sweep_fleet(name: str, kind: str, *, committed: bool) -> tuple[FleetSnapshot, Layout]:
@@ -258,9 +275,12 @@ def sweep_fleet(name: str, kind: str, *, committed: bool) -> tuple[FleetSnapshot
     if committed:
         plans = dict(fleet.plans)
         for vid in sorted(vehicles):
-            routes = [item for goal in sorted(first.layout.segments)
-                      for item in BFSPlanner().plan_routes(Task(999, vid, goal), fleet, first.layout)
-                      if isinstance(item, FleetPlan)]
+            routes = [
+                item
+                for goal in sorted(first.layout.segments)
+                for item in BFSPlanner().plan_routes(Task(999, vid, goal), fleet, first.layout)
+                if isinstance(item, FleetPlan)
+            ]
             longest = max(routes, key=lambda plan: len(plan.legs))
             plans[vid] = FleetPlan(vid, tuple(replace(leg, fixed=True) for leg in longest.legs))
         fleet = replace(fleet, plans=plans)
@@ -270,14 +290,18 @@ def sweep_fleet(name: str, kind: str, *, committed: bool) -> tuple[FleetSnapshot
 @pytest.mark.parametrize("name", EXAMPLES)
 @pytest.mark.parametrize("kind", ["agv", "tugger"])
 @pytest.mark.parametrize("committed", [False, True], ids=["start", "committed"])
-def test_node_routes_every_vehicle_to_every_segment_like_bfs_planner(start_node, name: str, kind: str,
-                                                                     committed: bool) -> None:
+def test_node_routes_every_vehicle_to_every_segment_like_bfs_planner(
+    start_node, name: str, kind: str, committed: bool
+) -> None:
     """Beyond the runs: one fleet, every vehicle to every goal segment, both methods."""
     fleet, layout = sweep_fleet(name, kind, committed=committed)
     bfs = BFSPlanner()
-    calls = [call(bfs, method, Task(1000 + goal, vid, goal), fleet, layout)
-             for vid in sorted(fleet.vehicles) for goal in sorted(layout.segments)
-             for method in ("plan_routes", "fix_legs")]
+    calls = [
+        call(bfs, method, Task(1000 + goal, vid, goal), fleet, layout)
+        for vid in sorted(fleet.vehicles)
+        for goal in sorted(layout.segments)
+        for method in ("plan_routes", "fix_legs")
+    ]
     planner = start_node()
     assert replay(planner, calls) == len(calls) - 1
     assert planner.finish() == 0, planner.stderr
@@ -286,8 +310,12 @@ def test_node_routes_every_vehicle_to_every_segment_like_bfs_planner(start_node,
 def test_the_goal_sweeps_cover_every_branch_of_plan_routes() -> None:
     """Route errors (a tugger cannot take the mixed layout's corner), goals on fixed legs, marked or not."""
     fleet, layout = sweep_fleet("mixed-shapes", "tugger", committed=False)
-    items = [item for vid in fleet.vehicles for goal in layout.segments
-             for item in BFSPlanner().plan_routes(Task(1, vid, goal), fleet, layout)]
+    items = [
+        item
+        for vid in fleet.vehicles
+        for goal in layout.segments
+        for item in BFSPlanner().plan_routes(Task(1, vid, goal), fleet, layout)
+    ]
     assert any(isinstance(item, RouteError) for item in items)
     assert any(isinstance(item, FleetPlan) for item in items)
     fleet, layout = sweep_fleet("loop-one-way", "agv", committed=True)
@@ -308,10 +336,16 @@ MALFORMED = {
     "not JSON": (False, "this is not json"),
     "not an object": (False, "[1, 2, 3]"),
     "unknown type": (True, '{"type": "plan_everything", "id": 1}'),
-    "request before init": (False, '{"type": "fix_legs", "id": 1, "vehicle": 1, "task": {"id": 1, "vehicle_id": 1, '
-                                   '"goal_segment": 1, "goal_progress": null}}'),
-    "no fleet ever sent": (True, '{"type": "fix_legs", "id": 1, "vehicle": 1, "task": {"id": 1, "vehicle_id": 1, '
-                                 '"goal_segment": 1, "goal_progress": null}}'),
+    "request before init": (
+        False,
+        '{"type": "fix_legs", "id": 1, "vehicle": 1, "task": {"id": 1, "vehicle_id": 1, '
+        '"goal_segment": 1, "goal_progress": null}}',
+    ),
+    "no fleet ever sent": (
+        True,
+        '{"type": "fix_legs", "id": 1, "vehicle": 1, "task": {"id": 1, "vehicle_id": 1, '
+        '"goal_segment": 1, "goal_progress": null}}',
+    ),
     "wrong protocol": (False, '{"type": "init", "protocol": "fleetsim-planner/999", "layout": {}, "scenario": {}}'),
 }
 

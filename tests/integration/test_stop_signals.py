@@ -95,7 +95,12 @@ class Run:
     def __init__(self, command: list[str], folder: Path, **env: str) -> None:
         self.mark = folder / "mark"
         self.started = time.monotonic()
-        environment = {**os.environ, "SLOW_MARK": str(self.mark), "PYTHONPATH": os.pathsep.join([str(ROOT), str(folder)]), **env}
+        environment = {
+            **os.environ,
+            "SLOW_MARK": str(self.mark),
+            "PYTHONPATH": os.pathsep.join([str(ROOT), str(folder)]),
+            **env,
+        }
         environment.pop("CI", None)  # the hunts of the shipped suite are not at stake here
         self.process = subprocess.Popen(
             command, cwd=folder, env=environment, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
@@ -106,7 +111,9 @@ class Run:
         while not ready():
             if self.process.poll() is not None:
                 out, err = self.process.communicate()
-                pytest.fail(f"the process ended ({self.process.returncode}) before the moment to signal it:\n{out}\n{err}")
+                pytest.fail(
+                    f"the process ended ({self.process.returncode}) before the moment to signal it:\n{out}\n{err}"
+                )
             if time.monotonic() - self.started > WAIT:
                 self.process.kill()
                 pytest.fail("the moment to signal the process never came")
@@ -141,7 +148,10 @@ def mcap_facts(path: Path) -> tuple[int, int]:
     """(messages, last /clock in ns), read by mcap + mcap_ros2 and checked against rosbags."""
     with path.open("rb") as stream:
         reader = make_reader(stream, decoder_factories=[DecoderFactory()])
-        decoded = [(channel.topic, message.log_time) for _, channel, message, _ in reader.iter_decoded_messages(log_time_order=False)]
+        decoded = [
+            (channel.topic, message.log_time)
+            for _, channel, message, _ in reader.iter_decoded_messages(log_time_order=False)
+        ]
     seen = []
     with AnyReader([path], default_typestore=get_typestore(Stores.ROS2_HUMBLE)) as bag:
         for connection, timestamp, raw in bag.messages():
@@ -187,7 +197,9 @@ def check_interrupted_folder(folder: Path, signal_name: str) -> dict[str, Any]:
 
 
 @pytest.mark.parametrize(("sig", "status"), [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
-def test_a_stop_signal_ends_the_running_scenario_with_its_files_and_prints_the_summary(folder: Path, sig: int, status: int) -> None:
+def test_a_stop_signal_ends_the_running_scenario_with_its_files_and_prints_the_summary(
+    folder: Path, sig: int, status: int
+) -> None:
     run = Run(run_command(folder / "rec"), folder, SLOW_RUN="2")  # during the second scenario
     run.wait_for(run.mark.exists)
     run.signal(sig)
@@ -235,7 +247,9 @@ def test_a_planner_process_is_ended_like_at_any_run_end(folder: Path) -> None:
 
 
 def test_a_signal_while_a_recording_is_written_lets_it_finish(folder: Path) -> None:
-    run = Run([*SLOW_WRITER, *run_command(folder / "rec")[3:]], folder, SLOW_SECONDS="0", SLOW_MARK_AFTER="-1")  # only the writer marks
+    run = Run(
+        [*SLOW_WRITER, *run_command(folder / "rec")[3:]], folder, SLOW_SECONDS="0", SLOW_MARK_AFTER="-1"
+    )  # only the writer marks
     run.wait_for(run.mark.exists)
     run.signal(signal.SIGINT)
     code, out, err = run.finish()
@@ -252,7 +266,11 @@ def test_a_signal_while_a_recording_is_written_lets_it_finish(folder: Path) -> N
 
 def test_a_second_signal_while_a_recording_is_written_aborts_and_record_rebuilds_it(folder: Path) -> None:
     run = Run(
-        [*SLOW_WRITER, *run_command(folder / "rec")[3:]], folder, SLOW_SECONDS="0", SLOW_MARK_AFTER="-1", SLOW_WRITE_SECONDS="0.05"
+        [*SLOW_WRITER, *run_command(folder / "rec")[3:]],
+        folder,
+        SLOW_SECONDS="0",
+        SLOW_MARK_AFTER="-1",
+        SLOW_WRITE_SECONDS="0.05",
     )  # only the writer marks, and then it writes slowly enough for two signals to arrive while it writes
     run.wait_for(run.mark.exists)
     run.signal(signal.SIGINT, signal.SIGINT, gap=0.1)
@@ -265,7 +283,9 @@ def test_a_second_signal_while_a_recording_is_written_aborts_and_record_rebuilds
     result = json.loads((crossing / "result.json").read_text())  # written before the recording
     assert result["status"] == "passed" and "mcap" not in result["artifacts"]
     assert len(trace_lines(crossing)) - 1 == result["steps"]
-    done = subprocess.run([*FLEETSIM, "record", "--trace", str(crossing)], capture_output=True, text=True, timeout=WAIT, check=False)
+    done = subprocess.run(
+        [*FLEETSIM, "record", "--trace", str(crossing)], capture_output=True, text=True, timeout=WAIT, check=False
+    )
     assert done.returncode == 0, done.stdout + done.stderr
     assert "note:" not in done.stdout, "a complete trace does not end early"
     messages, last_clock = mcap_facts(crossing / "run.mcap")
@@ -299,20 +319,30 @@ def test_a_killed_run_leaves_a_trace_that_record_and_render_rebuild(folder: Path
     assert not (crossing / "result.json").exists() and (crossing / "run.json").exists()
     lines = trace.read_text().split("\n")
     steps = len(lines) - 2  # the header; the last, maybe partial, line is left out
-    done = subprocess.run([*FLEETSIM, "record", "--trace", str(crossing)], capture_output=True, text=True, timeout=WAIT, check=False)
+    done = subprocess.run(
+        [*FLEETSIM, "record", "--trace", str(crossing)], capture_output=True, text=True, timeout=WAIT, check=False
+    )
     assert done.returncode == 0, done.stdout + done.stderr
     assert f"the trace ends early, at step {steps - 1} (t = {steps * 0.1:.2f} s): the run did not end" in done.stdout
     _, last_clock = mcap_facts(crossing / "run.mcap")
     assert last_clock == round(steps * 0.1 * 1e9)
     picture = folder / "step.svg"
-    done = subprocess.run([*FLEETSIM, "render", "--trace", str(crossing), "-o", str(picture)], capture_output=True, text=True, timeout=WAIT, check=False)
+    done = subprocess.run(
+        [*FLEETSIM, "render", "--trace", str(crossing), "-o", str(picture)],
+        capture_output=True,
+        text=True,
+        timeout=WAIT,
+        check=False,
+    )
     assert done.returncode == 0, done.stdout + done.stderr
     caption = " ".join(re.findall(r'class="caption-text"[^>]*>([^<]*)<', picture.read_text()))
     assert f"step {steps - 1} of {steps - 1} (the trace ends here: the run did not end)" in caption
 
 
 @pytest.mark.parametrize(("sig", "status"), [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
-def test_pytest_reports_the_interrupted_scenario_then_its_own_interrupt_summary(folder: Path, sig: int, status: int) -> None:
+def test_pytest_reports_the_interrupted_scenario_then_its_own_interrupt_summary(
+    folder: Path, sig: int, status: int
+) -> None:
     results = folder / "results"
     command = [
         sys.executable, "-m", "pytest", str(SUITE), "--planner", "slowplanner:SlowPlanner", "--fleetsim-artifacts", str(results),

@@ -46,7 +46,9 @@ def test_every_stuck_vehicle_of_the_dense_lattice_is_explained_and_drawn(tmp_pat
         assert finding["reason"] in REASONS
         assert finding["text"].startswith(f"vehicle {finding['vehicle']} (task {finding['task']}")
         if finding["reason"] in ("waits-for", "blocked-by-idle"):
-            assert finding["blocked_by"] and finding["contested"] and finding["leg"]["segment"] in scenario.layout.segments
+            assert (
+                finding["blocked_by"] and finding["contested"] and finding["leg"]["segment"] in scenario.layout.segments
+            )
             # Its wait ends at a root cause: its chain's last vehicle, or a cycle it belongs to.
             assert finding.get("chain", [finding["vehicle"]])[-1] in roots or finding["vehicle"] in roots
         else:

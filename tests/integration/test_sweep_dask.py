@@ -40,7 +40,9 @@ def _worker_processes() -> list[psutil.Process]:
     return found
 
 
-def test_local_cluster_losing_a_worker_gives_every_result_exactly_once(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_local_cluster_losing_a_worker_gives_every_result_exactly_once(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     planners_on_path(monkeypatch)
     spec = load_sweep_spec(write_spec(tmp_path, SLOW, count=20))
     items = expand(spec, tmp_path / "runs")
@@ -66,7 +68,9 @@ def test_local_cluster_losing_a_worker_gives_every_result_exactly_once(tmp_path:
 
 def test_resume_runs_only_what_is_missing(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     planners_on_path(monkeypatch)
-    spec = load_sweep_spec(write_spec(tmp_path, ("fleetsim.planners:ReservingPlanner", "fleetsim.planners:BFSPlanner"), count=6))
+    spec = load_sweep_spec(
+        write_spec(tmp_path, ("fleetsim.planners:ReservingPlanner", "fleetsim.planners:BFSPlanner"), count=6)
+    )
     items = expand(spec, tmp_path / "runs")
     results_path = tmp_path / "results.jsonl"
 
@@ -113,7 +117,9 @@ def test_sweep_on_a_separately_started_scheduler(tmp_path: Path) -> None:
         assert len(rows) == 6
         missing = [row for row in rows if row["planner"] == "only_on_my_laptop:Planner"]
         assert all(row["status"] == "failed" for row in missing)
-        assert all("cannot be loaded on this worker" in row["error"] and "only_on_my_laptop" in row["error"] for row in missing)
+        assert all(
+            "cannot be loaded on this worker" in row["error"] and "only_on_my_laptop" in row["error"] for row in missing
+        )
         assert all(row["status"] == "passed" for row in rows if row not in missing)
     finally:
         for process in (worker, scheduler):

@@ -44,7 +44,9 @@ def _requested(netlog: Path) -> set[str]:
 @pytest.fixture(scope="module")
 def report(tmp_path_factory: pytest.TempPathFactory) -> Path:
     folder = tmp_path_factory.mktemp("report")
-    spec = load_sweep_spec(write_spec(folder, ("fleetsim.planners:ReservingPlanner", "fleetsim.planners:BFSPlanner"), count=8))
+    spec = load_sweep_spec(
+        write_spec(folder, ("fleetsim.planners:ReservingPlanner", "fleetsim.planners:BFSPlanner"), count=8)
+    )
     results = folder / "results.jsonl"
     with ResultsFile(results, {"name": "small", "baseline": spec.baseline}, resume=False) as file:
         for item in expand(spec, folder / "runs"):
@@ -58,7 +60,9 @@ def test_report_renders_in_headless_chromium_without_requests(report: Path) -> N
     page = report / "results.html"
     shot = report / "shot.png"
     netlog = report / "net.json"
-    done = _chromium(chromium, page, report, f"--screenshot={shot}", "--window-size=1100,1400", f"--log-net-log={netlog}")
+    done = _chromium(
+        chromium, page, report, f"--screenshot={shot}", "--window-size=1100,1400", f"--log-net-log={netlog}"
+    )
     assert shot.is_file() and shot.stat().st_size > 10_000, done.stderr[-2000:]
     assert shot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     dom = _chromium(chromium, page, report, "--dump-dom").stdout
@@ -93,7 +97,20 @@ def test_report_is_the_same_whatever_order_the_rows_finished_in(report: Path, tm
     lines = (report / "results.jsonl").read_text(encoding="utf-8").splitlines()
     shuffled = tmp_path / "results.jsonl"
     shuffled.write_text("\n".join([lines[0], *reversed(lines[1:])]) + "\n", encoding="utf-8")
-    assert main(["sweep", "report", str(shuffled), "--markdown", str(tmp_path / "summary.md"), "--html", str(tmp_path / "r.html")]) == 0
+    assert (
+        main(
+            [
+                "sweep",
+                "report",
+                str(shuffled),
+                "--markdown",
+                str(tmp_path / "summary.md"),
+                "--html",
+                str(tmp_path / "r.html"),
+            ]
+        )
+        == 0
+    )
     assert (tmp_path / "summary.md").read_text() == (report / "summary.md").read_text()
     assert json.loads(lines[0])["format"] == "fleetsim-sweep-results/1"
 

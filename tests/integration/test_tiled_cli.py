@@ -26,8 +26,7 @@ TOLERANCE_M = 1e-3
 
 
 def assert_same_segments(actual: tuple[Segment, ...], expected: tuple[Segment, ...]) -> None:
-    assert [(s.id, s.shape, s.direction) for s in actual] == [
-        (s.id, s.shape, s.direction) for s in expected]
+    assert [(s.id, s.shape, s.direction) for s in actual] == [(s.id, s.shape, s.direction) for s in expected]
     for got, want in zip(actual, expected):
         assert_points(got.waypoints, want.waypoints)
 
@@ -39,8 +38,7 @@ def assert_points(actual: tuple[Point, ...], expected: tuple[Point, ...]) -> Non
 
 
 def test_maps_resaved_by_tiled_load_to_the_same_segments(tiled: TiledCli, tmp_path: Path) -> None:
-    arc = tuple((5 + 3 * math.sin(math.radians(a)), 3 - 3 * math.cos(math.radians(a)))
-                for a in range(0, 91, 10))
+    arc = tuple((5 + 3 * math.sin(math.radians(a)), 3 - 3 * math.cos(math.radians(a))) for a in range(0, 91, 10))
     segments = (
         Segment(1, Shape.STRAIGHT, Direction.BOTH, ((-5.0, 0.0), (5.0, 0.0))),
         Segment(2, Shape.CURVE, Direction.FORWARD, arc),
@@ -97,7 +95,8 @@ NESTED_EXPECTED = (
 @pytest.mark.parametrize("template_suffix", [".tx", ".tj"])
 @pytest.mark.parametrize("map_suffix", [".tmx", ".json"])
 def test_rotated_template_instance_in_nested_offset_groups_matches_tiled_detached_export(
-        tiled: TiledCli, tmp_path: Path, map_suffix: str, template_suffix: str) -> None:
+    tiled: TiledCli, tmp_path: Path, map_suffix: str, template_suffix: str
+) -> None:
     (tmp_path / "templates").mkdir()
     template = tmp_path / "templates" / ("bend" + template_suffix)
     template.write_text(BEND_TX if template_suffix == ".tx" else BEND_TJ)
@@ -110,8 +109,7 @@ def test_rotated_template_instance_in_nested_offset_groups_matches_tiled_detache
     original = load_map(source)
     assert_same_segments(original.segments, NESTED_EXPECTED)
     for detached_suffix in (".json", ".tmx"):
-        detached = tiled.export_map(source, tmp_path / ("detached" + detached_suffix),
-                                    detach_templates=True)
+        detached = tiled.export_map(source, tmp_path / ("detached" + detached_suffix), detach_templates=True)
         assert "template" not in detached.read_text()
         assert_same_segments(load_map(detached).segments, original.segments)
 
@@ -133,11 +131,11 @@ def test_shipped_templates_survive_a_tiled_round_trip(tiled: TiledCli, tmp_path:
 <map version="1.8" orientation="orthogonal" width="30" height="30" tilewidth="32" tileheight="32"
      infinite="0" nextlayerid="2" nextobjectid="4">
  <objectgroup id="1" name="segments">
-  <object id="1" template="{ref('straight.tx')}" x="160" y="480"/>
-  <object id="2" template="{ref('curve.tx')}" x="288" y="480">
+  <object id="1" template="{ref("straight.tx")}" x="160" y="480"/>
+  <object id="2" template="{ref("curve.tx")}" x="288" y="480">
    <properties><property name="direction" propertytype="direction" value="forward"/></properties>
   </object>
-  <object id="3" template="{ref('s_curve.tx')}" x="352" y="416" rotation="-90"/>
+  <object id="3" template="{ref("s_curve.tx")}" x="352" y="416" rotation="-90"/>
  </objectgroup>
 </map>
 """)
@@ -149,8 +147,7 @@ def test_shipped_templates_survive_a_tiled_round_trip(tiled: TiledCli, tmp_path:
         assert_same_segments(loaded.segments, original.segments)
         straight, curve, s_curve = loaded.segments
         assert [s.shape for s in loaded.segments] == [Shape.STRAIGHT, Shape.CURVE, Shape.S_CURVE]
-        assert [s.direction for s in loaded.segments] == [
-            Direction.BOTH, Direction.FORWARD, Direction.BOTH]
+        assert [s.direction for s in loaded.segments] == [Direction.BOTH, Direction.FORWARD, Direction.BOTH]
         assert math.dist(straight.last, curve.first) < 0.05
         assert math.dist(curve.last, s_curve.first) < 0.05
         assert straight.length == pytest.approx(4.0)

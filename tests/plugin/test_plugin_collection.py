@@ -118,7 +118,9 @@ def broken_planners(pytester: pytest.Pytester) -> str:
 
 def test_each_scenario_is_one_test_named_by_suite_path_and_scenario_in_file_order(pytester: pytest.Pytester) -> None:
     copy_example_suites(pytester, locks=False)
-    write_suite(pytester.path / "suites" / "order.fleetsim.yaml", "zeta", "alpha", "mid", folder="../examples/crossing/")
+    write_suite(
+        pytester.path / "suites" / "order.fleetsim.yaml", "zeta", "alpha", "mid", folder="../examples/crossing/"
+    )
     result = pytester.runpytest_inprocess("--collect-only", "-q", "suites")
     assert collected_ids(result) == [f"suites/order.fleetsim.yaml::{name}" for name in ("zeta", "alpha", "mid")]
 
@@ -154,12 +156,17 @@ def test_suite_tags_are_markers_that_m_selects_and_strict_markers_accepts(pytest
     assert "PytestUnknownMarkWarning" not in output(result) and "warnings summary" not in output(result)
 
 
-def test_a_suite_xfail_turns_a_failing_scenario_into_xfailed_and_a_passing_one_into_xpassed(pytester: pytest.Pytester) -> None:
+def test_a_suite_xfail_turns_a_failing_scenario_into_xfailed_and_a_passing_one_into_xpassed(
+    pytester: pytest.Pytester,
+) -> None:
     copy_example_suites(pytester)
     suite = pytester.path / "examples.fleetsim.yaml"
     text = suite.read_text(encoding="utf-8")
     assert text.count("    tags: [smoke]\n") == 1  # the crossing's entry
-    suite.write_text(text.replace("    tags: [smoke]\n", "    tags: [smoke]\n    xfail: BFSPlanner collides at the junction\n"), encoding="utf-8")
+    suite.write_text(
+        text.replace("    tags: [smoke]\n", "    tags: [smoke]\n    xfail: BFSPlanner collides at the junction\n"),
+        encoding="utf-8",
+    )
 
     failing = pytester.runpytest_inprocess("--planner", BFS, "-k", "crossing", "-rx")
     failing.assert_outcomes(xfailed=1)
@@ -176,7 +183,11 @@ def test_a_suite_xfail_turns_a_failing_scenario_into_xfailed_and_a_passing_one_i
     ("entry", "line", "message"),
     [
         ("  - name: a\n    dir: examples/crossing/\n    colour: red\n", 6, "scenarios[0]: unknown key 'colour'"),
-        ("  - name: a\n    dir: examples/crossing/\n  - name: b\n    dir: examples/nowhere/\n", 7, "scenarios[1].dir: no such directory"),
+        (
+            "  - name: a\n    dir: examples/crossing/\n  - name: b\n    dir: examples/nowhere/\n",
+            7,
+            "scenarios[1].dir: no such directory",
+        ),
     ],
     ids=["unknown-key", "missing-folder"],
 )
@@ -187,7 +198,9 @@ def test_a_bad_suite_fails_collection_at_its_file_and_line_without_a_harness_tra
     (pytester.path / "bad.fleetsim.yaml").write_text(f"fleetsim: 1\nname: bad\nscenarios:\n{entry}", encoding="utf-8")
     result = pytester.runpytest_inprocess("--planner", RESERVING)
     assert result.ret == pytest.ExitCode.INTERRUPTED
-    result.stdout.fnmatch_lines(["*ERROR collecting bad.fleetsim.yaml*", f"*bad.fleetsim.yaml:{line}:*: {glob.escape(message)}*"])
+    result.stdout.fnmatch_lines(
+        ["*ERROR collecting bad.fleetsim.yaml*", f"*bad.fleetsim.yaml:{line}:*: {glob.escape(message)}*"]
+    )
     text = output(result)
     assert "Traceback" not in text
     assert "fleetsim/load" not in text and "pytest_fleetsim/" not in text
@@ -236,7 +249,9 @@ def test_the_no_planner_skip_points_at_the_suite_not_at_the_harness(pytester: py
     ],
     ids=["no-module", "no-attribute", "no-planner-methods", "not-callable"],
 )
-def test_a_planner_spec_that_gives_no_planner_is_a_usage_error(pytester: pytest.Pytester, spec: str, problem: str) -> None:
+def test_a_planner_spec_that_gives_no_planner_is_a_usage_error(
+    pytester: pytest.Pytester, spec: str, problem: str
+) -> None:
     copy_example_suites(pytester)
     result = pytester.runpytest_inprocess("--planner", spec)
     assert result.ret == pytest.ExitCode.USAGE_ERROR
@@ -283,13 +298,17 @@ def test_a_conftest_autouse_fixture_runs_for_every_scenario(pytester: pytest.Pyt
     assert ran == ["examples.fleetsim.yaml::crossing", "examples.fleetsim.yaml::corridor-passing-bay"]
 
 
-def test_a_fixture_value_that_is_not_a_planner_fails_the_scenario_saying_what_it_must_be(pytester: pytest.Pytester) -> None:
+def test_a_fixture_value_that_is_not_a_planner_fails_the_scenario_saying_what_it_must_be(
+    pytester: pytest.Pytester,
+) -> None:
     copy_example_suites(pytester)
     pytester.makeconftest("import pytest\n\n@pytest.fixture\ndef fleetsim_planner():\n    return 42\n")
     result = pytester.runpytest_inprocess("-k", "crossing")
     result.assert_outcomes(failed=1)
     result.stdout.fnmatch_lines(
-        ["*the fleetsim_planner fixture returned 42; it must return a planner (an object with plan_routes and fix_legs)*"]
+        [
+            "*the fleetsim_planner fixture returned 42; it must return a planner (an object with plan_routes and fix_legs)*"
+        ]
     )
     assert "Traceback" not in output(result)
 
@@ -338,7 +357,9 @@ def test_a_raising_planner_fails_its_scenario_with_its_own_traceback_and_the_nex
     assert "corridor-passing-bay  passed" in text
 
 
-def test_a_planner_raising_in_fix_legs_shows_the_raise_line_of_fix_legs(pytester: pytest.Pytester, broken_planners: str) -> None:
+def test_a_planner_raising_in_fix_legs_shows_the_raise_line_of_fix_legs(
+    pytester: pytest.Pytester, broken_planners: str
+) -> None:
     result = pytester.runpytest_inprocess("--planner", f"{broken_planners}:RaisingInFixLegs", "-k", "crossing")
     result.assert_outcomes(failed=1)
     result.stdout.fnmatch_lines(
@@ -358,7 +379,9 @@ def test_a_planner_returning_garbage_fails_naming_the_method_the_vehicle_and_the
     result = pytester.runpytest_inprocess("--planner", f"{broken_planners}:ReturningDict", "-k", "crossing", "-rf")
     result.assert_outcomes(failed=1)
     result.stdout.fnmatch_lines(
-        ["FAILED examples.fleetsim.yaml::crossing - planner-error at t=*: plan_routes() for vehicle 1 returned {'vehicle': 1}*"]
+        [
+            "FAILED examples.fleetsim.yaml::crossing - planner-error at t=*: plan_routes() for vehicle 1 returned {'vehicle': 1}*"
+        ]
     )
 
 
@@ -393,7 +416,9 @@ def test_the_short_summary_of_a_planner_that_cannot_be_made_says_what_went_wrong
 ) -> None:
     args: tuple[str, ...] = ("--planner", f"{broken_planners}:FailingConstructor")
     if fixture_value is not None:
-        pytester.makeconftest(f"import pytest\n\n@pytest.fixture\ndef fleetsim_planner():\n    return {fixture_value}\n")
+        pytester.makeconftest(
+            f"import pytest\n\n@pytest.fixture\ndef fleetsim_planner():\n    return {fixture_value}\n"
+        )
         args = ()
     result = pytester.runpytest_inprocess(*args, "-k", "crossing", "-rf")
     result.assert_outcomes(failed=1)

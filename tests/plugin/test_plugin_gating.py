@@ -39,8 +39,18 @@ TWO = ("crossing", "corridor-passing-bay")
 SUITE_FILE = "gating.fleetsim.yaml"
 LOCK_FILE = "gating.fleetsim.lock.json"
 RESULT_KEYS = {
-    "scenario", "planner", "status", "failures", "trace_hash", "sim_time",
-    "steps", "tasks", "rejections", "collisions", "metrics", "artifacts",
+    "scenario",
+    "planner",
+    "status",
+    "failures",
+    "trace_hash",
+    "sim_time",
+    "steps",
+    "tasks",
+    "rejections",
+    "collisions",
+    "metrics",
+    "artifacts",
 }  # SPEC §10
 NO_BASELINE = "*--fleetsim-compare: *missing.json: no such metrics file; write one with --fleetsim-metrics-json*"
 WALL_CLOCK = {"wall_time", "planner_wall_time", "realtime_factor"}  # the only figures that may differ
@@ -133,7 +143,9 @@ def make_project(root: Path, names: Iterable[str] = TWO, *, folders: Iterable[st
     for name in folders if folders is not None else names:
         shutil.copytree(SUITES / "examples" / FOLDERS[name], root / "examples" / FOLDERS[name], dirs_exist_ok=True)
     suite = root / SUITE_FILE
-    suite.write_text(SUITE_HEAD + "".join(f"  - name: {n}\n    dir: examples/{FOLDERS[n]}/\n" for n in names), encoding="utf-8")
+    suite.write_text(
+        SUITE_HEAD + "".join(f"  - name: {n}\n    dir: examples/{FOLDERS[n]}/\n" for n in names), encoding="utf-8"
+    )
     return suite
 
 
@@ -207,7 +219,13 @@ def junit_cases(path: Path) -> dict[str, tuple[str, dict[str, str]]]:
     """name -> (outcome, properties) of each test case in a JUnit XML file."""
     cases = {}
     for case in ElementTree.parse(path).getroot().iter("testcase"):
-        outcome = "failed" if case.find("failure") is not None else "skipped" if case.find("skipped") is not None else "passed"
+        outcome = (
+            "failed"
+            if case.find("failure") is not None
+            else "skipped"
+            if case.find("skipped") is not None
+            else "passed"
+        )
         properties = {p.get("name"): p.get("value") for p in case.iter("property")}
         cases[case.get("name")] = (outcome, properties)
     return cases
@@ -246,7 +264,9 @@ def test_missing_hash_fails_with_a_command_that_records_it_beside_the_suite(
     missing = project.runpytest_inprocess("suites", "--planner", RESERVING)
     missing.assert_outcomes(failed=1)
     missing.stdout.fnmatch_lines([f"FAILED suites/{SUITE_FILE}::crossing - hash-missing: *"])
-    missing.stdout.fnmatch_lines([f"*no trace hash is recorded for planner '{RESERVING}'*record it with:", f"  *{command}"])
+    missing.stdout.fnmatch_lines(
+        [f"*no trace hash is recorded for planner '{RESERVING}'*record it with:", f"  *{command}"]
+    )
     assert hint_in(missing) == command
     assert not suite.with_name(LOCK_FILE).exists()
 
@@ -333,7 +353,11 @@ def test_changed_planner_behaviour_fails_with_hash_mismatch_from_the_first_check
 @pytest.mark.parametrize(
     ("checkpoints", "time", "window"),
     [
-        (lambda c: [c[0], "0" * 16], "10.00", "between t = 10 s and t = 20 s (the first differing checkpoint is at step 199)"),
+        (
+            lambda c: [c[0], "0" * 16],
+            "10.00",
+            "between t = 10 s and t = 20 s (the first differing checkpoint is at step 199)",
+        ),
         (lambda c: c, "20.00", "after t = 20 s, where every checkpoint both runs share agrees"),
         (lambda c: [], "0.00", "(no checkpoint both runs have narrows it down)"),
     ],
@@ -404,7 +428,8 @@ def test_nondeterministic_planner_is_refused_naming_the_first_diverging_step(
     assert (lock.read_bytes(), lock.stat().st_mtime_ns) == (before, mtime)
     text = result.stdout.str()
     found = re.search(
-        r"nondeterministic at t=(\S+) s: the planner is not deterministic: .*first divergence at step (\d+) \(t = (\S+) s\)", text
+        r"nondeterministic at t=(\S+) s: the planner is not deterministic: .*first divergence at step (\d+) \(t = (\S+) s\)",
+        text,
     )
     assert found, text
     assert "Nothing was recorded." in text
@@ -431,7 +456,10 @@ def test_nondeterministic_planner_is_refused_naming_the_first_diverging_step(
     [
         ([], {"fleetsim-results/gating/corridor-passing-bay"}),
         (["--fleetsim-record", "failed"], {"fleetsim-results/gating/corridor-passing-bay"}),
-        (["--fleetsim-record", "all"], {"fleetsim-results/gating/corridor-passing-bay", "fleetsim-results/gating/crossing"}),
+        (
+            ["--fleetsim-record", "all"],
+            {"fleetsim-results/gating/corridor-passing-bay", "fleetsim-results/gating/crossing"},
+        ),
         (["--fleetsim-record", "none"], set()),
         (["--fleetsim-artifacts", "out/runs"], {"out/runs/gating/corridor-passing-bay"}),
     ],
@@ -448,16 +476,22 @@ def test_record_option_decides_which_runs_leave_artifacts_and_where(
     names = ("result.json", "trace.jsonl", "run.mcap", "fleetsim.rviz", "failure.svg")
     files = {str(p.relative_to(project.path)) for p in project.path.rglob("*") if p.name in names}
     failed = {folder for folder in expected if folder.endswith("corridor-passing-bay")}
-    assert files == {f"{folder}/{name}" for folder in expected for name in names if name != "failure.svg" or folder in failed}
+    assert files == {
+        f"{folder}/{name}" for folder in expected for name in names if name != "failure.svg" or folder in failed
+    }
     # Only the failure reports; with CI set, pytest's short summary repeats whole messages.
-    reports = result.outlines[: next(i for i, line in enumerate(result.outlines) if "short test summary" in line or "fleetsim ===" in line)]
+    reports = result.outlines[
+        : next(i for i, line in enumerate(result.outlines) if "short test summary" in line or "fleetsim ===" in line)
+    ]
     listed = [line for line in reports if line.startswith("artifacts: ")]
     if "none" in options:
         assert listed == []
     else:
         folder = next(f for f in expected if f.endswith("corridor-passing-bay"))
         shown = ["failure.svg", "run.mcap", "fleetsim.rviz", "trace.jsonl", "result.json"]
-        result.stdout.fnmatch_lines([("artifacts: " if i == 0 else "           ") + f"{folder}/{name}" for i, name in enumerate(shown)])
+        result.stdout.fnmatch_lines(
+            [("artifacts: " if i == 0 else "           ") + f"{folder}/{name}" for i, name in enumerate(shown)]
+        )
         assert len(listed) == 1  # only the failing scenario's report
 
 
@@ -479,7 +513,9 @@ def test_result_json_and_junit_xml_describe_every_recorded_run(
         assert [failure["kind"] for failure in document["failures"]] == kinds
         assert document["trace_hash"] == recorded[name].hash
         assert document["steps"] == recorded[name].steps
-        assert hashlib.sha256((project.path / folder / "trace.jsonl").read_bytes()).hexdigest() == document["trace_hash"]
+        assert (
+            hashlib.sha256((project.path / folder / "trace.jsonl").read_bytes()).hexdigest() == document["trace_hash"]
+        )
         tasks = document["tasks"]
         outcome, properties = cases[name]
         assert outcome == status
@@ -504,30 +540,47 @@ def test_summary_table_and_metrics_json_have_one_row_per_scenario(
     rows = {row["id"]: row for row in metric_rows(project.path / "metrics.json")}
     assert list(rows) == [f"{SUITE_FILE}::corridor-passing-bay", f"{SUITE_FILE}::crossing"]  # sorted by id
     table = fleetsim_table(result)
-    assert table[0] == ["scenario", "outcome", "tasks", "makespan", "alerts", "rejections", "route errors", "hash", "realtime"]
+    assert table[0] == [
+        "scenario",
+        "outcome",
+        "tasks",
+        "makespan",
+        "alerts",
+        "rejections",
+        "route errors",
+        "hash",
+        "realtime",
+    ]
     assert [row[:2] for row in table[1:]] == [["crossing", "passed"], ["corridor-passing-bay", "failed"]]  # suite order
     for cells in table[1:]:
         row = rows[f"{SUITE_FILE}::{cells[0]}"]
         assert row["outcome"] == cells[1]
         assert row["trace_hash"] == recorded[cells[0]].hash
         assert row["planner"] == RESERVING
-        assert cells[2:8] == [
-            f"{row['tasks_completed']}/{row['tasks_total']}",
-            f"{row['makespan']:.1f} s",
-            str(row["alerts"]),
-            str(row["rejections"]),
-            "0",  # route errors: the reference planner finds every route
-            row["trace_hash"][:12],
-        ]
+        assert (
+            cells[2:8]
+            == [
+                f"{row['tasks_completed']}/{row['tasks_total']}",
+                f"{row['makespan']:.1f} s",
+                str(row["alerts"]),
+                str(row["rejections"]),
+                "0",  # route errors: the reference planner finds every route
+                row["trace_hash"][:12],
+            ]
+        )
         assert re.fullmatch(r"\d+x", cells[8])
     result.stdout.fnmatch_lines(["metrics of 2 scenario(s) written to *metrics.json"])
 
 
-def save_baseline(project: pytest.Pytester, recorded: dict[str, LockEntry], lower_by: Mapping[str, float]) -> dict[str, float]:
+def save_baseline(
+    project: pytest.Pytester, recorded: dict[str, LockEntry], lower_by: Mapping[str, float]
+) -> dict[str, float]:
     """Run the suite and save its metrics with each scenario's makespan made ``lower_by`` times lower;
     return the current makespans."""
     write_lock(make_project(project.path), {RESERVING: {name: recorded[name] for name in TWO}})
-    project.runpytest_inprocess("--planner", RESERVING, "--fleetsim-metrics-json", "base.json").assert_outcomes(passed=2)
+    project.runpytest_inprocess("--planner", RESERVING, "--fleetsim-metrics-json", "base.json").assert_outcomes(
+        passed=2
+    )
     path = project.path / "base.json"
     document = json.loads(path.read_text(encoding="utf-8"))
     current = {}
@@ -539,7 +592,9 @@ def save_baseline(project: pytest.Pytester, recorded: dict[str, LockEntry], lowe
     return current
 
 
-def test_makespan_regression_beyond_the_limit_fails_the_session(project: pytest.Pytester, recorded: dict[str, LockEntry]) -> None:
+def test_makespan_regression_beyond_the_limit_fails_the_session(
+    project: pytest.Pytester, recorded: dict[str, LockEntry]
+) -> None:
     current = save_baseline(project, recorded, {"crossing": 1.06, "corridor-passing-bay": 1.04})
 
     result = project.runpytest_inprocess(
@@ -573,7 +628,10 @@ def test_makespan_within_the_limit_passes_the_session(project: pytest.Pytester, 
 @pytest.mark.parametrize(
     ("options", "message"),
     [
-        (["--fleetsim-compare", "base.json", "--fleetsim-compare-fail", "speed:5%"], "*unknown metric 'speed'*known: *makespan*"),
+        (
+            ["--fleetsim-compare", "base.json", "--fleetsim-compare-fail", "speed:5%"],
+            "*unknown metric 'speed'*known: *makespan*",
+        ),
         (["--fleetsim-compare", "missing.json", "--fleetsim-compare-fail", "makespan:5%"], NO_BASELINE),
         (["--fleetsim-compare", "missing.json"], NO_BASELINE),
         (["--fleetsim-compare-fail", "makespan:5%"], "*--fleetsim-compare-fail needs --fleetsim-compare PATH*"),
@@ -594,7 +652,9 @@ def test_bad_compare_options_are_usage_errors(project: pytest.Pytester, options:
 # -- 4. pytest-xdist ---------------------------------------------------------------------------------
 
 
-def test_xdist_gives_the_serial_ids_outcomes_and_hashes(project: pytest.Pytester, recorded: dict[str, LockEntry]) -> None:
+def test_xdist_gives_the_serial_ids_outcomes_and_hashes(
+    project: pytest.Pytester, recorded: dict[str, LockEntry]
+) -> None:
     names = ("crossing", "corridor-passing-bay", "loop-one-way")
     write_lock(make_project(project.path, names), {RESERVING: {n: recorded[n] for n in ("crossing", "loop-one-way")}})
     common = ("--planner", RESERVING)
@@ -607,7 +667,9 @@ def test_xdist_gives_the_serial_ids_outcomes_and_hashes(project: pytest.Pytester
     serial.assert_outcomes(passed=2, failed=1)
     spread.assert_outcomes(passed=2, failed=1)
     assert "2 workers [3 items]" in spread.stdout.str()
-    rows = [[without_wall_clock(row) for row in metric_rows(project.path / f"{run}.json")] for run in ("serial", "spread")]
+    rows = [
+        [without_wall_clock(row) for row in metric_rows(project.path / f"{run}.json")] for run in ("serial", "spread")
+    ]
     assert rows[0] == rows[1]
     assert [(row["id"], row["outcome"], row["trace_hash"]) for row in rows[0]] == [
         (f"{SUITE_FILE}::corridor-passing-bay", "failed", recorded["corridor-passing-bay"].hash),
@@ -615,7 +677,9 @@ def test_xdist_gives_the_serial_ids_outcomes_and_hashes(project: pytest.Pytester
         (f"{SUITE_FILE}::loop-one-way", "passed", recorded["loop-one-way"].hash),
     ]
     assert junit_cases(project.path / "serial.xml") == junit_cases(project.path / "spread.xml")
-    assert [row[:7] for row in fleetsim_table(serial)] == [row[:7] for row in fleetsim_table(spread)]  # suite order, both
+    assert [row[:7] for row in fleetsim_table(serial)] == [
+        row[:7] for row in fleetsim_table(spread)
+    ]  # suite order, both
 
 
 def test_xdist_update_writes_the_lock_once_as_a_serial_update_does(
@@ -653,7 +717,9 @@ def test_a_failed_runs_artifacts_hold_a_readable_recording_and_picture(
     folder = project.path / "fleetsim-results" / "gating" / "corridor-passing-bay"
     with (folder / "run.mcap").open("rb") as stream:
         reader = make_reader(stream, decoder_factories=[DecoderFactory()])
-        clock = [message.log_time for _, channel, message, _ in reader.iter_decoded_messages() if channel.topic == "/clock"]
+        clock = [
+            message.log_time for _, channel, message, _ in reader.iter_decoded_messages() if channel.topic == "/clock"
+        ]
     assert clock and clock[-1] == round(recorded["corridor-passing-bay"].steps * 0.1 * 1e9)
     assert len(clock) < recorded["corridor-passing-bay"].steps / 2  # every 5th step, plus changes
     picture = ET.parse(folder / "failure.svg").getroot()

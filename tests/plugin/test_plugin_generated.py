@@ -27,15 +27,19 @@ def hunting(pytester: pytest.Pytester, monkeypatch: pytest.MonkeyPatch) -> pytes
     return pytester
 
 
-def test_a_caught_planner_fails_with_the_counterexample_saved_and_a_suite_entry_to_paste(hunting: pytest.Pytester) -> None:
+def test_a_caught_planner_fails_with_the_counterexample_saved_and_a_suite_entry_to_paste(
+    hunting: pytest.Pytester,
+) -> None:
     result = hunting.runpytest_inprocess("--planner", "fleetsim.planners:BFSPlanner")
 
     result.assert_outcomes(failed=1)
-    result.stdout.fnmatch_lines([
-        "*It is saved as fleetsim-results/hunting/random-loops/counterexample/*",
-        "  - name: random-loops-counterexample",
-        "    dir: fleetsim-results/hunting/random-loops/counterexample/",
-    ])
+    result.stdout.fnmatch_lines(
+        [
+            "*It is saved as fleetsim-results/hunting/random-loops/counterexample/*",
+            "  - name: random-loops-counterexample",
+            "    dir: fleetsim-results/hunting/random-loops/counterexample/",
+        ]
+    )
     folder = hunting.path / "fleetsim-results" / "hunting" / "random-loops"
     assert sorted(p.name for p in (folder / "counterexample").iterdir()) == ["map.json", "tasks.csv", "vehicles.csv"]
     assert (folder / "failure.svg").is_file() and (folder / "run.mcap").is_file()
@@ -55,7 +59,9 @@ def test_a_sound_planner_passes_a_generated_entry(hunting: pytest.Pytester) -> N
 
 
 def test_a_passing_generated_entry_has_a_summary_row_with_the_examples_it_ran(hunting: pytest.Pytester) -> None:
-    result = hunting.runpytest_inprocess("--planner", "fleetsim.planners:ReservingPlanner", "--fleetsim-metrics-json", "metrics.json")
+    result = hunting.runpytest_inprocess(
+        "--planner", "fleetsim.planners:ReservingPlanner", "--fleetsim-metrics-json", "metrics.json"
+    )
 
     result.assert_outcomes(passed=1)
     result.stdout.fnmatch_lines(["*= fleetsim =*", "scenario * outcome *", "random-loops (30 generated) * passed *"])
@@ -67,17 +73,24 @@ def test_a_failing_generated_entry_says_how_many_scenarios_ran(hunting: pytest.P
     result = hunting.runpytest_inprocess("--planner", "fleetsim.planners:BFSPlanner")
 
     result.assert_outcomes(failed=1)
-    result.stdout.fnmatch_lines([
-        "Hypothesis ran * generated scenario(s) (at most 30, the entry's examples); the last failed, and * shrink run(s)*",
-        "random-loops (* generated, * shrink runs) * failed *",
-    ])
-    document = (hunting.path / "fleetsim-results" / "hunting" / "random-loops" / "result.json").read_text(encoding="utf-8")
+    result.stdout.fnmatch_lines(
+        [
+            "Hypothesis ran * generated scenario(s) (at most 30, the entry's examples); the last failed, and * shrink run(s)*",
+            "random-loops (* generated, * shrink runs) * failed *",
+        ]
+    )
+    document = (hunting.path / "fleetsim-results" / "hunting" / "random-loops" / "result.json").read_text(
+        encoding="utf-8"
+    )
     recorded = json.loads(document)
     assert 1 <= recorded["generated"] <= 30 and recorded["shrink_runs"] >= 1
 
 
 def test_a_generate_block_that_cannot_hold_its_vehicles_fails_at_its_suite_entry(hunting: pytest.Pytester) -> None:
-    hunting.makefile(".fleetsim.yaml", hunting=SUITE.replace("vehicles: [1, 3]", "vehicles: [9, 9]").replace("size: [1, 2]", "size: [1, 1]"))
+    hunting.makefile(
+        ".fleetsim.yaml",
+        hunting=SUITE.replace("vehicles: [1, 3]", "vehicles: [9, 9]").replace("size: [1, 2]", "size: [1, 1]"),
+    )
     result = hunting.runpytest_inprocess("--planner", "fleetsim.planners:ReservingPlanner")
 
     result.assert_outcomes(failed=1)

@@ -21,7 +21,17 @@ def test_plugin_can_be_disabled_by_name(pytester: pytest.Pytester) -> None:
     result.assert_outcomes(passed=1)
 
 
-HEAVY = ("numpy", "hypothesis", "rosbags", "networkx", "jsonschema", "mcap", "fleetsim.sim", "fleetsim.layout", "fleetsim.load")
+HEAVY = (
+    "numpy",
+    "hypothesis",
+    "rosbags",
+    "networkx",
+    "jsonschema",
+    "mcap",
+    "fleetsim.sim",
+    "fleetsim.layout",
+    "fleetsim.load",
+)
 REPORT_IMPORTS = f"""
 import sys
 
@@ -43,7 +53,9 @@ def test_a_session_without_suites_does_not_import_the_harness(pytester: pytest.P
 def test_a_session_with_a_fleetsim_option_loads_the_harness_before_any_test(pytester: pytest.Pytester) -> None:
     """The narrow other side: an option such as --planner is checked at once, which needs the harness."""
     pytester.makepyfile(REPORT_IMPORTS)
-    result = pytester.runpytest_subprocess("-s", "-p", "no:hypothesispytest", "--planner", "fleetsim.planners:BFSPlanner")
+    result = pytester.runpytest_subprocess(
+        "-s", "-p", "no:hypothesispytest", "--planner", "fleetsim.planners:BFSPlanner"
+    )
     result.stdout.fnmatch_lines(["fleetsim: *, planner: fleetsim.planners:BFSPlanner", "*HEAVY: *fleetsim.sim*"])
     result.assert_outcomes(passed=1)
 

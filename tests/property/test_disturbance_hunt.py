@@ -47,7 +47,9 @@ def test_a_hunt_finds_and_shrinks_a_one_stop_counterexample_and_saves_it(tmp_pat
     # shrunk: the lowest vehicle id, the earliest time, and a duration just long enough to fail
     assert (stop.vehicle, stop.kind, stop.at) == (1, "stop", 0.0)
     shorter = load_scenario(spec, suite)
-    barely = run_scenario(replace(shorter, disturbances=(replace(stop, duration=stop.duration - 0.1),)), OnTimePlanner())
+    barely = run_scenario(
+        replace(shorter, disturbances=(replace(stop, duration=stop.duration - 0.1),)), OnTimePlanner()
+    )
     assert barely.passed, "0.1 s shorter no longer fails: the duration is shrunk"
     assert any(f.kind == "collision" for f in found.result.failures)
     paths = record_counterexample(found, tmp_path / "found", {"suite": str(path)})

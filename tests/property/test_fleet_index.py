@@ -28,7 +28,10 @@ legs = st.builds(
 def plan_of(vehicle: int, drawn: list[FleetLeg], fixed: int) -> FleetPlan:
     """Fixed legs first (at least the one it stands on), then planned ones, as the protocol has them."""
     count = max(1, min(fixed, len(drawn)))
-    return FleetPlan(vehicle, tuple(FleetLeg(leg.segment, leg.traverse, leg.progress, fixed=k < count) for k, leg in enumerate(drawn)))
+    return FleetPlan(
+        vehicle,
+        tuple(FleetLeg(leg.segment, leg.traverse, leg.progress, fixed=k < count) for k, leg in enumerate(drawn)),
+    )
 
 
 plans = st.builds(plan_of, st.integers(1, 3), st.lists(legs, min_size=1, max_size=8), st.integers(0, 8))

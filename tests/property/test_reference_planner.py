@@ -24,10 +24,20 @@ TUGGER = VehicleType("tugger", 1.4, 0.7, 0.5, 1.2, 0.4, TurnCapability.CURVE)
 SPEC = GenerationSpec(layout="any", size=(1, 4), vehicles=(1, 6), tasks=(1, 3), vehicle_types=(AGV, TUGGER))
 
 
-@settings(max_examples=300, deadline=None, database=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+@settings(
+    max_examples=300,
+    deadline=None,
+    database=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
+)
 @given(scenarios(SPEC))
-def test_the_reference_planner_completes_every_generated_scenario_without_alerts_or_rejections(scenario: Scenario) -> None:
+def test_the_reference_planner_completes_every_generated_scenario_without_alerts_or_rejections(
+    scenario: Scenario,
+) -> None:
     result = run_scenario(scenario, ReservingPlanner(), keep_trace=False)
-    story = failure_report(result, heading=f"{len(scenario.vehicles)} vehicles, {len(scenario.tasks)} tasks, {len(scenario.layout.segments)} segments")
+    story = failure_report(
+        result,
+        heading=f"{len(scenario.vehicles)} vehicles, {len(scenario.tasks)} tasks, {len(scenario.layout.segments)} segments",
+    )
     assert result.ended == "completed", story
     assert (result.collisions, result.rejections) == ((), ()), story

@@ -89,7 +89,11 @@ def assert_same_scenario(loaded: Scenario, generated: Scenario) -> None:
     assert tuple(a.segments.values()) == tuple(b.segments.values())
     assert a.connections == b.connections
     assert {sid: a.conflicts(sid) for sid in a.segments} == {sid: b.conflicts(sid) for sid in b.segments}
-    assert (a.vehicle_radius, a.safety_margin, a.conflict_model) == (b.vehicle_radius, b.safety_margin, b.conflict_model)
+    assert (a.vehicle_radius, a.safety_margin, a.conflict_model) == (
+        b.vehicle_radius,
+        b.safety_margin,
+        b.conflict_model,
+    )
     assert dict(loaded.vehicle_types) == dict(generated.vehicle_types)
     assert loaded.vehicles == generated.vehicles
     assert loaded.tasks == generated.tasks
@@ -109,13 +113,19 @@ def test_generated_scenario_loads_back_identically_after_saving(case: tuple[Gene
         assert_same_scenario(load_saved(folder, spec), scenario)
 
 
-def _route(scenario: Scenario, capability: TurnCapability, state: State, goal: int, arrive: Progress | None) -> list[State] | None:
+def _route(
+    scenario: Scenario, capability: TurnCapability, state: State, goal: int, arrive: Progress | None
+) -> list[State] | None:
     return shortest_route(scenario.layout, capability, state, goal, arrive, lambda segment, traverse, joint: 1.0)
 
 
 def _arrival(path: list[State], capability: TurnCapability, arrive: Progress | None) -> State:
     segment, traverse, progress = path[-1]
-    return (segment, traverse, arrive) if arrive is not None and capability is TurnCapability.IN_PLACE else (segment, traverse, progress)
+    return (
+        (segment, traverse, arrive)
+        if arrive is not None and capability is TurnCapability.IN_PLACE
+        else (segment, traverse, progress)
+    )
 
 
 @settings(max_examples=60, deadline=None)
@@ -138,7 +148,9 @@ def test_starts_do_not_conflict_and_every_task_is_reachable(case: tuple[Generati
             state = _arrival(path, capability, task.goal_progress)
 
 
-def _states_after(scenario: Scenario, capability: TurnCapability, here: frozenset[State], usable: frozenset[int]) -> set[State]:
+def _states_after(
+    scenario: Scenario, capability: TurnCapability, here: frozenset[State], usable: frozenset[int]
+) -> set[State]:
     """States reachable in one or more legs from some state in ``here``, driving on ``usable`` only."""
     graph: nx.DiGraph[State] = nx.DiGraph()
     frontier, seen = list(here), set(here)
@@ -155,7 +167,9 @@ def _states_after(scenario: Scenario, capability: TurnCapability, here: frozense
 
 @settings(max_examples=60, deadline=None)
 @given(spec_and_scenario)
-def test_vehicles_could_do_their_tasks_one_after_another_without_conflicts(case: tuple[GenerationSpec, Scenario]) -> None:
+def test_vehicles_could_do_their_tasks_one_after_another_without_conflicts(
+    case: tuple[GenerationSpec, Scenario],
+) -> None:
     # So every generated scenario is solvable: a failing run blames the planner, not the scenario.
     _, scenario = case
     layout = scenario.layout
@@ -169,15 +183,21 @@ def test_vehicles_could_do_their_tasks_one_after_another_without_conflicts(case:
         for task in (t for t in scenario.tasks if t.vehicle_id == vehicle.id):
             arrive = task.goal_progress
             reached = _states_after(scenario, capability, here, usable)
-            here = frozenset(_arrival([s], capability, arrive) for s in reached
-                             if s[0] == task.goal_segment and (arrive is None or s[2] is arrive or capability is TurnCapability.IN_PLACE))
+            here = frozenset(
+                _arrival([s], capability, arrive)
+                for s in reached
+                if s[0] == task.goal_segment
+                and (arrive is None or s[2] is arrive or capability is TurnCapability.IN_PLACE)
+            )
             assert here, f"vehicle {vehicle.id} cannot do task {task.id} while the others stand still"
             parked[vehicle.id] = task.goal_segment
 
 
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(spec_and_scenario)
-def test_reserving_planner_never_alerts_or_is_rejected_on_generated_scenarios(case: tuple[GenerationSpec, Scenario]) -> None:
+def test_reserving_planner_never_alerts_or_is_rejected_on_generated_scenarios(
+    case: tuple[GenerationSpec, Scenario],
+) -> None:
     _, scenario = case
     result = run_scenario(scenario, ReservingPlanner(), keep_trace=False)
     assert not result.collisions, [c.alert.text() for c in result.collisions]
@@ -203,8 +223,15 @@ def test_bfs_planner_collision_is_found_and_shrinks_to_a_small_saved_counterexam
 
 def _suite_for(spec: GenerationSpec, folder: Path) -> Path:
     types = {
-        t.name: {"length": t.length, "width": t.width, "height": t.height, "max_speed": t.max_speed,
-                 "acceleration": t.acceleration, "turn_capability": t.turn_capability.value, "turn_rate": t.turn_rate}
+        t.name: {
+            "length": t.length,
+            "width": t.width,
+            "height": t.height,
+            "max_speed": t.max_speed,
+            "acceleration": t.acceleration,
+            "turn_capability": t.turn_capability.value,
+            "turn_rate": t.turn_rate,
+        }
         for t in spec.types
     }
     suite = {
@@ -261,7 +288,9 @@ def crowded_specs(draw: st.DrawFn) -> GenerationSpec:
 
 @settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(spec=crowded_specs(), data=st.data())
-def test_the_number_of_vehicles_is_always_within_the_range_or_the_spec_is_refused(spec: GenerationSpec, data: st.DataObject) -> None:
+def test_the_number_of_vehicles_is_always_within_the_range_or_the_spec_is_refused(
+    spec: GenerationSpec, data: st.DataObject
+) -> None:
     try:
         strategy = scenarios(spec)
     except ValueError as error:

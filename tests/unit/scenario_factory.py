@@ -34,5 +34,7 @@ def make_scenario(
     (folder / "tasks.csv").write_text(TASKS_HEADER + tasks, encoding="utf-8")
     options = {"vehicle_type": types[0].name, **settings}
     return load_scenario_dir(
-        folder, vehicle_types={t.name: t for t in types}, settings=ScenarioSettings(**options)  # type: ignore[arg-type]
+        folder,
+        vehicle_types={t.name: t for t in types},
+        settings=ScenarioSettings(**options),  # type: ignore[arg-type]
     )

@@ -14,8 +14,12 @@ from fleetsim.load.site_map import load_site_map
 
 Json = dict[str, Any]
 HALF = math.sqrt(0.5)
-META_1 = {"projectIdentification": "test", "creator": "tests", "exportTimestamp": "2026-01-01T00:00:00.00Z",
-          "lifVersion": "1.0.0"}
+META_1 = {
+    "projectIdentification": "test",
+    "creator": "tests",
+    "exportTimestamp": "2026-01-01T00:00:00.00Z",
+    "lifVersion": "1.0.0",
+}
 META_2 = {"lifId": "test", "creator": "tests", "exportTimestamp": "2026-01-01T00:00:00.00Z", "lifVersion": "2.0.0"}
 
 
@@ -35,7 +39,9 @@ def edge(edge_id: str, start: str, end: str, *types: str, trajectory: Json | Non
     return {"edgeId": edge_id, "startNodeId": start, "endNodeId": end, "vehicleTypeEdgeProperties": props}
 
 
-def nurbs(degree: int, knots: list[float], points: list[tuple[float, float]], weights: list[float] | None = None) -> Json:
+def nurbs(
+    degree: int, knots: list[float], points: list[tuple[float, float]], weights: list[float] | None = None
+) -> Json:
     control: list[Json] = []
     for index, (x, y) in enumerate(points):
         point: Json = {"x": x, "y": y}
@@ -64,12 +70,16 @@ def to_v2(document: Json) -> Json:
     for item in converted["layouts"]:
         for n in item["nodes"]:
             props = n.pop("vehicleTypeNodeProperties")
-            n["mobileRobotTypeNodeProperties"] = [{"mobileRobotTypes": [_robot(p.pop("vehicleTypeId"))], **p} for p in props]
+            n["mobileRobotTypeNodeProperties"] = [
+                {"mobileRobotTypes": [_robot(p.pop("vehicleTypeId"))], **p} for p in props
+            ]
         for e in item["edges"]:
             props = e.pop("vehicleTypeEdgeProperties")
             for p in props:
                 p.pop("rotationAllowed", None)
-            e["mobileRobotTypeEdgeProperties"] = [{"mobileRobotTypes": [_robot(p.pop("vehicleTypeId"))], **p} for p in props]
+            e["mobileRobotTypeEdgeProperties"] = [
+                {"mobileRobotTypes": [_robot(p.pop("vehicleTypeId"))], **p} for p in props
+            ]
     return {"metaInformation": dict(META_2), "origins": [{"originId": "O", "layouts": converted["layouts"]}]}
 
 
@@ -108,5 +118,6 @@ def same_layout(a: Layout, b: Layout, tolerance: float = 1e-6) -> None:
         for p, q in zip(segment.waypoints, other.waypoints):
             assert math.dist(p, q) <= tolerance, (sid, p, q)
     assert [(c.from_segment, c.from_traverse, c.to_segment, c.to_traverse, c.joint) for c in a.connections] == [
-        (c.from_segment, c.from_traverse, c.to_segment, c.to_traverse, c.joint) for c in b.connections]
+        (c.from_segment, c.from_traverse, c.to_segment, c.to_traverse, c.joint) for c in b.connections
+    ]
     assert {sid: a.conflicts(sid) for sid in a.segments} == {sid: b.conflicts(sid) for sid in b.segments}

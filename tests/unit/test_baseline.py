@@ -156,7 +156,9 @@ def test_a_metrics_file_saved_with_a_byte_order_mark_reads(tmp_path: Path) -> No
 def test_malformed_json_is_reported_with_line_and_column(tmp_path: Path) -> None:
     path = tmp_path / "metrics.json"
     path.write_text('{\n  "format": "fleetsim-metrics/1",\n  "scenarios": [,]\n}\n', encoding="utf-8")
-    with pytest.raises(BaselineError, match=f"^{re.escape(str(path))}:3:17: the file is not valid JSON: a value .* is expected here"):
+    with pytest.raises(
+        BaselineError, match=f"^{re.escape(str(path))}:3:17: the file is not valid JSON: a value .* is expected here"
+    ):
         read_metrics(path)
 
 
@@ -168,19 +170,42 @@ def _scenario(**changes: object) -> dict[str, object]:
     ("document", "problem"),
     [
         ([], "its \"format\" is None, not 'fleetsim-metrics/1'"),
-        ({"format": "fleetsim-metrics/2", "scenarios": []}, "its \"format\" is 'fleetsim-metrics/2', not 'fleetsim-metrics/1'"),
+        (
+            {"format": "fleetsim-metrics/2", "scenarios": []},
+            "its \"format\" is 'fleetsim-metrics/2', not 'fleetsim-metrics/1'",
+        ),
         ({"format": "fleetsim-metrics/1", "scenarios": {}}, "scenarios={} must be a list"),
-        ({"format": "fleetsim-metrics/1", "scenarios": [_scenario(), _scenario()]}, f"scenarios[1]: id {CROSSING!r} appears twice"),
+        (
+            {"format": "fleetsim-metrics/1", "scenarios": [_scenario(), _scenario()]},
+            f"scenarios[1]: id {CROSSING!r} appears twice",
+        ),
         ({"format": "fleetsim-metrics/1", "scenarios": [7]}, "scenarios[0]: scenario=7 must be a JSON object"),
-        ({"format": "fleetsim-metrics/1", "scenarios": [_scenario(makespan="22")]}, "scenarios[0]: field 'makespan' value='22' must be a finite number or null"),
-        ({"format": "fleetsim-metrics/1", "scenarios": [_scenario(alerts=True)]}, "scenarios[0]: field 'alerts' value=True must be an integer"),
-        ({"format": "fleetsim-metrics/1", "scenarios": [_scenario(distance=None)]}, "scenarios[0]: field 'distance' value=None must be a finite number"),
-        ({"format": "fleetsim-metrics/1", "scenarios": [_scenario(planner=3)]}, "scenarios[0]: field 'planner' value=3 must be a string"),
-        ({"format": "fleetsim-metrics/1", "scenarios": [_scenario(outcome="ok")]}, "scenarios[0]: field 'outcome' value='ok' must be one of passed"),
+        (
+            {"format": "fleetsim-metrics/1", "scenarios": [_scenario(makespan="22")]},
+            "scenarios[0]: field 'makespan' value='22' must be a finite number or null",
+        ),
+        (
+            {"format": "fleetsim-metrics/1", "scenarios": [_scenario(alerts=True)]},
+            "scenarios[0]: field 'alerts' value=True must be an integer",
+        ),
+        (
+            {"format": "fleetsim-metrics/1", "scenarios": [_scenario(distance=None)]},
+            "scenarios[0]: field 'distance' value=None must be a finite number",
+        ),
+        (
+            {"format": "fleetsim-metrics/1", "scenarios": [_scenario(planner=3)]},
+            "scenarios[0]: field 'planner' value=3 must be a string",
+        ),
+        (
+            {"format": "fleetsim-metrics/1", "scenarios": [_scenario(outcome="ok")]},
+            "scenarios[0]: field 'outcome' value='ok' must be one of passed",
+        ),
         ({"format": "fleetsim-metrics/1", "scenarios": [{"id": "a::one"}]}, "scenarios[0]: field 'planner' is missing"),
     ],
 )
-def test_an_unusable_metrics_document_is_named_with_the_bad_value(tmp_path: Path, document: object, problem: str) -> None:
+def test_an_unusable_metrics_document_is_named_with_the_bad_value(
+    tmp_path: Path, document: object, problem: str
+) -> None:
     path = tmp_path / "metrics.json"
     path.write_text(json.dumps(document), encoding="utf-8")
     with pytest.raises(BaselineError) as caught:
@@ -190,14 +215,19 @@ def test_an_unusable_metrics_document_is_named_with_the_bad_value(tmp_path: Path
 
 def test_integers_in_float_fields_read_back_as_floats(tmp_path: Path) -> None:
     path = tmp_path / "metrics.json"
-    path.write_text(json.dumps({"format": "fleetsim-metrics/1", "scenarios": [_scenario(makespan=22, distance=0)]}), encoding="utf-8")
+    path.write_text(
+        json.dumps({"format": "fleetsim-metrics/1", "scenarios": [_scenario(makespan=22, distance=0)]}),
+        encoding="utf-8",
+    )
     row = read_metrics(path)[CROSSING]
     assert (type(row.makespan), type(row.distance)) == (float, float)
 
 
 def test_fields_a_later_version_adds_are_left_alone(tmp_path: Path) -> None:
     path = tmp_path / "metrics.json"
-    path.write_text(json.dumps({"format": "fleetsim-metrics/1", "scenarios": [_scenario(energy=3.0)]}), encoding="utf-8")
+    path.write_text(
+        json.dumps({"format": "fleetsim-metrics/1", "scenarios": [_scenario(energy=3.0)]}), encoding="utf-8"
+    )
     assert read_metrics(path) == {CROSSING: ROW}
 
 
@@ -205,7 +235,10 @@ def test_fields_a_later_version_adds_are_left_alone(tmp_path: Path) -> None:
 
 
 def test_the_catalogue_knows_which_way_is_better() -> None:
-    assert {name for name, metric in METRICS.items() if metric.better == "higher"} == {"tasks_completed", "realtime_factor"}
+    assert {name for name, metric in METRICS.items() if metric.better == "higher"} == {
+        "tasks_completed",
+        "realtime_factor",
+    }
     assert len(METRICS) == 10
     assert METRICS["makespan"].read(ROW) == 22.0
 
@@ -265,7 +298,9 @@ def test_a_threshold_made_directly_is_checked_too() -> None:
         ("tasks_completed", 4, 3, 2, "tasks_completed:1"),  # higher is better, absolute
     ],
 )
-def test_a_metric_regresses_only_beyond_its_limit(metric: str, before: float, inside: float, outside: float, threshold: str) -> None:
+def test_a_metric_regresses_only_beyond_its_limit(
+    metric: str, before: float, inside: float, outside: float, threshold: str
+) -> None:
     assert _compare(metric, before, inside, threshold).regressions == ()
     (regression,) = _compare(metric, before, outside, threshold).regressions
     assert (regression.metric, regression.baseline, regression.current) == (metric, before, outside)

@@ -34,7 +34,9 @@ TASKS = {
 }
 
 
-def leg(segment: int, traverse: Traverse = F, progress: Progress = FWD, fixed: bool = False, goal: int | None = None) -> FleetLeg:
+def leg(
+    segment: int, traverse: Traverse = F, progress: Progress = FWD, fixed: bool = False, goal: int | None = None
+) -> FleetLeg:
     return FleetLeg(segment, traverse, progress, fixed, goal)
 
 
@@ -226,7 +228,9 @@ def test_goal_marker_on_the_tasks_goal_segment_is_accepted() -> None:
 
 def test_arriving_with_the_wrong_progress_is_rejected() -> None:
     ctx = context(capability=TurnCapability.IN_PLACE)
-    rejection = assert_rejected(check(leg(1, fixed=True), leg(2, progress=REV, goal=1), ctx=ctx), RejectionCode.GOAL_DIRECTION, 1)
+    rejection = assert_rejected(
+        check(leg(1, fixed=True), leg(2, progress=REV, goal=1), ctx=ctx), RejectionCode.GOAL_DIRECTION, 1
+    )
     assert "requires arriving forward" in rejection.message
 
 
@@ -260,9 +264,19 @@ def test_rejection_reads_as_code_vehicle_leg_segment_and_message() -> None:
 
 def test_there_are_exactly_the_thirteen_codes_of_the_spec() -> None:
     assert {code.value for code in RejectionCode} == {
-        "unknown-vehicle", "duplicate-plan", "empty-plan", "unknown-segment", "fixed-legs-changed",
-        "fixed-not-contiguous", "not-connected", "wrong-way", "illegal-progress-change",
-        "goal-not-assigned", "goal-order", "goal-segment-mismatch", "goal-direction",
+        "unknown-vehicle",
+        "duplicate-plan",
+        "empty-plan",
+        "unknown-segment",
+        "fixed-legs-changed",
+        "fixed-not-contiguous",
+        "not-connected",
+        "wrong-way",
+        "illegal-progress-change",
+        "goal-not-assigned",
+        "goal-order",
+        "goal-segment-mismatch",
+        "goal-direction",
     }
 
 

@@ -117,7 +117,9 @@ def test_render_highlight_colours_segment_successors_and_conflicts(
     assert {str(i) for i in range(1, 9)} <= texts
 
 
-def test_render_marks_conflicting_but_unconnected_segments_grey(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_render_marks_conflicting_but_unconnected_segments_grey(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     out_svg = tmp_path / "loop.svg"
     loop = SUITES / "examples" / "loop" / "map.tmx"
     # Segment 4 is the one-way right-hand side; with a 2.5 m radius the top and bottom straights

@@ -59,24 +59,53 @@ SUITE = "broken.fleetsim.yaml"
 # (what is broken, how to break it, what the one error line must contain)
 CASES = [
     ("missing template", _edit(MAP, "straight.tx", "straigth.tx"), ["map.json", "object 1", "straigth.tx"]),
-    ("unknown direction", _edit(MAP, '"id":2,', '"id":2,"properties":[{"name":"direction","type":"string","value":"sideways"}],'),
-     ["map.json", "object 2", "'sideways'"]),
-    ("non-orthogonal map", _edit(MAP, '"orientation":"orthogonal"', '"orientation":"isometric"'), ["map.json", "'isometric'"]),
+    (
+        "unknown direction",
+        _edit(MAP, '"id":2,', '"id":2,"properties":[{"name":"direction","type":"string","value":"sideways"}],'),
+        ["map.json", "object 2", "'sideways'"],
+    ),
+    (
+        "non-orthogonal map",
+        _edit(MAP, '"orientation":"orthogonal"', '"orientation":"isometric"'),
+        ["map.json", "'isometric'"],
+    ),
     ("infinite map", _edit(MAP, '"infinite":false', '"infinite":true'), ["map.json", "infinite"]),
     ("no segments", _edit(MAP, '"objects":[', '"objects":[],"unused":['), ["map.json", "no segments"]),
     ("duplicate vehicle id", _edit(VEHICLES, "2,5,forward", "1,5,forward"), ["vehicles.csv:3", "vehicle_id", "1"]),
     ("unknown segment in vehicles.csv", _edit(VEHICLES, "2,5,forward", "2,55,forward"), ["vehicles.csv:3", "55"]),
-    ("wrong-way start", _both(_edit(MAP, '"id":5,', '"id":5,"properties":[{"name":"direction","type":"string","value":"forward"}],'),
-                              _edit(VEHICLES, "2,5,forward", "2,5,backward")), ["vehicles.csv:3", "segment_orientation"]),
+    (
+        "wrong-way start",
+        _both(
+            _edit(MAP, '"id":5,', '"id":5,"properties":[{"name":"direction","type":"string","value":"forward"}],'),
+            _edit(VEHICLES, "2,5,forward", "2,5,backward"),
+        ),
+        ["vehicles.csv:3", "segment_orientation"],
+    ),
     ("unknown segment in tasks.csv", _edit(TASKS, "2,8,", "2,88,"), ["tasks.csv:3", "88"]),
-    ("missing CSV header", _edit(VEHICLES, "vehicle_id,start_segment_id,segment_orientation,progress_direction\n", ""),
-     ["vehicles.csv:1", "missing header", "1,1,forward,forward"]),
-    ("map cut short in a string", _cut(MAP, '"orientation":"orth'),
-     ["map.json:70:", "not valid JSON: a string that starts here runs to the end of the file (is the file cut short?)"]),
-    ("map cut short between items", _cut(MAP, '"infinite":false,'),
-     ["map.json:3:", "a key in double quotes is expected here; the file ends there (is it cut short?)"]),
+    (
+        "missing CSV header",
+        _edit(VEHICLES, "vehicle_id,start_segment_id,segment_orientation,progress_direction\n", ""),
+        ["vehicles.csv:1", "missing header", "1,1,forward,forward"],
+    ),
+    (
+        "map cut short in a string",
+        _cut(MAP, '"orientation":"orth'),
+        [
+            "map.json:70:",
+            "not valid JSON: a string that starts here runs to the end of the file (is the file cut short?)",
+        ],
+    ),
+    (
+        "map cut short between items",
+        _cut(MAP, '"infinite":false,'),
+        ["map.json:3:", "a key in double quotes is expected here; the file ends there (is it cut short?)"],
+    ),
     ("YAML syntax error", _edit(SUITE, "name: broken", "name: [broken"), [f"{SUITE}:"]),
-    ("schema violation", _edit(SUITE, "turn_capability: in_place", "turn_capability: hover"), [f"{SUITE}:4:", "'hover'"]),
+    (
+        "schema violation",
+        _edit(SUITE, "turn_capability: in_place", "turn_capability: hover"),
+        [f"{SUITE}:4:", "'hover'"],
+    ),
 ]
 
 
@@ -116,4 +145,7 @@ def test_a_map_of_another_file_type_is_named_in_words(tmp_path: Path, capsys: py
     path.write_text("vehicle_id\n", encoding="utf-8")
     assert main(["inspect", str(path)]) == 1
     err = capsys.readouterr().err
-    assert err == f"fleetsim: error: {path}: this is not a map file: a map is a Tiled map (.json, .tmj, .tmx), a LIF file (.lif.json) or an RMF building map (.building.yaml), and this file ends in '.csv'\n"
+    assert (
+        err
+        == f"fleetsim: error: {path}: this is not a map file: a map is a Tiled map (.json, .tmj, .tmx), a LIF file (.lif.json) or an RMF building map (.building.yaml), and this file ends in '.csv'\n"
+    )

@@ -68,7 +68,9 @@ def test_by_default_the_failure_step_is_drawn_as_failure_picture_draws_it(
     status, out, _ = render(capsys, "--trace", str(collided), "-o", str(output))
     assert status == 0 and "step 1 of 1" in out
     root = picture(output)
-    assert texts(root, "caption-text") == ["t = 0.20 s — possible collision on segment 2: primary 1; secondary 2"]  # the frame's own time
+    assert texts(root, "caption-text") == [
+        "t = 0.20 s — possible collision on segment 2: primary 1; secondary 2"
+    ]  # the frame's own time
     assert alert_segments(root) == {2, 3, 6, 7}
     expected = failure_picture(crossing(), run_scenario(crossing(), BFSPlanner(), keep_trace=True))
     assert expected is not None and output.read_text(encoding="utf-8") == expected[1]
@@ -88,10 +90,14 @@ def test_a_passed_run_is_drawn_at_its_last_step(tmp_path: Path, capsys: pytest.C
     status, out, _ = render(capsys, "--trace", str(folder), "-o", str(output))
     assert status == 0
     assert f"step {result.steps - 1} of {result.steps - 1}" in out
-    assert texts(picture(output), "caption-text")[0].endswith(f"crossing, step {result.steps - 1} of {result.steps - 1}")
+    assert texts(picture(output), "caption-text")[0].endswith(
+        f"crossing, step {result.steps - 1} of {result.steps - 1}"
+    )
 
 
-def test_a_trace_without_result_json_needs_suite(collided: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_a_trace_without_result_json_needs_suite(
+    collided: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     lone = tmp_path / "lone" / TRACE_FILE
     lone.parent.mkdir()
     lone.write_text((collided / TRACE_FILE).read_text())
@@ -100,10 +106,14 @@ def test_a_trace_without_result_json_needs_suite(collided: Path, tmp_path: Path,
     assert status == 2 and "--suite SUITE::SCENARIO" in err and str(lone) in err
     status, _, err = render(capsys, "--trace", str(lone), "--suite", f"{SUITE}::crossing", "-o", str(output))
     assert (status, err) == (0, "")
-    assert texts(picture(output), "caption-text") == ["t = 0.20 s — crossing, step 1 of 1"]  # no result: no failure known
+    assert texts(picture(output), "caption-text") == [
+        "t = 0.20 s — crossing, step 1 of 1"
+    ]  # no result: no failure known
 
 
-def test_a_step_out_of_range_is_a_usage_error(collided: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_a_step_out_of_range_is_a_usage_error(
+    collided: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     output = tmp_path / "out.svg"
     status, out, err = render(capsys, "--trace", str(collided), "--step", "5", "-o", str(output))
     assert status == 2 and out == ""
@@ -121,7 +131,9 @@ def test_a_missing_trace_is_a_usage_error(tmp_path: Path, capsys: pytest.Capture
     assert (status, err) == (2, f"fleetsim: error: {tmp_path / 'nowhere'}: no such file or directory\n")
 
 
-def test_a_trace_of_another_scenario_is_a_usage_error(collided: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_a_trace_of_another_scenario_is_a_usage_error(
+    collided: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     trace = collided / TRACE_FILE
     header, *steps = trace.read_text().splitlines()
     trace.write_text("\n".join([json.dumps({**json.loads(header), "vehicles": [1, 2, 3]}), *steps]) + "\n")
@@ -134,7 +146,9 @@ def test_a_trace_of_another_scenario_is_a_usage_error(collided: Path, tmp_path: 
 def test_an_unknown_scenario_in_suite_is_named_with_a_suggestion(
     collided: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    status, _, err = render(capsys, "--trace", str(collided), "--suite", f"{SUITE}::crosing", "-o", str(tmp_path / "o.svg"))
+    status, _, err = render(
+        capsys, "--trace", str(collided), "--suite", f"{SUITE}::crosing", "-o", str(tmp_path / "o.svg")
+    )
     assert status == 2 and "no scenario 'crosing'" in err and "did you mean 'crossing'?" in err
 
 

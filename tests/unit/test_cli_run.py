@@ -26,8 +26,18 @@ EXAMPLES = SUITES / "examples.fleetsim.yaml"
 NAMES = ["crossing", "loop-one-way", "corridor-passing-bay", "mixed-shapes"]
 RESERVING = "fleetsim.planners:ReservingPlanner"
 RESULT_KEYS = {
-    "scenario", "planner", "status", "failures", "trace_hash", "sim_time",
-    "steps", "tasks", "rejections", "collisions", "metrics", "artifacts",
+    "scenario",
+    "planner",
+    "status",
+    "failures",
+    "trace_hash",
+    "sim_time",
+    "steps",
+    "tasks",
+    "rejections",
+    "collisions",
+    "metrics",
+    "artifacts",
 }  # SPEC §10
 
 FAULTY_PLANNERS = """\
@@ -85,16 +95,35 @@ def test_the_shipped_suites_pass_with_the_reserving_planner(
     status, out, err = run(capsys, "run", str(SUITES), "--planner", RESERVING)
     assert status == 0, out + err
     header, *rows = out.splitlines()[:16]
-    assert header.split() == ["scenario", "outcome", "tasks", "makespan", "alerts", "rejections", "route", "errors", "hash", "realtime"]
+    assert header.split() == [
+        "scenario",
+        "outcome",
+        "tasks",
+        "makespan",
+        "alerts",
+        "rejections",
+        "route",
+        "errors",
+        "hash",
+        "realtime",
+    ]
     expected = [[f"caught-bugs.fleetsim.yaml::{name}", "passed"] for name in ("crossing-collides", "corridor-head-on")]
     # The hunt catches BFSPlanner; its label says what it ran: "(N generated, M shrink runs)".
     expected += [["caught-bugs.fleetsim.yaml::generated-layouts", "generated,", "shrink", "runs)", "xfailed"]]
     expected += [["caught-bugs.fleetsim.yaml::late-crossing-stop", "passed"]]
     expected += [["caught-bugs.fleetsim.yaml::late-crossing-hunt", "generated,", "shrink", "runs)", "xfailed"]]
-    expected += [[f"disturbances.fleetsim.yaml::{spec.name}", "passed"] for spec in fleetsim.load_suite(SUITES / "disturbances.fleetsim.yaml").scenarios]
+    expected += [
+        [f"disturbances.fleetsim.yaml::{spec.name}", "passed"]
+        for spec in fleetsim.load_suite(SUITES / "disturbances.fleetsim.yaml").scenarios
+    ]
     expected += [[f"examples.fleetsim.yaml::{name}", "passed"] for name in NAMES]
-    assert [[cell for cell in row.split() if not cell.lstrip("(").isdigit()][: len(want)] for row, want in zip(rows, expected, strict=True)] == expected
-    assert (tmp_path / "fleetsim-results" / "caught-bugs" / "generated-layouts" / "counterexample" / "map.json").is_file()
+    assert [
+        [cell for cell in row.split() if not cell.lstrip("(").isdigit()][: len(want)]
+        for row, want in zip(rows, expected, strict=True)
+    ] == expected
+    assert (
+        tmp_path / "fleetsim-results" / "caught-bugs" / "generated-layouts" / "counterexample" / "map.json"
+    ).is_file()
     # The caught-bugs suite is pinned to BFSPlanner, whatever --planner says.
     assert f"17 scenario(s) with fleetsim.planners:BFSPlanner, {RESERVING}: 15 passed, 2 xfailed" in out
     assert "FAILED" not in out
@@ -139,7 +168,9 @@ def test_on_a_terminal_a_live_progress_line_is_drawn_and_cleared(
 # -- --json ---------------------------------------------------------------------------------------
 
 
-def test_json_prints_one_result_per_scenario_per_line_with_the_direct_runs_hash(capsys: pytest.CaptureFixture[str]) -> None:
+def test_json_prints_one_result_per_scenario_per_line_with_the_direct_runs_hash(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
     status, out, err = run(capsys, "run", str(EXAMPLES), "--planner", RESERVING, "--json")
     assert status == 0
     results = json_lines(out)
@@ -188,7 +219,15 @@ def test_a_raising_planner_exits_1_and_its_traceback_is_shown(
 
 
 def test_the_planner_timeout_option_limits_each_call(user_project: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    argv = ("run", f"{EXAMPLES}::crossing", "--planner", "faulty_planners:Sleeping", "--planner-timeout", "0.2", "--json")
+    argv = (
+        "run",
+        f"{EXAMPLES}::crossing",
+        "--planner",
+        "faulty_planners:Sleeping",
+        "--planner-timeout",
+        "0.2",
+        "--json",
+    )
     status, out, _ = run(capsys, *argv)
     assert status == 1
     [result] = json_lines(out)
@@ -290,16 +329,26 @@ def test_a_folder_without_suites_exits_2(tmp_path: Path, capsys: pytest.CaptureF
     assert "no *.fleetsim.yaml files" in err
 
 
-def test_record_writes_each_runs_artifacts_and_a_picture_for_a_failed_one(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_record_writes_each_runs_artifacts_and_a_picture_for_a_failed_one(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     root = tmp_path / "runs"
-    status, out, _ = run(capsys, "run", str(EXAMPLES), "--planner", "fleetsim.planners:BFSPlanner", "--record", str(root), "--json")
+    status, out, _ = run(
+        capsys, "run", str(EXAMPLES), "--planner", "fleetsim.planners:BFSPlanner", "--record", str(root), "--json"
+    )
 
     assert status == 1
     documents = {document["scenario"]: document for document in json_lines(out)}
     crossing = root / "examples" / "crossing"
     assert documents["crossing"]["status"] == "failed"
     assert documents["crossing"]["artifacts"]["mcap"] == str(crossing / "run.mcap")
-    assert sorted(p.name for p in crossing.iterdir()) == ["failure.svg", "fleetsim.rviz", "result.json", "run.mcap", "trace.jsonl"]
+    assert sorted(p.name for p in crossing.iterdir()) == [
+        "failure.svg",
+        "fleetsim.rviz",
+        "result.json",
+        "run.mcap",
+        "trace.jsonl",
+    ]
     with (crossing / "run.mcap").open("rb") as stream:
         summary = make_reader(stream).get_summary()
     assert summary is not None and summary.statistics is not None and summary.statistics.message_count > 0
@@ -311,7 +360,9 @@ def test_record_writes_each_runs_artifacts_and_a_picture_for_a_failed_one(tmp_pa
         assert (folder / "failure.svg").exists() == (document["status"] == "failed")
 
 
-def test_without_record_no_artifacts_are_written(tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> None:
+def test_without_record_no_artifacts_are_written(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
     monkeypatch.chdir(tmp_path)
     status, out, _ = run(capsys, "run", f"{EXAMPLES}::crossing", "--planner", RESERVING, "--json")
     assert status == 0 and json_lines(out)[0]["artifacts"] == {}

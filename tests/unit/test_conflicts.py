@@ -134,4 +134,3 @@ def test_bbox_model_flags_every_pair_the_swept_model_flags() -> None:
 def test_layouts_with_zero_or_one_segment_have_trivial_conflicts(model: ConflictModel) -> None:
     assert build_layout([], vehicle_radius=0.3, conflict_model=model).segments == {}
     assert build_layout([_straight(4, (0, 0), (1, 0))], vehicle_radius=0.3, conflict_model=model).conflicts(4) == {4}
-

@@ -32,7 +32,8 @@ START = {1: 1, 2: 11, 3: 21}
 
 def _controller(*tasks: Task) -> FleetController:
     vehicles = tuple(
-        Vehicle(vid, segment, Traverse.FORWARD, Progress.FORWARD, DEFAULT_VEHICLE_TYPE) for vid, segment in START.items()
+        Vehicle(vid, segment, Traverse.FORWARD, Progress.FORWARD, DEFAULT_VEHICLE_TYPE)
+        for vid, segment in START.items()
     )
     types = {DEFAULT_VEHICLE_TYPE.name: DEFAULT_VEHICLE_TYPE}
     return FleetController(Scenario("controller", LAYOUT, types, vehicles, tasks))

@@ -30,34 +30,97 @@ TUG = MapOptions(robot_type="Acme.Tug")
 _NUMBER = {"type": "number"}
 _STRING = {"type": "string"}
 LIF_1_0 = {
-    "type": "object", "required": ["metaInformation", "layouts"],
+    "type": "object",
+    "required": ["metaInformation", "layouts"],
     "properties": {
-        "metaInformation": {"type": "object", "required": ["projectIdentification", "creator", "exportTimestamp", "lifVersion"],
-                            "properties": {k: _STRING for k in ("projectIdentification", "creator", "exportTimestamp", "lifVersion")}},
-        "layouts": {"type": "array", "items": {
-            "type": "object", "required": ["layoutId", "layoutVersion", "nodes", "edges", "stations"],
-            "properties": {
-                "layoutId": _STRING, "layoutVersion": _STRING,
-                "nodes": {"type": "array", "items": {
-                    "type": "object", "required": ["nodeId", "nodePosition", "vehicleTypeNodeProperties"],
-                    "properties": {"nodeId": _STRING,
-                                   "nodePosition": {"type": "object", "required": ["x", "y"], "properties": {"x": _NUMBER, "y": _NUMBER}},
-                                   "vehicleTypeNodeProperties": {"type": "array", "minItems": 1, "items": {
-                                       "type": "object", "required": ["vehicleTypeId"], "properties": {"vehicleTypeId": _STRING}}}}}},
-                "edges": {"type": "array", "items": {
-                    "type": "object", "required": ["edgeId", "startNodeId", "endNodeId", "vehicleTypeEdgeProperties"],
-                    "properties": {"edgeId": _STRING, "startNodeId": _STRING, "endNodeId": _STRING,
-                                   "vehicleTypeEdgeProperties": {"type": "array", "minItems": 1, "items": {
-                                       "type": "object", "required": ["vehicleTypeId", "rotationAllowed"],
-                                       "properties": {"vehicleTypeId": _STRING, "rotationAllowed": {"type": "boolean"},
-                                                      "trajectory": {"type": "object", "required": ["knotVector", "controlPoints"],
-                                                                     "properties": {"degree": {"type": "number", "minimum": 1},
-                                                                                    "knotVector": {"type": "array", "items": {"type": "number", "minimum": 0, "maximum": 1}},
-                                                                                    "controlPoints": {"type": "array", "items": {
-                                                                                        "type": "object", "required": ["x", "y"],
-                                                                                        "properties": {"x": _NUMBER, "y": _NUMBER, "weight": {"type": "number", "minimum": 1.0}}}}}}}}}}}},
-                "stations": {"type": "array"},
-            }}},
+        "metaInformation": {
+            "type": "object",
+            "required": ["projectIdentification", "creator", "exportTimestamp", "lifVersion"],
+            "properties": {k: _STRING for k in ("projectIdentification", "creator", "exportTimestamp", "lifVersion")},
+        },
+        "layouts": {
+            "type": "array",
+            "items": {
+                "type": "object",
+                "required": ["layoutId", "layoutVersion", "nodes", "edges", "stations"],
+                "properties": {
+                    "layoutId": _STRING,
+                    "layoutVersion": _STRING,
+                    "nodes": {
+                        "type": "array",
+                        "items": {
+                            "type": "object",
+                            "required": ["nodeId", "nodePosition", "vehicleTypeNodeProperties"],
+                            "properties": {
+                                "nodeId": _STRING,
+                                "nodePosition": {
+                                    "type": "object",
+                                    "required": ["x", "y"],
+                                    "properties": {"x": _NUMBER, "y": _NUMBER},
+                                },
+                                "vehicleTypeNodeProperties": {
+                                    "type": "array",
+                                    "minItems": 1,
+                                    "items": {
+                                        "type": "object",
+                                        "required": ["vehicleTypeId"],
+                                        "properties": {"vehicleTypeId": _STRING},
+                                    },
+                                },
+                            },
+                        },
+                    },
+                    "edges": {
+                        "type": "array",
+                        "items": {
+                            "type": "object",
+                            "required": ["edgeId", "startNodeId", "endNodeId", "vehicleTypeEdgeProperties"],
+                            "properties": {
+                                "edgeId": _STRING,
+                                "startNodeId": _STRING,
+                                "endNodeId": _STRING,
+                                "vehicleTypeEdgeProperties": {
+                                    "type": "array",
+                                    "minItems": 1,
+                                    "items": {
+                                        "type": "object",
+                                        "required": ["vehicleTypeId", "rotationAllowed"],
+                                        "properties": {
+                                            "vehicleTypeId": _STRING,
+                                            "rotationAllowed": {"type": "boolean"},
+                                            "trajectory": {
+                                                "type": "object",
+                                                "required": ["knotVector", "controlPoints"],
+                                                "properties": {
+                                                    "degree": {"type": "number", "minimum": 1},
+                                                    "knotVector": {
+                                                        "type": "array",
+                                                        "items": {"type": "number", "minimum": 0, "maximum": 1},
+                                                    },
+                                                    "controlPoints": {
+                                                        "type": "array",
+                                                        "items": {
+                                                            "type": "object",
+                                                            "required": ["x", "y"],
+                                                            "properties": {
+                                                                "x": _NUMBER,
+                                                                "y": _NUMBER,
+                                                                "weight": {"type": "number", "minimum": 1.0},
+                                                            },
+                                                        },
+                                                    },
+                                                },
+                                            },
+                                        },
+                                    },
+                                },
+                            },
+                        },
+                    },
+                    "stations": {"type": "array"},
+                },
+            },
+        },
     },
 }
 
@@ -108,8 +171,16 @@ def canonical(layout: Layout) -> tuple[Any, ...]:
         points = s.waypoints[::-1] if sid in flipped else s.waypoints
         direction = Direction.FORWARD if sid in flipped else s.direction
         segments.append((sid, direction, tuple((round(x, 6), round(y, 6)) for x, y in points)))
-    connections = sorted((c.from_segment, way(c.from_segment, c.from_traverse), c.to_segment, way(c.to_segment, c.to_traverse),
-                          c.joint.value) for c in layout.connections)
+    connections = sorted(
+        (
+            c.from_segment,
+            way(c.from_segment, c.from_traverse),
+            c.to_segment,
+            way(c.to_segment, c.to_traverse),
+            c.joint.value,
+        )
+        for c in layout.connections
+    )
     return tuple(segments), tuple(connections), tuple((sid, layout.conflicts(sid)) for sid in layout.segments)
 
 
@@ -124,7 +195,9 @@ def test_a_tiled_map_converted_to_lif_and_back_to_tiled_has_the_same_layout(tmp_
     assert canonical(layout_of(original)) == canonical(layout_of(again))
     # Unnamed segments get edge ids E<id> (E<id>-back against their waypoints), which come back as names.
     assert [seg.names for seg in again.segments] == [
-        (f"E{seg.id}", f"E{seg.id}-back") if seg.direction is Direction.BOTH else (f"E{seg.id}",) for seg in original.segments]
+        (f"E{seg.id}", f"E{seg.id}-back") if seg.direction is Direction.BOTH else (f"E{seg.id}",)
+        for seg in original.segments
+    ]
 
 
 def test_an_rmf_building_converted_to_tiled_keeps_its_layout_and_lane_names(tmp_path: Path) -> None:
@@ -143,9 +216,13 @@ def test_the_convert_command_says_what_it_wrote(tmp_path: Path, capsys: pytest.C
     assert any("warning not-modelled: a station" in line for line in printed)
 
 
-def test_the_convert_command_refuses_an_output_it_cannot_write(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_the_convert_command_refuses_an_output_it_cannot_write(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     assert main(["convert", str(HALL), str(tmp_path / "hall.svg"), "--robot-type", "Acme.Tug"]) == 1
-    assert "the output must end in .lif.json (LIF 1.0) or .json, .tmj, .tmx (Tiled), not '.svg'" in capsys.readouterr().err
+    assert (
+        "the output must end in .lif.json (LIF 1.0) or .json, .tmj, .tmx (Tiled), not '.svg'" in capsys.readouterr().err
+    )
 
 
 def test_inspect_lists_id_name_length_direction_and_ends(capsys: pytest.CaptureFixture[str]) -> None:
@@ -153,7 +230,15 @@ def test_inspect_lists_id_name_length_direction_and_ends(capsys: pytest.CaptureF
     lines = capsys.readouterr().out.splitlines()
     header = next(i for i, line in enumerate(lines) if line.startswith("  id  name"))
     assert lines[header].split() == ["id", "name", "shape", "direction", "length", "from", "->", "to", "(points)"]
-    assert lines[header + 6].split()[:7] == ["6", "ward_a--ward_b", "straight", "forward", "10.000", "(15.000,", "-15.000)"]
+    assert lines[header + 6].split()[:7] == [
+        "6",
+        "ward_a--ward_b",
+        "straight",
+        "forward",
+        "10.000",
+        "(15.000,",
+        "-15.000)",
+    ]
 
 
 def test_inspect_json_carries_each_segments_names(capsys: pytest.CaptureFixture[str]) -> None:
@@ -165,14 +250,18 @@ def test_inspect_json_carries_each_segments_names(capsys: pytest.CaptureFixture[
 
 def test_a_tiled_map_given_lif_options_notes_that_they_do_not_apply(tmp_path: Path) -> None:
     site = load_site_map(MIXED, MapOptions(layout="x"))
-    assert site.warnings[-1].endswith("warning option-ignored: map option 'layout' (for LIF and RMF maps) (once, first at "
-                                      "map_options); it does not apply to this map")
+    assert site.warnings[-1].endswith(
+        "warning option-ignored: map option 'layout' (for LIF and RMF maps) (once, first at "
+        "map_options); it does not apply to this map"
+    )
     assert not any("option-ignored" in w for w in load_site_map(MIXED).warnings)
 
 
 def test_segments_keep_their_names_through_a_tiled_file(tmp_path: Path) -> None:
     from fleetsim.load.tiled_writer import write_map
 
-    segment = Segment(3, load_site_map(MIXED).segments[0].shape, Direction.BOTH, ((0.0, 0.0), (2.0, 0.0)), ("a \"quoted\" name",))
+    segment = Segment(
+        3, load_site_map(MIXED).segments[0].shape, Direction.BOTH, ((0.0, 0.0), (2.0, 0.0)), ('a "quoted" name',)
+    )
     for suffix in (".json", ".tmx"):
         assert load_site_map(write_map(tmp_path / f"m{suffix}", [segment])).segments[0].names == ('a "quoted" name',)

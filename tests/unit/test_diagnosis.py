@@ -26,7 +26,10 @@ from fleetsim.sim.result import RunResult
 
 def line(count: int, length: float = 4.0) -> tuple[Segment, ...]:
     """``count`` two-way straights in a row along x, ids 1..count: a corridor with no passing place."""
-    return tuple(Segment(i, Shape.STRAIGHT, Direction.BOTH, ((length * i, 0.0), (length * i + length, 0.0))) for i in range(1, count + 1))
+    return tuple(
+        Segment(i, Shape.STRAIGHT, Direction.BOTH, ((length * i, 0.0), (length * i + length, 0.0)))
+        for i in range(1, count + 1)
+    )
 
 
 def hexagon(side: float = 4.0) -> tuple[Segment, ...]:
@@ -106,11 +109,17 @@ def test_two_vehicles_head_on_in_a_corridor_wait_for_each_other_in_a_cycle(tmp_p
 
 def test_three_vehicles_round_a_block_form_one_cycle_of_three(tmp_path: Path) -> None:
     # Each stands on every other side of the ring and is sent past the vehicle ahead of it.
-    scenario = make_scenario(tmp_path, hexagon(), "1,1,forward,,\n2,3,forward,,\n3,5,forward,,\n", "1,4,\n2,6,\n3,2,\n", deadlock_after=2.0)
+    scenario = make_scenario(
+        tmp_path, hexagon(), "1,1,forward,,\n2,3,forward,,\n3,5,forward,,\n", "1,4,\n2,6,\n3,2,\n", deadlock_after=2.0
+    )
     result = run_scenario(scenario, GreedyPlanner())
     assert result.ended == "deadlock"
     found = findings(result)
-    assert {v: (f["reason"], f["blocked_by"]) for v, f in found.items()} == {1: ("waits-for", [2]), 2: ("waits-for", [3]), 3: ("waits-for", [1])}
+    assert {v: (f["reason"], f["blocked_by"]) for v, f in found.items()} == {
+        1: ("waits-for", [2]),
+        2: ("waits-for", [3]),
+        3: ("waits-for", [1]),
+    }
     document = stuck_failure(result)
     assert document["cycles"] == [[1, 2, 3]]
     assert [(r["kind"], r["cycle"]) for r in document["roots"]] == [("cycle", [1, 2, 3])]
@@ -137,11 +146,22 @@ def dead_end(tmp_path: Path, third: bool, idle_task: bool = False) -> Scenario:
 def test_a_vehicle_with_no_tasks_parked_on_the_only_way_is_the_root_cause(tmp_path: Path) -> None:
     result = run_scenario(dead_end(tmp_path, third=True), GreedyPlanner())
     found = findings(result)
-    assert (found[1]["reason"], found[1]["blocked_by"], found[1]["idle"], found[1]["contested"]) == ("blocked-by-idle", [2], [2], [5])
+    assert (found[1]["reason"], found[1]["blocked_by"], found[1]["idle"], found[1]["contested"]) == (
+        "blocked-by-idle",
+        [2],
+        [2],
+        [5],
+    )
     assert (found[3]["reason"], found[3]["blocked_by"], found[3]["chain"]) == ("waits-for", [1], [3, 1, 2])
     assert 2 not in found  # no pending task: not a finding, but the root cause
     [root] = stuck_failure(result)["roots"]
-    assert (root["kind"], root["vehicles"], root["segments"], root["waiting"], root["behind"]) == ("idle", [2], [5], [1], [1, 3])
+    assert (root["kind"], root["vehicles"], root["segments"], root["waiting"], root["behind"]) == (
+        "idle",
+        [2],
+        [5],
+        [1],
+        [1, 3],
+    )
     assert result.failures[0].message == (
         "vehicle 2 (no tasks left) stands on segment 5, which vehicle 1 needs; 1 more vehicle waits behind them"
     )
@@ -196,7 +216,9 @@ def test_a_planner_that_answers_only_route_errors_says_so_in_the_headline(tmp_pa
     assert found[1]["reason"] == "no-route" and asked == round(result.sim_time / 0.1)
     # Stamped with the end of the step of the call (the first call is at t = 0).
     assert (found[1]["route_errors"], found[1]["since"], found[1]["message"]) == (asked, 0.1, "no route to segment 3")
-    assert result.failures[0].message.startswith(f"the planner answered nothing but route errors ({asked}); vehicle 1: the planner finds no route")
+    assert result.failures[0].message.startswith(
+        f"the planner answered nothing but route errors ({asked}); vehicle 1: the planner finds no route"
+    )
     report = failure_report(result, heading="h")
     assert f"route errors: {asked} (1 distinct message)" in report
     assert f"  {asked}x, vehicle 1, t = 0.10-{result.sim_time:.2f} s: no route to segment 3" in report
@@ -252,7 +274,9 @@ def test_the_report_lists_root_causes_cycles_and_one_line_per_vehicle(tmp_path: 
 
 
 def test_the_failure_picture_draws_who_waits_for_whom(tmp_path: Path) -> None:
-    scenario = make_scenario(tmp_path, hexagon(), "1,1,forward,,\n2,3,forward,,\n3,5,forward,,\n", "1,4,\n2,6,\n3,2,\n", deadlock_after=2.0)
+    scenario = make_scenario(
+        tmp_path, hexagon(), "1,1,forward,,\n2,3,forward,,\n3,5,forward,,\n", "1,4,\n2,6,\n3,2,\n", deadlock_after=2.0
+    )
     result = run_scenario(scenario, GreedyPlanner())
     picture = failure_picture(scenario, result)
     assert picture is not None
@@ -285,10 +309,20 @@ def test_a_collision_picture_has_no_wait_for_layer(tmp_path: Path) -> None:
 def test_the_recording_shows_the_wait_for_relations_at_the_failure_time(tmp_path: Path) -> None:
     from mcap_ros2.reader import read_ros2_messages
 
-    scenario = make_scenario(tmp_path / "s", hexagon(), "1,1,forward,,\n2,3,forward,,\n3,5,forward,,\n", "1,4,\n2,6,\n3,2,\n", deadlock_after=2.0)
+    scenario = make_scenario(
+        tmp_path / "s",
+        hexagon(),
+        "1,1,forward,,\n2,3,forward,,\n3,5,forward,,\n",
+        "1,4,\n2,6,\n3,2,\n",
+        deadlock_after=2.0,
+    )
     result = run_scenario(scenario, GreedyPlanner())
     paths = write_run_artifacts(tmp_path / "run", result, scenario=scenario)
-    markers = [(m.log_time_ns, marker) for m in read_ros2_messages(paths["mcap"], topics=["/fleetsim/stuck"]) for marker in m.ros_msg.markers]
+    markers = [
+        (m.log_time_ns, marker)
+        for m in read_ros2_messages(paths["mcap"], topics=["/fleetsim/stuck"])
+        for marker in m.ros_msg.markers
+    ]
     assert {time for time, _ in markers} == {round(result.sim_time * 1e9)}
     arrows = [marker for _, marker in markers if marker.ns == "wait_for_cycle"]
     assert len(arrows) == 3 and all(marker.type == 0 and len(marker.points) == 2 for marker in arrows)

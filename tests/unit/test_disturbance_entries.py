@@ -32,14 +32,17 @@ def load(tmp_path: Path, entry: str) -> Scenario:
 
 
 def test_declared_random_and_hunt_keys_load_as_written(tmp_path: Path) -> None:
-    scenario = load(tmp_path, """\
+    scenario = load(
+        tmp_path,
+        """\
     disturbances:
       - {vehicle: 2, at: 12.0, stop: 20}
       - {vehicle: 1, on_segment: 3, stop: 5}
       - {vehicle: 2, at: 30, slow: 0.5, for: 40}
     random_disturbances: {seed: 7, stops_per_vehicle_hour: 6, stop: [5, 30]}
     hunt_disturbances: {count: [1, 2], stop: [1, 30], examples: 20}
-""")
+""",
+    )
     assert scenario.disturbances == (
         Disturbance(2, "stop", 20.0, at=12.0),
         Disturbance(1, "stop", 5.0, on_segment=3),
@@ -97,8 +100,14 @@ def test_a_valid_neighbour_of_each_invalid_disturbance_loads(tmp_path: Path, ite
 @pytest.mark.parametrize(
     ("block", "words"),
     [
-        ("random_disturbances: {seed: 1, stops_per_vehicle_hour: 6, stop: [30, 5]}", ["stop=[30, 5] must be [min, max]"]),
-        ("random_disturbances: {seed: 1, stops_per_vehicle_hour: -1, stop: [5, 30]}", ["stops_per_vehicle_hour", ">= 0"]),
+        (
+            "random_disturbances: {seed: 1, stops_per_vehicle_hour: 6, stop: [30, 5]}",
+            ["stop=[30, 5] must be [min, max]"],
+        ),
+        (
+            "random_disturbances: {seed: 1, stops_per_vehicle_hour: -1, stop: [5, 30]}",
+            ["stops_per_vehicle_hour", ">= 0"],
+        ),
         ("random_disturbances: {seed: 1, stop: [5, 30]}", ["stops_per_vehicle_hour"]),
         ("hunt_disturbances: {count: [3, 1]}", ["count=[3, 1] must be [min, max]"]),
         ("hunt_disturbances: {examples: 0}", ["examples", ">= 1"]),
@@ -113,8 +122,14 @@ def test_invalid_random_and_hunt_blocks_are_located_errors(tmp_path: Path, block
 
 def test_a_generated_entry_takes_hunt_but_not_declared_disturbances(tmp_path: Path) -> None:
     path = tmp_path / "g.fleetsim.yaml"
-    path.write_text("fleetsim: 1\nname: g\nscenarios:\n  - name: g\n    generate: {examples: 2}\n    hunt_disturbances: {count: [1, 1]}\n", encoding="utf-8")
+    path.write_text(
+        "fleetsim: 1\nname: g\nscenarios:\n  - name: g\n    generate: {examples: 2}\n    hunt_disturbances: {count: [1, 1]}\n",
+        encoding="utf-8",
+    )
     assert load_suite(path).scenarios[0].hunt_disturbances == HuntDisturbances(count=(1, 1))
-    path.write_text("fleetsim: 1\nname: g\nscenarios:\n  - name: g\n    generate: {examples: 2}\n    disturbances: [{vehicle: 1, at: 1, stop: 1}]\n", encoding="utf-8")
+    path.write_text(
+        "fleetsim: 1\nname: g\nscenarios:\n  - name: g\n    generate: {examples: 2}\n    disturbances: [{vehicle: 1, at: 1, stop: 1}]\n",
+        encoding="utf-8",
+    )
     with pytest.raises(SuiteError, match=r"g.fleetsim.yaml:6.*not known in advance"):
         load_suite(path)

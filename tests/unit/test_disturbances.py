@@ -24,7 +24,10 @@ DT = 0.1
 
 
 def straights(n: int, length: float = 10.0) -> tuple[Segment, ...]:
-    return tuple(Segment(i, Shape.STRAIGHT, Direction.BOTH, ((length * (i - 1), 0.0), (length * i, 0.0))) for i in range(1, n + 1))
+    return tuple(
+        Segment(i, Shape.STRAIGHT, Direction.BOTH, ((length * (i - 1), 0.0), (length * i, 0.0)))
+        for i in range(1, n + 1)
+    )
 
 
 def lane(tmp_path: Path, vehicles: str = "1,1,forward,,\n", tasks: str = "1,6,\n", **settings: object) -> Scenario:
@@ -95,7 +98,9 @@ def test_a_slowed_vehicle_never_exceeds_the_factor_once_braked_down(tmp_path: Pa
     assert max(speed for t, speed, _ in during if t >= braked_by) <= 0.4 + 1e-9
     assert all(speed <= prev + 1e-9 for (t, speed, _), (_, prev, _) in zip(during[1:], during))  # never accelerates
     assert max(speed for t, speed, _, _ in seen if t > 30.0 + 1.0) > 0.9  # full speed again after
-    assert [(d.kind, d.factor, d.start, d.end) for d in result.disturbances] == [("slow", 0.4, 10.0, pytest.approx(30.0))]
+    assert [(d.kind, d.factor, d.start, d.end) for d in result.disturbances] == [
+        ("slow", 0.4, 10.0, pytest.approx(30.0))
+    ]
 
 
 def test_a_stopped_vehicle_keeps_its_reservations(tmp_path: Path) -> None:
@@ -144,7 +149,9 @@ def test_the_deadlock_timer_counts_from_the_end_of_a_stop(tmp_path: Path) -> Non
     # narrowly: a 1 s stop at 13 s moves the deadlock to 14 + 5 s; a slow does not hold the timer at all
     short = run_scenario(replace(scenario, disturbances=(Disturbance(1, "stop", 1.0, at=13.0),)), FixesNothing())
     assert short.ended == "deadlock" and short.sim_time == pytest.approx(19.0, abs=DT + 1e-9)
-    slowed = run_scenario(replace(scenario, disturbances=(Disturbance(1, "slow", 20.0, at=13.0, factor=0.5),)), FixesNothing())
+    slowed = run_scenario(
+        replace(scenario, disturbances=(Disturbance(1, "slow", 20.0, at=13.0, factor=0.5),)), FixesNothing()
+    )
     assert slowed.ended == "deadlock" and slowed.sim_time == plain.sim_time
 
 
@@ -175,10 +182,15 @@ def test_the_same_seed_draws_the_same_stops_and_another_seed_others(tmp_path: Pa
     assert 3 <= len(first) <= 40  # about 6 per vehicle-hour
     # pinned: the documented draw gives these numbers on every platform
     assert [(d.vehicle, d.at, d.duration) for d in first[:2]] == PINNED
-    scenario = replace(lane(tmp_path, "1,1,forward,,\n2,6,backward,,\n", "1,3,\n2,4,\n"), random_disturbances=replace(spec, stops_per_vehicle_hour=600.0))
+    scenario = replace(
+        lane(tmp_path, "1,1,forward,,\n2,6,backward,,\n", "1,3,\n2,4,\n"),
+        random_disturbances=replace(spec, stops_per_vehicle_hour=600.0),
+    )
     one, two = run_scenario(scenario, ReservingPlanner()), run_scenario(scenario, ReservingPlanner())
     assert one.disturbances and one.trace_hash == two.trace_hash and one.disturbances == two.disturbances
-    other = run_scenario(replace(scenario, random_disturbances=replace(spec, seed=9, stops_per_vehicle_hour=600.0)), ReservingPlanner())
+    other = run_scenario(
+        replace(scenario, random_disturbances=replace(spec, seed=9, stops_per_vehicle_hour=600.0)), ReservingPlanner()
+    )
     assert other.disturbances != one.disturbances and other.trace_hash != one.trace_hash
 
 

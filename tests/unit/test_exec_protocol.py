@@ -43,14 +43,20 @@ def test_init_and_requests_match_their_schemas_and_updates_carry_only_changes() 
     jsonschema.validate(encode_init(scenario.layout, first), schema("init"))
     full = encode_fleet(first)
     task = scenario.tasks[0]
-    jsonschema.validate({"type": "plan_routes", "id": 1, "vehicle": task.vehicle_id, "task": encode_task(task), "fleet": full}, schema("request"))
+    jsonschema.validate(
+        {"type": "plan_routes", "id": 1, "vehicle": task.vehicle_id, "task": encode_task(task), "fleet": full},
+        schema("request"),
+    )
     assert [v["id"] for v in full["vehicles"]] == sorted(v.id for v in scenario.vehicles)
 
     moved = controller.states[task.vehicle_id]._replace(x=123.0)
     controller.set_state(moved)
     second = controller.snapshot(0.1)
     update = encode_fleet(second, first)
-    jsonschema.validate({"type": "fix_legs", "id": 2, "vehicle": task.vehicle_id, "task": encode_task(task), "fleet": update}, schema("request"))
+    jsonschema.validate(
+        {"type": "fix_legs", "id": 2, "vehicle": task.vehicle_id, "task": encode_task(task), "fleet": update},
+        schema("request"),
+    )
     assert [v["id"] for v in update["vehicles"]] == [task.vehicle_id]
     assert update["plans"] == [] and update["tasks"] == [] and update["time"] == 0.1
 
@@ -73,7 +79,10 @@ def test_the_python_client_keeps_the_fleet_by_vehicle_id_across_updates() -> Non
 
 
 def test_an_answer_decodes_to_plans_then_route_errors_and_a_request_error_is_raised() -> None:
-    plan = {"vehicle_id": 1, "legs": [{"segment": 1, "traverse": "forward", "progress": "reverse", "fixed": True, "goal_for_task": None}]}
+    plan = {
+        "vehicle_id": 1,
+        "legs": [{"segment": 1, "traverse": "forward", "progress": "reverse", "fixed": True, "goal_for_task": None}],
+    }
     items = decode_response({"id": 1, "plans": [plan], "route_errors": [{"vehicle_id": 2, "message": "blocked"}]})
     assert isinstance(items[0], FleetPlan) and items[0].legs[0].progress.value == "reverse"
     assert items[1] == RouteError(2, "blocked")
@@ -87,7 +96,13 @@ def test_a_served_planner_answers_like_the_planner_itself() -> None:
     fleet = controller.snapshot(0.0)
     session = _Session(json.loads(json.dumps(encode_init(scenario.layout, fleet))))
     task = scenario.tasks[0]
-    request = {"type": "plan_routes", "id": 1, "vehicle": task.vehicle_id, "task": encode_task(task), "fleet": encode_fleet(fleet)}
+    request = {
+        "type": "plan_routes",
+        "id": 1,
+        "vehicle": task.vehicle_id,
+        "task": encode_task(task),
+        "fleet": encode_fleet(fleet),
+    }
     answer = session.answer(ReservingPlanner(), json.loads(json.dumps(request)))
     jsonschema.validate(answer, schema("response"))
     assert decode_response(answer) == list(ReservingPlanner().plan_routes(task, fleet, scenario.layout))
@@ -106,7 +121,10 @@ def test_the_disturbed_field_travels_only_while_set_and_protocol_1_0_clients_are
     second = controller.snapshot(0.1)
     update = json.loads(json.dumps(encode_fleet(second, first)))
     assert update["vehicles"][0]["disturbed"] == "stopped"
-    jsonschema.validate({"type": "fix_legs", "id": 2, "vehicle": 1, "task": encode_task(scenario.tasks[0]), "fleet": update}, schema("request"))
+    jsonschema.validate(
+        {"type": "fix_legs", "id": 2, "vehicle": 1, "task": encode_task(scenario.tasks[0]), "fleet": update},
+        schema("request"),
+    )
     assert session.snapshot(update).vehicles[1].disturbed is Disturbed.STOPPED
     with pytest.raises(jsonschema.ValidationError):
         jsonschema.validate({**update["vehicles"][0], "disturbed": "late"}, schema("request")["$defs"]["vehicle_state"])

@@ -77,11 +77,18 @@ def test_a_sound_planner_passes_the_hunt(tmp_path: Path) -> None:
 def test_fleetsim_run_and_validate_take_generated_entries(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     path = write_suite(tmp_path)
     assert main(["validate", str(path)]) == 0
-    assert "ok   random-loops: generated (loop layouts of size 1-2, 1-3 vehicles, 1-2 tasks each, 30 examples)" in capsys.readouterr().out
+    assert (
+        "ok   random-loops: generated (loop layouts of size 1-2, 1-3 vehicles, 1-2 tasks each, 30 examples)"
+        in capsys.readouterr().out
+    )
     status = main(["run", str(path), "--planner", "fleetsim.planners:BFSPlanner", "--record", str(tmp_path / "runs")])
     err = capsys.readouterr().err
     assert status == 1
-    assert "reduced it to a counterexample" in err and "It is saved as" in err and "  - name: random-loops-counterexample" in err
+    assert (
+        "reduced it to a counterexample" in err
+        and "It is saved as" in err
+        and "  - name: random-loops-counterexample" in err
+    )
     assert (tmp_path / "runs" / "hunting" / "random-loops" / "counterexample" / "map.json").is_file()
     assert (tmp_path / "runs" / "hunting" / "random-loops" / "run.mcap").is_file()
 
@@ -142,7 +149,9 @@ def test_the_counts_say_exactly_how_many_scenarios_ran(
     assert found.ran == found.generated + found.shrink_runs + 1 == len(made), "one more run records the counterexample"
 
     path = write_suite(tmp_path, examples=5)
-    assert main(["run", str(path), "--planner", "fleetsim.planners:BFSPlanner", "--record", str(tmp_path / "runs")]) == 1
+    assert (
+        main(["run", str(path), "--planner", "fleetsim.planners:BFSPlanner", "--record", str(tmp_path / "runs")]) == 1
+    )
     err = capsys.readouterr().err
     document = json.loads((tmp_path / "runs" / "hunting" / "random-loops" / "result.json").read_text(encoding="utf-8"))
     assert (document["generated"], document["shrink_runs"]) == (found.generated, found.shrink_runs)
@@ -163,11 +172,15 @@ def test_a_passing_hunt_counts_the_examples_it_ran(tmp_path: Path) -> None:
         return made[-1]
 
     found = hunt(spec, suite, planner, identity="reserving", derandomize=True)
-    assert found.counterexample is None and (found.generated, found.shrink_runs, found.ran) == (6, 0, 6) and len(made) == 6
+    assert (
+        found.counterexample is None and (found.generated, found.shrink_runs, found.ran) == (6, 0, 6) and len(made) == 6
+    )
     assert found.result is not None and found.result.passed, "the last run, for the summary row"
 
 
-def test_a_passing_generated_entry_has_a_summary_row_with_the_examples_it_ran(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_a_passing_generated_entry_has_a_summary_row_with_the_examples_it_ran(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     path = write_suite(tmp_path, examples=4)
     assert main(["run", str(path), "--planner", "fleetsim.planners:ReservingPlanner"]) == 0
     table = capsys.readouterr().out.splitlines()
@@ -195,14 +208,22 @@ def test_a_generate_block_whose_layouts_cannot_hold_its_vehicles_is_refused_with
     )
 
 
-def test_fleetsim_validate_refuses_a_generate_block_no_layout_has_room_for(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_fleetsim_validate_refuses_a_generate_block_no_layout_has_room_for(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     path = write_warehouse_suite(tmp_path, size="[1, 1]", vehicles="[4, 5]")
     assert main(["validate", str(path)]) == 1
     out = capsys.readouterr().out
-    assert "  FAIL crowded-warehouse\n" in out and f"{path}:8: field 'generate'" in out and "0 scenario(s) valid, 1 failed" in out
+    assert (
+        "  FAIL crowded-warehouse\n" in out
+        and f"{path}:8: field 'generate'" in out
+        and "0 scenario(s) valid, 1 failed" in out
+    )
 
 
-def test_fleetsim_validate_accepts_a_generate_block_with_room(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_fleetsim_validate_accepts_a_generate_block_with_room(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     path = write_warehouse_suite(tmp_path, size="[1, 2]", vehicles="[2, 4]")
     assert main(["validate", str(path)]) == 0
     assert "  ok   crowded-warehouse: generated" in capsys.readouterr().out

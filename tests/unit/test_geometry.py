@@ -39,9 +39,7 @@ def _distance(a0: P, a1: P, b0: P, b1: P) -> float:
         pytest.param((0, 0), (4, 0), (1, -1), (3, -1), 1.0, id="parallel-shorter-below"),
     ],
 )
-def test_segment_distance_matches_known_geometry(
-    a0: P, a1: P, b0: P, b1: P, expected: float
-) -> None:
+def test_segment_distance_matches_known_geometry(a0: P, a1: P, b0: P, b1: P, expected: float) -> None:
     assert _distance(a0, a1, b0, b1) == pytest.approx(expected, abs=1e-12)
     assert _distance(b1, b0, a1, a0) == pytest.approx(expected, abs=1e-12)
 
@@ -69,8 +67,10 @@ def _brute_force_box_pairs(boxes: np.ndarray) -> set[tuple[int, int]]:
         (i, j)
         for i in range(n)
         for j in range(i + 1, n)
-        if boxes[i, 0] <= boxes[j, 2] and boxes[j, 0] <= boxes[i, 2]
-        and boxes[i, 1] <= boxes[j, 3] and boxes[j, 1] <= boxes[i, 3]
+        if boxes[i, 0] <= boxes[j, 2]
+        and boxes[j, 0] <= boxes[i, 2]
+        and boxes[i, 1] <= boxes[j, 3]
+        and boxes[j, 1] <= boxes[i, 3]
     }
 
 

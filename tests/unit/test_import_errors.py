@@ -17,9 +17,16 @@ from fleetsim.load.site_map import load_site_map
 
 from site_documents import edge, layout, lif_v1, node, nurbs, quarter, save_json, save_yaml, to_v2
 
-BASE = lif_v1(layout("hall", [node("A", 0, 0), node("B", 5, 0), node("C", 5, 5)], [
-    edge("A-B", "A", "B"), edge("B-C", "B", "C", trajectory=quarter((5, 0), (5, 5), (5, 5))),
-]))
+BASE = lif_v1(
+    layout(
+        "hall",
+        [node("A", 0, 0), node("B", 5, 0), node("C", 5, 5)],
+        [
+            edge("A-B", "A", "B"),
+            edge("B-C", "B", "C", trajectory=quarter((5, 0), (5, 5), (5, 5))),
+        ],
+    )
+)
 Mutation = Callable[[Any], object]
 
 
@@ -33,6 +40,7 @@ def _set(path: str, value: object) -> Mutation:
             del target[last]
         else:
             target[last] = value
+
     return mutate
 
 
@@ -45,37 +53,155 @@ LIF_CASES: list[tuple[str, Mutation, dict[str, Any], str, str]] = [
     ("layouts-and-origins", _set("/origins", []), {}, "/", "has both 'layouts' (LIF 1.0) and 'origins' (LIF 2.0)"),
     ("layouts-empty", _set("/layouts", []), {}, "/layouts", "must not be empty"),
     ("layouts-not-list", _set("/layouts", {"a": 1}), {}, "/layouts", "{'a': 1} must be a list, not an object"),
-    ("layout-id-missing", _set("/layouts/0/layoutId", _DELETE), {}, "/layouts/0", "required member 'layoutId' is missing"),
+    (
+        "layout-id-missing",
+        _set("/layouts/0/layoutId", _DELETE),
+        {},
+        "/layouts/0",
+        "required member 'layoutId' is missing",
+    ),
     ("layout-id-number", _set("/layouts/0/layoutId", 5), {}, "/layouts/0/layoutId", "5 must be a string, not a number"),
     ("nodes-missing", _set("/layouts/0/nodes", _DELETE), {}, "/layouts/0", "required member 'nodes' is missing"),
-    ("node-id-twice", _set("/layouts/0/nodes/1/nodeId", "A"), {}, "/layouts/0/nodes/1/nodeId", "nodeId 'A' is used twice"),
+    (
+        "node-id-twice",
+        _set("/layouts/0/nodes/1/nodeId", "A"),
+        {},
+        "/layouts/0/nodes/1/nodeId",
+        "nodeId 'A' is used twice",
+    ),
     ("node-id-empty", _set("/layouts/0/nodes/1/nodeId", " "), {}, "/layouts/0/nodes/1/nodeId", "' ' must not be empty"),
-    ("x-string", _set("/layouts/0/nodes/0/nodePosition/x", "1.0"), {}, "/layouts/0/nodes/0/nodePosition/x", "'1.0' must be a number, not a string"),
-    ("y-missing", _set("/layouts/0/nodes/2/nodePosition/y", _DELETE), {}, "/layouts/0/nodes/2/nodePosition", "required member 'y' is missing"),
-    ("x-boolean", _set("/layouts/0/nodes/0/nodePosition/x", True), {}, "/layouts/0/nodes/0/nodePosition/x", "True must be a number, not a boolean"),
-    ("unknown-start-node", _set("/layouts/0/edges/0/startNodeId", "Q"), {}, "/layouts/0/edges/0/startNodeId", "startNodeId 'Q' is not a node of this layout"),
-    ("end-node-number", _set("/layouts/0/edges/0/endNodeId", 7), {}, "/layouts/0/edges/0/endNodeId", "7 must be a string, not a number"),
-    ("properties-not-list", _set("/layouts/0/edges/0/vehicleTypeEdgeProperties", "T"), {}, "/layouts/0/edges/0/vehicleTypeEdgeProperties", "'T' must be a list"),
-    ("type-id-missing", _set("/layouts/0/edges/0/vehicleTypeEdgeProperties/0/vehicleTypeId", _DELETE), {}, "/layouts/0/edges/0/vehicleTypeEdgeProperties/0", "required member 'vehicleTypeId' is missing"),
-    ("knots-too-few", _set(f"{TRAJECTORY}/knotVector", [0, 0, 1, 1]), {}, TRAJECTORY, "the knot vector has 4 values; 3 control points of degree 2 need 6"),
-    ("knot-above-one", _set(f"{TRAJECTORY}/knotVector", [0, 0, 0, 1, 1, 2]), {}, f"{TRAJECTORY}/knotVector/5", "knot 2.0 is outside [0, 1]"),
-    ("weight-zero", _set(f"{TRAJECTORY}/controlPoints/1/weight", 0), {}, TRAJECTORY, "weights=[1.0, 0.0, 1.0] must be finite and > 0"),
+    (
+        "x-string",
+        _set("/layouts/0/nodes/0/nodePosition/x", "1.0"),
+        {},
+        "/layouts/0/nodes/0/nodePosition/x",
+        "'1.0' must be a number, not a string",
+    ),
+    (
+        "y-missing",
+        _set("/layouts/0/nodes/2/nodePosition/y", _DELETE),
+        {},
+        "/layouts/0/nodes/2/nodePosition",
+        "required member 'y' is missing",
+    ),
+    (
+        "x-boolean",
+        _set("/layouts/0/nodes/0/nodePosition/x", True),
+        {},
+        "/layouts/0/nodes/0/nodePosition/x",
+        "True must be a number, not a boolean",
+    ),
+    (
+        "unknown-start-node",
+        _set("/layouts/0/edges/0/startNodeId", "Q"),
+        {},
+        "/layouts/0/edges/0/startNodeId",
+        "startNodeId 'Q' is not a node of this layout",
+    ),
+    (
+        "end-node-number",
+        _set("/layouts/0/edges/0/endNodeId", 7),
+        {},
+        "/layouts/0/edges/0/endNodeId",
+        "7 must be a string, not a number",
+    ),
+    (
+        "properties-not-list",
+        _set("/layouts/0/edges/0/vehicleTypeEdgeProperties", "T"),
+        {},
+        "/layouts/0/edges/0/vehicleTypeEdgeProperties",
+        "'T' must be a list",
+    ),
+    (
+        "type-id-missing",
+        _set("/layouts/0/edges/0/vehicleTypeEdgeProperties/0/vehicleTypeId", _DELETE),
+        {},
+        "/layouts/0/edges/0/vehicleTypeEdgeProperties/0",
+        "required member 'vehicleTypeId' is missing",
+    ),
+    (
+        "knots-too-few",
+        _set(f"{TRAJECTORY}/knotVector", [0, 0, 1, 1]),
+        {},
+        TRAJECTORY,
+        "the knot vector has 4 values; 3 control points of degree 2 need 6",
+    ),
+    (
+        "knot-above-one",
+        _set(f"{TRAJECTORY}/knotVector", [0, 0, 0, 1, 1, 2]),
+        {},
+        f"{TRAJECTORY}/knotVector/5",
+        "knot 2.0 is outside [0, 1]",
+    ),
+    (
+        "weight-zero",
+        _set(f"{TRAJECTORY}/controlPoints/1/weight", 0),
+        {},
+        TRAJECTORY,
+        "weights=[1.0, 0.0, 1.0] must be finite and > 0",
+    ),
     ("degree-fraction", _set(f"{TRAJECTORY}/degree", 1.5), {}, f"{TRAJECTORY}/degree", "1.5 must be a whole number"),
-    ("control-x-null", _set(f"{TRAJECTORY}/controlPoints/0/x", None), {}, f"{TRAJECTORY}/controlPoints/0/x", "None must be a number, not null"),
-    ("trajectory-off-its-node", _set(f"{TRAJECTORY}/controlPoints/0/x", 6.0), {}, TRAJECTORY, "the trajectory starts at (6, 0), 1 m from its node 'B' at (5, 0)"),
-    ("edge-to-itself", _set("/layouts/0/edges/0/endNodeId", "A"), {}, "/layouts/0/edges/0", "edge 'A-B' joins node 'A' to itself without a trajectory"),
-    ("type-twice", lambda d: d["layouts"][0]["edges"][0]["vehicleTypeEdgeProperties"].append({"vehicleTypeId": "T", "rotationAllowed": True}),
-     {}, "/layouts/0/edges/0/vehicleTypeEdgeProperties/1", "robot type 'T' has two property objects on this edge"),
+    (
+        "control-x-null",
+        _set(f"{TRAJECTORY}/controlPoints/0/x", None),
+        {},
+        f"{TRAJECTORY}/controlPoints/0/x",
+        "None must be a number, not null",
+    ),
+    (
+        "trajectory-off-its-node",
+        _set(f"{TRAJECTORY}/controlPoints/0/x", 6.0),
+        {},
+        TRAJECTORY,
+        "the trajectory starts at (6, 0), 1 m from its node 'B' at (5, 0)",
+    ),
+    (
+        "edge-to-itself",
+        _set("/layouts/0/edges/0/endNodeId", "A"),
+        {},
+        "/layouts/0/edges/0",
+        "edge 'A-B' joins node 'A' to itself without a trajectory",
+    ),
+    (
+        "type-twice",
+        lambda d: d["layouts"][0]["edges"][0]["vehicleTypeEdgeProperties"].append(
+            {"vehicleTypeId": "T", "rotationAllowed": True}
+        ),
+        {},
+        "/layouts/0/edges/0/vehicleTypeEdgeProperties/1",
+        "robot type 'T' has two property objects on this edge",
+    ),
     ("no-edges", _set("/layouts/0/edges", []), {}, "/layouts/0", "layout 'hall' has no edges"),
-    ("unknown-layout", lambda d: None, {"layout": "hal"}, "", "map_options.layout='hal' is not a layout of this file ('hall'); did you mean 'hall'?"),
-    ("unknown-robot-type", lambda d: None, {"robot_type": "U"}, "", "map_options.robot_type='U' has no edges in layout 'hall' (robot types there: 'T')"),
-    ("duplicate-layout-id", lambda d: d["layouts"].append(copy.deepcopy(d["layouts"][0])), {}, "/layouts/1/layoutId", "layoutId 'hall' is used twice"),
+    (
+        "unknown-layout",
+        lambda d: None,
+        {"layout": "hal"},
+        "",
+        "map_options.layout='hal' is not a layout of this file ('hall'); did you mean 'hall'?",
+    ),
+    (
+        "unknown-robot-type",
+        lambda d: None,
+        {"robot_type": "U"},
+        "",
+        "map_options.robot_type='U' has no edges in layout 'hall' (robot types there: 'T')",
+    ),
+    (
+        "duplicate-layout-id",
+        lambda d: d["layouts"].append(copy.deepcopy(d["layouts"][0])),
+        {},
+        "/layouts/1/layoutId",
+        "layoutId 'hall' is used twice",
+    ),
 ]
 
 
-@pytest.mark.parametrize(("mutate", "options", "pointer", "words"), [c[1:] for c in LIF_CASES], ids=[c[0] for c in LIF_CASES])
-def test_a_malformed_lif_file_gives_one_located_error(tmp_path: Path, mutate: Mutation, options: dict[str, Any],
-                                                      pointer: str, words: str) -> None:
+@pytest.mark.parametrize(
+    ("mutate", "options", "pointer", "words"), [c[1:] for c in LIF_CASES], ids=[c[0] for c in LIF_CASES]
+)
+def test_a_malformed_lif_file_gives_one_located_error(
+    tmp_path: Path, mutate: Mutation, options: dict[str, Any], pointer: str, words: str
+) -> None:
     document = copy.deepcopy(BASE)
     mutate(document)
     path = save_json(tmp_path, document)
@@ -88,9 +214,16 @@ def test_a_malformed_lif_file_gives_one_located_error(tmp_path: Path, mutate: Mu
 
 
 V2_CASES = [
-    ("robot-types-empty", ("/origins/0/layouts/0/edges/0/mobileRobotTypeEdgeProperties/0/mobileRobotTypes", []), "must not be empty"),
-    ("manufacturer-missing", ("/origins/0/layouts/0/edges/0/mobileRobotTypeEdgeProperties/0/mobileRobotTypes/0/manufacturer", _DELETE),
-     "required member 'manufacturer' is missing"),
+    (
+        "robot-types-empty",
+        ("/origins/0/layouts/0/edges/0/mobileRobotTypeEdgeProperties/0/mobileRobotTypes", []),
+        "must not be empty",
+    ),
+    (
+        "manufacturer-missing",
+        ("/origins/0/layouts/0/edges/0/mobileRobotTypeEdgeProperties/0/mobileRobotTypes/0/manufacturer", _DELETE),
+        "required member 'manufacturer' is missing",
+    ),
     ("origin-id-missing", ("/origins/0/originId", _DELETE), "required member 'originId' is missing"),
 ]
 
@@ -131,26 +264,82 @@ levels:
 RMF_CASES = [
     ("yaml-syntax", BUILDING.replace("[0, 1, {bidirectional", "[0, 1, {bidirectional: ["), {}, 10, "invalid YAML"),
     ("no-levels", "name: x\n", {}, 1, "levels is None; it must be a mapping"),
-    ("web-mercator", "coordinate_system: web_mercator\n" + BUILDING, {}, 1, "coordinate_system 'web_mercator' is not supported"),
-    ("vertex-x-text", BUILDING.replace("[200, 0, 0, b]", "[wide, 0, 0, b]"), {}, 5, "vertex 1 x is 'wide'; it must be a finite number"),
-    ("lane-vertex-out-of-range", BUILDING.replace("[1, 2, {", "[1, 9, {"), {}, 11, "lane vertex 9 is not a vertex index (0 to 2)"),
-    ("lane-params-list", BUILDING.replace("[0, 1, {bidirectional: [4, true], graph_idx: [2, 0]}]", "[0, 1, [4, true]]"), {}, 10,
-     "lane parameters is [4, True]; it must be a mapping"),
-    ("bidirectional-text", BUILDING.replace("[4, true]", "[4, 'yes']"), {}, 10, "bidirectional is 'yes'; it must be true or false"),
-    ("graph-fraction", BUILDING.replace("graph_idx: [2, 0]}]\n      - [1", "graph_idx: [2, 1.5]}]\n      - [1"), {}, 10, "graph_idx is 1.5; it must be a whole number"),
+    (
+        "web-mercator",
+        "coordinate_system: web_mercator\n" + BUILDING,
+        {},
+        1,
+        "coordinate_system 'web_mercator' is not supported",
+    ),
+    (
+        "vertex-x-text",
+        BUILDING.replace("[200, 0, 0, b]", "[wide, 0, 0, b]"),
+        {},
+        5,
+        "vertex 1 x is 'wide'; it must be a finite number",
+    ),
+    (
+        "lane-vertex-out-of-range",
+        BUILDING.replace("[1, 2, {", "[1, 9, {"),
+        {},
+        11,
+        "lane vertex 9 is not a vertex index (0 to 2)",
+    ),
+    (
+        "lane-params-list",
+        BUILDING.replace("[0, 1, {bidirectional: [4, true], graph_idx: [2, 0]}]", "[0, 1, [4, true]]"),
+        {},
+        10,
+        "lane parameters is [4, True]; it must be a mapping",
+    ),
+    (
+        "bidirectional-text",
+        BUILDING.replace("[4, true]", "[4, 'yes']"),
+        {},
+        10,
+        "bidirectional is 'yes'; it must be true or false",
+    ),
+    (
+        "graph-fraction",
+        BUILDING.replace("graph_idx: [2, 0]}]\n      - [1", "graph_idx: [2, 1.5]}]\n      - [1"),
+        {},
+        10,
+        "graph_idx is 1.5; it must be a whole number",
+    ),
     ("distance-zero", BUILDING.replace("[3, 10]", "[3, 0]"), {}, 8, "both must be positive"),
     ("unknown-level", BUILDING, {"level": "L2"}, 2, "map_options.level='L2' is not a level of this building ('L1')"),
     ("empty-graph", BUILDING, {"graph": 3}, 3, "level 'L1' has no lanes in graph 3 (graphs with lanes: 0)"),
-    ("lane-of-no-length", BUILDING.replace("[200, 200, 0, \"\"]", "[200, 0, 0, \"\"]"), {}, 11, "lane 1 joins vertices 1 and 2, which are at the same place"),
-    ("duplicate-key", BUILDING.replace("    lanes:", "    measurements: []\n    lanes:"), {}, 9, "duplicate key 'measurements'"),
+    (
+        "lane-of-no-length",
+        BUILDING.replace('[200, 200, 0, ""]', '[200, 0, 0, ""]'),
+        {},
+        11,
+        "lane 1 joins vertices 1 and 2, which are at the same place",
+    ),
+    (
+        "duplicate-key",
+        BUILDING.replace("    lanes:", "    measurements: []\n    lanes:"),
+        {},
+        9,
+        "duplicate key 'measurements'",
+    ),
     ("python-tag", "levels: !!python/object:os.system {}\n", {}, 1, "could not determine a constructor"),
-    ("param-not-pair", BUILDING.replace("{distance: [3, 10]}", "{distance: 10}"), {}, 8, "parameter 'distance' is 10; it must be [type, value]"),
+    (
+        "param-not-pair",
+        BUILDING.replace("{distance: [3, 10]}", "{distance: 10}"),
+        {},
+        8,
+        "parameter 'distance' is 10; it must be [type, value]",
+    ),
 ]
 
 
-@pytest.mark.parametrize(("text", "options", "line", "words"), [c[1:] for c in RMF_CASES], ids=[c[0] for c in RMF_CASES])
-def test_a_malformed_building_map_gives_one_error_at_its_yaml_line(tmp_path: Path, text: str, options: dict[str, Any],
-                                                                  line: int, words: str) -> None:
+@pytest.mark.parametrize(
+    ("text", "options", "line", "words"), [c[1:] for c in RMF_CASES], ids=[c[0] for c in RMF_CASES]
+)
+def test_a_malformed_building_map_gives_one_error_at_its_yaml_line(
+    tmp_path: Path, text: str, options: dict[str, Any], line: int, words: str
+) -> None:
     path = save_yaml(tmp_path, text)
     with pytest.raises(MapError) as caught:
         load_site_map(path, MapOptions(**options))

@@ -56,7 +56,9 @@ def test_a_signal_in_a_planner_call_ends_the_run_at_the_end_of_that_step() -> No
     assert result.ended == "interrupted" and result.status == "failed"
     first = result.failures[0]
     assert first.kind == "interrupted" and first.time == pytest.approx(result.sim_time)
-    assert first.details["signal"] == "SIGTERM" and first.message.startswith("stopped by SIGTERM at the end of the step")
+    assert first.details["signal"] == "SIGTERM" and first.message.startswith(
+        "stopped by SIGTERM at the end of the step"
+    )
     assert [f.kind for f in result.failures] == ["interrupted"], "what the run did not get to is not judged"
     assert result.trace is not None and json.loads(result.trace.lines[-1])[3][-1] == ["interrupted", "SIGTERM"]
     assert result.steps < 220  # the complete run takes 220
@@ -91,7 +93,14 @@ def test_an_interrupted_run_is_never_gated_nor_recorded() -> None:
     for mode in ("check", "update"):
         with StopSignals() as stop:
             checked = run_checked(
-                scenario, lambda: SignalAt(30), identity="p:Q", mode=mode, recorded=None, record_hint="", planner_timeout=None, stop=stop
+                scenario,
+                lambda: SignalAt(30),
+                identity="p:Q",
+                mode=mode,
+                recorded=None,
+                record_hint="",
+                planner_timeout=None,
+                stop=stop,
             )  # type: ignore[arg-type]
         assert checked.record is None
         assert [f.kind for f in checked.result.failures] == ["interrupted"], mode
@@ -149,6 +158,8 @@ def test_a_stop_signal_ends_a_hunt_without_shrinking_anything() -> None:
     suite = load_suite(SUITE.with_name("caught-bugs.fleetsim.yaml"))
     spec = next(spec for spec in suite.scenarios if spec.generate is not None)
     with StopSignals() as stop:
-        found = hunt(spec, suite, lambda: SignalAt(3), identity="p:Q", planner_timeout=None, stop=stop, derandomize=True)
+        found = hunt(
+            spec, suite, lambda: SignalAt(3), identity="p:Q", planner_timeout=None, stop=stop, derandomize=True
+        )
     assert found.counterexample is None and found.shrink_runs == 0 and found.generated >= 1
     assert found.result is not None and found.result.ended == "interrupted"

@@ -16,16 +16,28 @@ from fleetsim.load.site_map import load_site_map
 from site_documents import edge, layout, lif_v1, load, node, nurbs, quarter, save_json, to_v2
 
 SQUARE_NODES = [node("A", 0, 0), node("B", 10, 0), node("C", 10, 10)]
-STRAIGHTS = lif_v1(layout("hall", SQUARE_NODES, [
-    edge("A-B", "A", "B"), edge("B-C", "B", "C"), edge("B-A", "B", "A"),
-]))
+STRAIGHTS = lif_v1(
+    layout(
+        "hall",
+        SQUARE_NODES,
+        [
+            edge("A-B", "A", "B"),
+            edge("B-C", "B", "C"),
+            edge("B-A", "B", "A"),
+        ],
+    )
+)
 
 
 @pytest.mark.parametrize("structure", ["1.0", "2.0"])
-def test_edges_become_segments_in_file_order_and_opposite_edges_one_two_way_segment(tmp_path: Path, structure: str) -> None:
+def test_edges_become_segments_in_file_order_and_opposite_edges_one_two_way_segment(
+    tmp_path: Path, structure: str
+) -> None:
     document = STRAIGHTS if structure == "1.0" else to_v2(STRAIGHTS)
     site = load(tmp_path, document)
-    assert site.format == "lif" and site.part == ("layout 'hall', robot type 'T'" if structure == "1.0" else "layout 'hall', robot type 'T/T'")
+    assert site.format == "lif" and site.part == (
+        "layout 'hall', robot type 'T'" if structure == "1.0" else "layout 'hall', robot type 'T/T'"
+    )
     assert [(s.id, s.shape, s.direction, s.names, s.waypoints) for s in site.segments] == [
         (1, Shape.STRAIGHT, Direction.BOTH, ("A-B", "B-A"), ((0.0, 0.0), (10.0, 0.0))),
         (2, Shape.STRAIGHT, Direction.FORWARD, ("B-C",), ((10.0, 0.0), (10.0, 10.0))),
@@ -56,12 +68,16 @@ def test_a_layout_is_chosen_by_its_id_and_the_others_are_noted(tmp_path: Path, s
     site = load(tmp_path, document, layout="upper")
     assert [(s.names, s.direction) for s in site.segments] == [(("u1", "u2"), Direction.BOTH)]
     pointer = "/layouts/0" if structure == "1.0" else "/origins/0/layouts/0"
-    assert site.warnings == (f"{tmp_path / 'site.lif.json'}: warning not-modelled: another layout (another level or "
-                             f"area) (once, first at {pointer} ('ground')); fleetsim does not model it and ignores it",)
+    assert site.warnings == (
+        f"{tmp_path / 'site.lif.json'}: warning not-modelled: another layout (another level or "
+        f"area) (once, first at {pointer} ('ground')); fleetsim does not model it and ignores it",
+    )
 
 
 def test_several_layouts_need_the_layout_option(tmp_path: Path) -> None:
-    with pytest.raises(MapError, match=r"holds 2 layouts \('ground', 'upper'\); choose one with map_options: \{layout: ID\}"):
+    with pytest.raises(
+        MapError, match=r"holds 2 layouts \('ground', 'upper'\); choose one with map_options: \{layout: ID\}"
+    ):
         load(tmp_path, TWO_LAYOUTS)
 
 
@@ -73,16 +89,29 @@ def test_layouts_of_several_origins_are_all_offered(tmp_path: Path) -> None:
 
 # -- robot types ----------------------------------------------------------------------------------
 
-TYPED = lif_v1(layout("hall", [node("A", 0, 0, "Acme.Tug", "Acme.Lift"), node("B", 4, 0, "Acme.Tug", "Acme.Lift"),
-                               node("C", 4, 4, "Acme.Tug")], [
-    edge("A-B", "A", "B", "Acme.Tug", "Acme.Lift"),
-    edge("B-C", "B", "C", "Acme.Tug"),
-    edge("C-A", "C", "A", "Acme.Tug", trajectory=quarter((4, 4), (0, 4), (0, 0))),
-]))
+TYPED = lif_v1(
+    layout(
+        "hall",
+        [
+            node("A", 0, 0, "Acme.Tug", "Acme.Lift"),
+            node("B", 4, 0, "Acme.Tug", "Acme.Lift"),
+            node("C", 4, 4, "Acme.Tug"),
+        ],
+        [
+            edge("A-B", "A", "B", "Acme.Tug", "Acme.Lift"),
+            edge("B-C", "B", "C", "Acme.Tug"),
+            edge("C-A", "C", "A", "Acme.Tug", trajectory=quarter((4, 4), (0, 4), (0, 0))),
+        ],
+    )
+)
 
 
-@pytest.mark.parametrize(("structure", "tug", "lift"), [("1.0", "Acme.Tug", "Acme.Lift"), ("2.0", "Acme/Tug", "Acme/Lift")])
-def test_the_robot_type_option_chooses_whose_edges_form_the_map(tmp_path: Path, structure: str, tug: str, lift: str) -> None:
+@pytest.mark.parametrize(
+    ("structure", "tug", "lift"), [("1.0", "Acme.Tug", "Acme.Lift"), ("2.0", "Acme/Tug", "Acme/Lift")]
+)
+def test_the_robot_type_option_chooses_whose_edges_form_the_map(
+    tmp_path: Path, structure: str, tug: str, lift: str
+) -> None:
     document = TYPED if structure == "1.0" else to_v2(TYPED)
     assert [s.names for s in load(tmp_path, document, robot_type=tug).segments] == [("A-B",), ("B-C",), ("C-A",)]
     lifted = load(tmp_path, document, robot_type=lift)
@@ -95,7 +124,11 @@ def test_a_robot_type_that_may_use_every_edge_skips_none(tmp_path: Path) -> None
 
 
 def test_an_edge_to_a_node_of_its_own_layout_is_kept_without_a_warning(tmp_path: Path) -> None:
-    document = lif_v1(layout("hall", [node("A", 0, 0), node("B", 5, 0), node("Z", 5, 5)], [edge("e1", "A", "B"), edge("lift", "B", "Z")]))
+    document = lif_v1(
+        layout(
+            "hall", [node("A", 0, 0), node("B", 5, 0), node("Z", 5, 5)], [edge("e1", "A", "B"), edge("lift", "B", "Z")]
+        )
+    )
     site = load(tmp_path, document)
     assert [s.names for s in site.segments] == [("e1",), ("lift",)] and site.warnings == ()
 
@@ -108,8 +141,13 @@ def test_edges_that_differ_per_robot_type_need_the_option(tmp_path: Path) -> Non
 
 
 def test_edges_shared_alike_by_every_robot_type_need_no_option(tmp_path: Path) -> None:
-    shared = lif_v1(layout("hall", [node("A", 0, 0, "X.1", "X.2"), node("B", 4, 0, "X.1", "X.2")],
-                           [edge("A-B", "A", "B", "X.1", "X.2")]))
+    shared = lif_v1(
+        layout(
+            "hall",
+            [node("A", 0, 0, "X.1", "X.2"), node("B", 4, 0, "X.1", "X.2")],
+            [edge("A-B", "A", "B", "X.1", "X.2")],
+        )
+    )
     site = load(tmp_path, shared)
     assert site.part == "layout 'hall', robot type 'X.1'" and len(site.segments) == 1
 
@@ -125,8 +163,13 @@ def test_one_property_object_may_serve_several_mobile_robot_types(tmp_path: Path
 
 
 def arc_edges(*trajectories: tuple[str, str, str, dict[str, object]]) -> dict[str, object]:
-    return lif_v1(layout("hall", [node("A", 5, 0), node("B", 0, 5), node("C", 15, 0)],
-                         [edge(eid, s, e, trajectory=t) for eid, s, e, t in trajectories]))
+    return lif_v1(
+        layout(
+            "hall",
+            [node("A", 5, 0), node("B", 0, 5), node("C", 15, 0)],
+            [edge(eid, s, e, trajectory=t) for eid, s, e, t in trajectories],
+        )
+    )
 
 
 def test_a_rational_quadratic_trajectory_becomes_a_circular_path_within_the_chord_tolerance(tmp_path: Path) -> None:
@@ -135,8 +178,9 @@ def test_a_rational_quadratic_trajectory_becomes_a_circular_path_within_the_chor
     assert segment.shape is Shape.PATH and segment.first == (5.0, 0.0) and segment.last == (0.0, 5.0)
     assert all(abs(math.hypot(x, y) - 5.0) < 1e-9 for x, y in segment.waypoints)  # every sample on the circle
     # The farthest a chord strays from the circle is at its middle: r − distance of the chord's midpoint.
-    sagitta = max(5.0 - math.hypot((a[0] + b[0]) / 2, (a[1] + b[1]) / 2)
-                  for a, b in zip(segment.waypoints, segment.waypoints[1:]))
+    sagitta = max(
+        5.0 - math.hypot((a[0] + b[0]) / 2, (a[1] + b[1]) / 2) for a, b in zip(segment.waypoints, segment.waypoints[1:])
+    )
     assert sagitta <= CHORD_TOLERANCE
     assert segment.length == pytest.approx(5.0 * math.pi / 2, abs=0.01)
 
@@ -144,7 +188,11 @@ def test_a_rational_quadratic_trajectory_becomes_a_circular_path_within_the_chor
 @pytest.mark.parametrize("degree", [1, 2, 3])
 def test_trajectories_of_degree_one_to_three_with_weights_run_from_node_to_node(tmp_path: Path, degree: int) -> None:
     points = [(5.0, 0.0), (6.0, 3.0), (3.0, 6.0), (1.0, 6.0), (0.0, 5.0)]
-    knots = [0.0] * (degree + 1) + [i / (len(points) - degree) for i in range(1, len(points) - degree)] + [1.0] * (degree + 1)
+    knots = (
+        [0.0] * (degree + 1)
+        + [i / (len(points) - degree) for i in range(1, len(points) - degree)]
+        + [1.0] * (degree + 1)
+    )
     trajectory = nurbs(degree, knots, points, [1.0, 2.0, 0.5, 3.0, 1.0])
     (segment,) = load(tmp_path, arc_edges(("A-B", "A", "B", trajectory))).segments
     assert segment.first == (5.0, 0.0) and segment.last == (0.0, 5.0)
@@ -172,35 +220,67 @@ def test_opposite_edges_along_different_paths_stay_two_one_way_segments(tmp_path
     back = quarter((0, 5), (0, 0), (5, 0))  # bulges the other way
     site = load(tmp_path, arc_edges(("out", "A", "B", there), ("back", "B", "A", back)))
     assert [(s.id, s.names, s.direction) for s in site.segments] == [
-        (1, ("out",), Direction.FORWARD), (2, ("back",), Direction.FORWARD)]
+        (1, ("out",), Direction.FORWARD),
+        (2, ("back",), Direction.FORWARD),
+    ]
 
 
 def test_parallel_edges_in_one_direction_are_separate_segments_and_pair_up_in_order(tmp_path: Path) -> None:
-    document = lif_v1(layout("hall", [node("A", 0, 0), node("B", 5, 0)], [
-        edge("e1", "A", "B"), edge("e2", "A", "B"), edge("e3", "B", "A"),
-    ]))
+    document = lif_v1(
+        layout(
+            "hall",
+            [node("A", 0, 0), node("B", 5, 0)],
+            [
+                edge("e1", "A", "B"),
+                edge("e2", "A", "B"),
+                edge("e3", "B", "A"),
+            ],
+        )
+    )
     assert [(s.names, s.direction) for s in load(tmp_path, document).segments] == [
-        (("e1", "e3"), Direction.BOTH), (("e2",), Direction.FORWARD)]
+        (("e1", "e3"), Direction.BOTH),
+        (("e2",), Direction.FORWARD),
+    ]
 
 
 def test_an_edge_to_a_node_of_another_layout_is_skipped_with_a_warning(tmp_path: Path) -> None:
-    document = lif_v1(layout("hall", [node("A", 0, 0), node("B", 5, 0)], [edge("e1", "A", "B"), edge("lift", "B", "Z")]))
+    document = lif_v1(
+        layout("hall", [node("A", 0, 0), node("B", 5, 0)], [edge("e1", "A", "B"), edge("lift", "B", "Z")])
+    )
     site = load(tmp_path, document)
     assert [s.names for s in site.segments] == [("e1",)]
-    assert site.warnings == (f"{tmp_path / 'site.lif.json'}: warning skipped-edge: an edge to a node of another layout "
-                             "(once, first at /layouts/0/edges/1 ('lift')); no segment was made for it",)
+    assert site.warnings == (
+        f"{tmp_path / 'site.lif.json'}: warning skipped-edge: an edge to a node of another layout "
+        "(once, first at /layouts/0/edges/1 ('lift')); no segment was made for it",
+    )
 
 
 # -- warnings: once per kind ----------------------------------------------------------------------
 
 
 def test_every_attribute_fleetsim_does_not_model_is_noted_once_per_kind(tmp_path: Path) -> None:
-    document = lif_v1(layout("hall", [
-        node("A", 0, 0, theta=0.0), node("B", 5, 0), node("C", 5, 5),
-    ], [
-        edge("A-B", "A", "B", maxSpeed=1.0, actions=[{"actionType": "beep", "blockingType": "NONE"}]),
-        edge("B-C", "B", "C", maxSpeed=0.5, loadRestriction={"loaded": True, "unloaded": True}, rotationAllowed=False),
-    ], stations=[{"stationId": "s", "interactionNodeIds": ["C"]}]))
+    document = lif_v1(
+        layout(
+            "hall",
+            [
+                node("A", 0, 0, theta=0.0),
+                node("B", 5, 0),
+                node("C", 5, 5),
+            ],
+            [
+                edge("A-B", "A", "B", maxSpeed=1.0, actions=[{"actionType": "beep", "blockingType": "NONE"}]),
+                edge(
+                    "B-C",
+                    "B",
+                    "C",
+                    maxSpeed=0.5,
+                    loadRestriction={"loaded": True, "unloaded": True},
+                    rotationAllowed=False,
+                ),
+            ],
+            stations=[{"stationId": "s", "interactionNodeIds": ["C"]}],
+        )
+    )
     document["layouts"][0]["nodes"][1]["vehicleTypeNodeProperties"][0]["allowedDeviationXy"] = 0.1
     site = load(tmp_path, document, level="L1")
     codes_and_kinds = [w.split("warning ", 1)[1].split(";")[0] for w in site.warnings]
@@ -224,4 +304,6 @@ def test_a_file_of_modelled_attributes_only_loads_without_warnings(tmp_path: Pat
 
 def test_loading_twice_gives_equal_maps(tmp_path: Path) -> None:
     path = save_json(tmp_path, TYPED)
-    assert load_site_map(path, MapOptions(robot_type="Acme.Tug")) == load_site_map(path, MapOptions(robot_type="Acme.Tug"))
+    assert load_site_map(path, MapOptions(robot_type="Acme.Tug")) == load_site_map(
+        path, MapOptions(robot_type="Acme.Tug")
+    )

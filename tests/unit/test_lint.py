@@ -121,9 +121,7 @@ def test_touching_one_ways_in_the_same_direction_are_not_reported() -> None:
 
 def test_segment_shorter_than_the_connection_tolerance_is_zero_length() -> None:
     findings = _codes([_straight(1, (0, 0), (0.049, 0))], "zero-length")
-    assert [f.message for f in findings] == [
-        "segment 1 is 0.049 m long, shorter than the connection tolerance 0.05 m"
-    ]
+    assert [f.message for f in findings] == ["segment 1 is 0.049 m long, shorter than the connection tolerance 0.05 m"]
 
 
 def test_segment_just_longer_than_the_connection_tolerance_is_not_zero_length() -> None:

@@ -43,12 +43,15 @@ def test_a_scenario_folder_loads_completely(tmp_path: Path) -> None:
     assert scenario.name == "sc"
     assert sorted(scenario.layout.segments) == [1, 2, 3]
     assert [(v.id, v.start_segment, v.type) for v in scenario.vehicles] == [
-        (1, 1, DEFAULT_VEHICLE_TYPE), (2, 3, DEFAULT_VEHICLE_TYPE)
+        (1, 1, DEFAULT_VEHICLE_TYPE),
+        (2, 3, DEFAULT_VEHICLE_TYPE),
     ]
     assert [(t.id, t.vehicle_id, t.goal_segment) for t in scenario.tasks] == [(1, 1, 2), (2, 2, 3)]
     assert (scenario.settings, scenario.expect) == (ScenarioSettings(), Expectations())
     assert (scenario.map_path, scenario.vehicles_path, scenario.tasks_path) == (
-        folder / "map.json", folder / "vehicles.csv", folder / "tasks.csv"
+        folder / "map.json",
+        folder / "vehicles.csv",
+        folder / "tasks.csv",
     )
 
 
@@ -76,12 +79,18 @@ def test_allow_start_conflicts_accepts_conflicting_starts(tmp_path: Path) -> Non
 
 def test_a_larger_vehicle_type_in_use_widens_the_conflicts(tmp_path: Path) -> None:
     types = {"default": DEFAULT_VEHICLE_TYPE, "big": BIG}
-    small = load_scenario_dir(make_dir(tmp_path, "1,1,forward,,\n2,3,forward,,\n", name="small"),
-                              vehicle_types=types, settings=ScenarioSettings(vehicle_type="default"))
+    small = load_scenario_dir(
+        make_dir(tmp_path, "1,1,forward,,\n2,3,forward,,\n", name="small"),
+        vehicle_types=types,
+        settings=ScenarioSettings(vehicle_type="default"),
+    )
     assert small.layout.vehicle_radius == DEFAULT_VEHICLE_TYPE.swept_radius
     with pytest.raises(ScenarioFileError, match="start on conflicting segments"):
-        load_scenario_dir(make_dir(tmp_path, "1,1,forward,,big\n2,3,forward,,\n", name="big"),
-                          vehicle_types=types, settings=ScenarioSettings(vehicle_type="default"))
+        load_scenario_dir(
+            make_dir(tmp_path, "1,1,forward,,big\n2,3,forward,,\n", name="big"),
+            vehicle_types=types,
+            settings=ScenarioSettings(vehicle_type="default"),
+        )
 
 
 def test_the_bbox_model_uses_the_bbox_radius(tmp_path: Path) -> None:
@@ -101,15 +110,15 @@ def test_without_vehicles_the_default_type_sets_the_radius(tmp_path: Path) -> No
 @pytest.mark.parametrize(
     ("files", "problem"),
     [
-        pytest.param(("vehicles.csv", "tasks.csv"),
-                     "needs exactly one of map.json, map.tmj, map.tmx, map.lif.json, map.building.yaml; found none", id="no-map"),
-        pytest.param(("map.json", "map.tmj", "vehicles.csv", "tasks.csv"), "found map.json and map.tmj",
-                     id="two-maps"),
+        pytest.param(
+            ("vehicles.csv", "tasks.csv"),
+            "needs exactly one of map.json, map.tmj, map.tmx, map.lif.json, map.building.yaml; found none",
+            id="no-map",
+        ),
+        pytest.param(("map.json", "map.tmj", "vehicles.csv", "tasks.csv"), "found map.json and map.tmj", id="two-maps"),
     ],
 )
-def test_a_scenario_folder_needs_exactly_one_map(
-    tmp_path: Path, files: tuple[str, ...], problem: str
-) -> None:
+def test_a_scenario_folder_needs_exactly_one_map(tmp_path: Path, files: tuple[str, ...], problem: str) -> None:
     for name in files:
         (tmp_path / name).write_text("", encoding="utf-8")
     with pytest.raises(ScenarioFileError, match=problem):

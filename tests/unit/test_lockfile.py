@@ -243,8 +243,12 @@ def write_document(path: Path, document: Any) -> Path:
 def document(**top: Any) -> dict[str, Any]:
     recorded = entry(220)
     body = {"hash": recorded.hash, "steps": 220, "checkpoints": list(recorded.checkpoints)}
-    base = {"format": LOCK_FORMAT, "trace_format": TRACE_FORMAT, "checkpoint_every": CHECKPOINT_EVERY,
-            "hashes": {"X": {"crossing": body}}}
+    base = {
+        "format": LOCK_FORMAT,
+        "trace_format": TRACE_FORMAT,
+        "checkpoint_every": CHECKPOINT_EVERY,
+        "hashes": {"X": {"crossing": body}},
+    }
     return {**base, **top}
 
 
@@ -319,7 +323,9 @@ def test_bad_document_is_rejected_naming_file_and_value(tmp_path: Path, case: st
 def test_malformed_json_is_reported_with_line_and_column(tmp_path: Path) -> None:
     path = tmp_path / "s.lock.json"
     path.write_text('{\n  "format": "fleetsim-lock/1",\n  "hashes": {,\n}\n', encoding="utf-8")
-    with pytest.raises(LockFileError, match=r"the file is not valid JSON: a key in double quotes is expected here") as caught:
+    with pytest.raises(
+        LockFileError, match=r"the file is not valid JSON: a key in double quotes is expected here"
+    ) as caught:
         HashLock.load(path)
     assert str(caught.value).startswith(f"{path}:3:14: ")
 

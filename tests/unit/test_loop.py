@@ -30,7 +30,9 @@ def example(name: str, **settings: object) -> Scenario:
 
 def corridor(tmp_path: Path, **settings: object) -> Scenario:
     """Three straights in a row, one vehicle at each end, each sent to the other end: head-on."""
-    segments = tuple(Segment(i, Shape.STRAIGHT, Direction.BOTH, ((4.0 * i, 0.0), (4.0 * i + 4.0, 0.0))) for i in (1, 2, 3))
+    segments = tuple(
+        Segment(i, Shape.STRAIGHT, Direction.BOTH, ((4.0 * i, 0.0), (4.0 * i + 4.0, 0.0))) for i in (1, 2, 3)
+    )
     return make_scenario(tmp_path, segments, "1,1,forward,,\n2,3,backward,,\n", "1,3,\n2,1,\n", **settings)
 
 
@@ -38,7 +40,12 @@ def corridor(tmp_path: Path, **settings: object) -> Scenario:
 def test_reserving_planner_passes_every_shipped_example(name: str) -> None:
     result = run_scenario(example(name), ReservingPlanner())
     assert result.status == "passed", [f.message for f in result.failures]
-    assert (result.ended, result.tasks_completed, result.collisions, result.rejections) == ("completed", result.tasks_total, (), ())
+    assert (result.ended, result.tasks_completed, result.collisions, result.rejections) == (
+        "completed",
+        result.tasks_total,
+        (),
+        (),
+    )
     assert result.metrics.makespan is not None and result.metrics.makespan <= result.sim_time
 
 
@@ -107,7 +114,9 @@ def test_makespan_bound() -> None:
     ok = run_scenario(replace(example("crossing"), expect=Expectations(max_makespan=60)), ReservingPlanner())
     tight = run_scenario(replace(example("crossing"), expect=Expectations(max_makespan=5)), ReservingPlanner())
     assert ok.status == "passed"
-    assert [f.kind for f in tight.failures] == ["expectation"] and "exceeds max_makespan 5 s" in tight.failures[0].message
+    assert [f.kind for f in tight.failures] == ["expectation"] and "exceeds max_makespan 5 s" in tight.failures[
+        0
+    ].message
 
 
 class _WrongWay(ReservingPlanner):
@@ -115,7 +124,9 @@ class _WrongWay(ReservingPlanner):
 
     def plan_routes(self, task, fleet, layout):  # type: ignore[no-untyped-def]
         current = fleet.plans[task.vehicle_id].fixed_legs
-        return [FleetPlan(task.vehicle_id, (*current, FleetLeg(task.goal_segment, "backward", "forward", False, task.id)))]
+        return [
+            FleetPlan(task.vehicle_id, (*current, FleetLeg(task.goal_segment, "backward", "forward", False, task.id)))
+        ]
 
 
 def test_rejections_fail_the_run_and_stop_it_by_default() -> None:
@@ -165,8 +176,20 @@ def test_a_one_line_planner_change_changes_the_hash_and_the_divergence_is_locate
 def test_metrics_and_the_json_form() -> None:
     result = run_scenario(example("corridor-passing-bay"), ReservingPlanner())
     data = json.loads(json.dumps(result.to_dict()))
-    assert set(data) >= {"scenario", "planner", "status", "failures", "trace_hash", "sim_time", "steps", "tasks",
-                         "rejections", "collisions", "metrics", "artifacts"}
+    assert set(data) >= {
+        "scenario",
+        "planner",
+        "status",
+        "failures",
+        "trace_hash",
+        "sim_time",
+        "steps",
+        "tasks",
+        "rejections",
+        "collisions",
+        "metrics",
+        "artifacts",
+    }
     assert data["planner"] == "ReservingPlanner" and data["tasks"] == {"total": 2, "completed": 2}
     metrics = data["metrics"]
     assert metrics["distance"]["1"] == pytest.approx(36.0, abs=0.01)  # the corridor's main line end to end

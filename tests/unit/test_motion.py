@@ -61,7 +61,9 @@ def eq14(v0: float, s: float) -> float:
     return (v0 * v0 - 2 * v0 * VMAX + 2 * VMAX * VMAX + 2 * A * s) / (2 * A * VMAX)
 
 
-@pytest.mark.parametrize(("length", "expected"), [(1.5, eq12(0.0, 1.5)), (8.0, eq14(0.0, 8.0))], ids=["triangle", "trapezoid"])
+@pytest.mark.parametrize(
+    ("length", "expected"), [(1.5, eq12(0.0, 1.5)), (8.0, eq14(0.0, 8.0))], ids=["triangle", "trapezoid"]
+)
 def test_stop_time_from_rest_matches_the_closed_form(length: float, expected: float) -> None:
     driver = driver_on((straight(1, (0.0, 0.0), (length, 0.0)),))
     assert time_to_stop(driver, plan((1, F, FWD))) == pytest.approx(expected, abs=DT)
@@ -70,7 +72,12 @@ def test_stop_time_from_rest_matches_the_closed_form(length: float, expected: fl
 
 def _moving_start(first_length: float, more_length: float, at: float) -> tuple[float, float, Driver]:
     """Drive a ``first_length`` leg; at time ``at`` a second leg is fixed. Returns (stop time, v0, driver)."""
-    driver = driver_on((straight(1, (0.0, 0.0), (first_length, 0.0)), straight(2, (first_length, 0.0), (first_length + more_length, 0.0))))
+    driver = driver_on(
+        (
+            straight(1, (0.0, 0.0), (first_length, 0.0)),
+            straight(2, (first_length, 0.0), (first_length + more_length, 0.0)),
+        )
+    )
     one = plan((1, F, FWD))
     now = 0.0
     for _ in range(round(at / DT)):
@@ -167,7 +174,11 @@ def test_driving_on_to_a_smooth_continuation_does_not_stop() -> None:
 
 
 def test_passed_legs_are_dropped_and_the_entered_legs_reported() -> None:
-    segments = (straight(1, (0.0, 0.0), (1.0, 0.0)), straight(2, (1.0, 0.0), (2.0, 0.0)), straight(3, (2.0, 0.0), (3.0, 0.0)))
+    segments = (
+        straight(1, (0.0, 0.0), (1.0, 0.0)),
+        straight(2, (1.0, 0.0), (2.0, 0.0)),
+        straight(3, (2.0, 0.0), (3.0, 0.0)),
+    )
     driver = driver_on(segments)
     route = plan((1, F, FWD), (2, F, FWD), (3, F, FWD))
     entered = []
@@ -194,7 +205,9 @@ def test_tasks_complete_in_queue_order(tmp_path: Path) -> None:
     result = run_scenario(scenario, __import__("fleetsim.planners", fromlist=["ReservingPlanner"]).ReservingPlanner())
     assert result.status == "passed", [f.message for f in result.failures]
     lines = result.trace.lines if result.trace else []
-    completions = [event[1] for line in lines[1:] for event in __import__("json").loads(line)[3] if event[0] == "complete"]
+    completions = [
+        event[1] for line in lines[1:] for event in __import__("json").loads(line)[3] if event[0] == "complete"
+    ]
     assert completions == [1, 2, 3]  # task 2 (segment 4) before task 3 (segment 3): queue order, not distance
 
 

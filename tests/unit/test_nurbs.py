@@ -34,7 +34,9 @@ def deviation(curve: Nurbs, polyline: tuple[tuple[float, float], ...]) -> float:
     a, b = np.array(polyline[:-1]), np.array(polyline[1:])
     best = np.full(len(points), np.inf)
     for start, end in zip(a, b):
-        best = np.minimum(best, point_segment_distances(points, np.tile(start, (len(points), 1)), np.tile(end, (len(points), 1))))
+        best = np.minimum(
+            best, point_segment_distances(points, np.tile(start, (len(points), 1)), np.tile(end, (len(points), 1)))
+        )
     return float(best.max())
 
 
@@ -93,8 +95,9 @@ def test_single_span_nurbs_of_each_degree_with_weights_match_rational_bezier(deg
 
 
 def test_a_cubic_with_interior_knots_is_continuous_and_samples_within_tolerance() -> None:
-    curve = Nurbs.of(3, (0, 0, 0, 0, 0.3, 0.6, 1, 1, 1, 1),
-                     ((0, 0), (2, 0), (3, 2), (5, -1), (6, 3), (8, 3)), (1, 2, 0.5, 1, 1.5, 1))
+    curve = Nurbs.of(
+        3, (0, 0, 0, 0, 0.3, 0.6, 1, 1, 1, 1), ((0, 0), (2, 0), (3, 2), (5, -1), (6, 3), (8, 3)), (1, 2, 0.5, 1, 1.5, 1)
+    )
     polyline = sample_nurbs(curve)
     assert polyline[0] == (0.0, 0.0) and polyline[-1] == pytest.approx((8.0, 3.0))
     assert deviation(curve, polyline) <= CHORD_TOLERANCE
@@ -123,18 +126,22 @@ def test_random_curves_sample_within_the_chord_tolerance(degree: int, extra: int
     count = degree + 1 + extra
     inner = np.sort(rng.uniform(0, 1, size=count - degree - 1))
     knots = [0.0] * (degree + 1) + list(inner) + [1.0] * (degree + 1)
-    curve = Nurbs.of(degree, knots, [tuple(p) for p in rng.uniform(-3, 3, size=(count, 2))],
-                     list(rng.uniform(0.2, 4.0, size=count)))
+    curve = Nurbs.of(
+        degree, knots, [tuple(p) for p in rng.uniform(-3, 3, size=(count, 2))], list(rng.uniform(0.2, 4.0, size=count))
+    )
     assert deviation(curve, sample_nurbs(curve)) <= CHORD_TOLERANCE * 1.0001
 
 
-@pytest.mark.parametrize(("args", "message"), [
-    ((0, (0, 1), ((0, 0),)), "degree=0 must be a whole number >= 1"),
-    ((2, (0, 0, 0, 1, 1), ((0, 0), (1, 1))), "2 control points are too few for degree 2: at least 3 are needed"),
-    ((1, (0, 0, 1), ((0, 0), (1, 1))), "the knot vector has 3 values; 2 control points of degree 1 need 4"),
-    ((1, (0, 1, 0.5, 1), ((0, 0), (1, 1))), "must be finite and non-decreasing"),
-    ((1, (0, 0.5, 0.5, 1), ((0, 0), (1, 1))), "leave an empty domain [0.5, 0.5]"),
-])
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        ((0, (0, 1), ((0, 0),)), "degree=0 must be a whole number >= 1"),
+        ((2, (0, 0, 0, 1, 1), ((0, 0), (1, 1))), "2 control points are too few for degree 2: at least 3 are needed"),
+        ((1, (0, 0, 1), ((0, 0), (1, 1))), "the knot vector has 3 values; 2 control points of degree 1 need 4"),
+        ((1, (0, 1, 0.5, 1), ((0, 0), (1, 1))), "must be finite and non-decreasing"),
+        ((1, (0, 0.5, 0.5, 1), ((0, 0), (1, 1))), "leave an empty domain [0.5, 0.5]"),
+    ],
+)
 def test_invalid_curves_are_refused_naming_the_value(args: tuple[object, ...], message: str) -> None:
     with pytest.raises(ValueError) as caught:
         Nurbs.of(*args)  # type: ignore[arg-type]

@@ -31,26 +31,48 @@ ZIGZAG = ((0.0, 0.0), (2.0, 0.0), (3.0, 1.0), (4.0, 0.0), (5.0, 1.0), (7.0, 1.0)
 
 def _tiled_json(tmp_path: Path, objects: list[dict[str, object]]) -> Path:
     path = tmp_path / "map.json"
-    path.write_text(json.dumps({
-        "type": "map", "orientation": "orthogonal", "width": 20, "height": 20, "tilewidth": 32,
-        "tileheight": 32, "infinite": False,
-        "layers": [{"type": "objectgroup", "name": "segments", "objects": objects}]}))
+    path.write_text(
+        json.dumps(
+            {
+                "type": "map",
+                "orientation": "orthogonal",
+                "width": 20,
+                "height": 20,
+                "tilewidth": 32,
+                "tileheight": 32,
+                "infinite": False,
+                "layers": [{"type": "objectgroup", "name": "segments", "objects": objects}],
+            }
+        )
+    )
     return path
 
 
 @pytest.mark.parametrize("spelling", ["path", "Path", "PATH"])
 def test_a_polyline_of_class_path_is_a_segment_with_all_its_points(tmp_path: Path, spelling: str) -> None:
     points = [{"x": 32 * x, "y": -32 * y} for x, y in ZIGZAG]
-    path = _tiled_json(tmp_path, [{"id": 4, "type": spelling, "name": "aisle 4", "x": 320, "y": 320,
-                                   "polyline": points}])
+    path = _tiled_json(
+        tmp_path, [{"id": 4, "type": spelling, "name": "aisle 4", "x": 320, "y": 320, "polyline": points}]
+    )
     (segment,) = load_map(path).segments
     assert segment.shape is Shape.PATH and segment.waypoints == ZIGZAG
     assert segment.name == "aisle 4" and segment.names == ("aisle 4",)
 
 
 def test_an_unnamed_tiled_object_gives_a_segment_without_a_name(tmp_path: Path) -> None:
-    path = _tiled_json(tmp_path, [{"id": 1, "type": "path", "name": "", "x": 0, "y": 0,
-                                   "polyline": [{"x": 0, "y": 0}, {"x": 32, "y": 0}, {"x": 64, "y": 5}]}])
+    path = _tiled_json(
+        tmp_path,
+        [
+            {
+                "id": 1,
+                "type": "path",
+                "name": "",
+                "x": 0,
+                "y": 0,
+                "polyline": [{"x": 0, "y": 0}, {"x": 32, "y": 0}, {"x": 64, "y": 5}],
+            }
+        ],
+    )
     (segment,) = load_map(path).segments
     assert segment.name is None and segment.names == ()
 
@@ -60,14 +82,29 @@ def test_the_path_template_places_a_free_polyline_and_instances_rename_it(tmp_pa
     reference = os.path.relpath(ASSETS / "path.tx", tmp_path)
     path = tmp_path / ("map" + suffix)
     if suffix == ".tmx":
-        path.write_text('<map orientation="orthogonal" width="20" height="20" tilewidth="32" tileheight="32">'
-                        f'<objectgroup><object id="1" name="bend" template="{reference}" x="320" y="320"/>'
-                        '</objectgroup></map>')
+        path.write_text(
+            '<map orientation="orthogonal" width="20" height="20" tilewidth="32" tileheight="32">'
+            f'<objectgroup><object id="1" name="bend" template="{reference}" x="320" y="320"/>'
+            "</objectgroup></map>"
+        )
     else:
-        path.write_text(json.dumps({
-            "orientation": "orthogonal", "width": 20, "height": 20, "tilewidth": 32, "tileheight": 32,
-            "layers": [{"type": "objectgroup", "objects": [
-                {"id": 1, "name": "bend", "template": reference, "x": 320, "y": 320}]}]}))
+        path.write_text(
+            json.dumps(
+                {
+                    "orientation": "orthogonal",
+                    "width": 20,
+                    "height": 20,
+                    "tilewidth": 32,
+                    "tileheight": 32,
+                    "layers": [
+                        {
+                            "type": "objectgroup",
+                            "objects": [{"id": 1, "name": "bend", "template": reference, "x": 320, "y": 320}],
+                        }
+                    ],
+                }
+            )
+        )
     (segment,) = load_map(path).segments
     assert segment.shape is Shape.PATH and segment.name == "bend"
     assert len(segment.waypoints) == 6 and segment.first == (0.0, 0.0) and segment.last == (6.0, 1.0)
@@ -75,11 +112,15 @@ def test_the_path_template_places_a_free_polyline_and_instances_rename_it(tmp_pa
 
 @pytest.mark.parametrize("suffix", [".tmx", ".json"])
 def test_written_path_segments_and_names_load_back(tmp_path: Path, suffix: str) -> None:
-    segments = (Segment(1, Shape.PATH, Direction.FORWARD, ZIGZAG, ("zig & zag",)),
-                Segment(2, Shape.STRAIGHT, Direction.BOTH, ((7.0, 1.0), (9.0, 1.0))))
+    segments = (
+        Segment(1, Shape.PATH, Direction.FORWARD, ZIGZAG, ("zig & zag",)),
+        Segment(2, Shape.STRAIGHT, Direction.BOTH, ((7.0, 1.0), (9.0, 1.0))),
+    )
     loaded = load_map(write_map(tmp_path / ("map" + suffix), segments)).segments
     assert [(s.id, s.shape, s.direction, s.names) for s in loaded] == [
-        (1, Shape.PATH, Direction.FORWARD, ("zig & zag",)), (2, Shape.STRAIGHT, Direction.BOTH, ())]
+        (1, Shape.PATH, Direction.FORWARD, ("zig & zag",)),
+        (2, Shape.STRAIGHT, Direction.BOTH, ()),
+    ]
     for a, b in zip(loaded[0].waypoints, ZIGZAG):
         assert math.dist(a, b) < 1e-9
 
@@ -122,8 +163,10 @@ def test_motion_follows_every_piece_of_a_path() -> None:
 
 
 def test_a_run_on_a_path_map_is_drawn_and_recorded_like_any_other(tmp_path: Path) -> None:
-    segments = (Segment(1, Shape.PATH, Direction.BOTH, ZIGZAG, ("zigzag",)),
-                Segment(2, Shape.STRAIGHT, Direction.BOTH, ((7.0, 1.0), (9.0, 1.0))))
+    segments = (
+        Segment(1, Shape.PATH, Direction.BOTH, ZIGZAG, ("zigzag",)),
+        Segment(2, Shape.STRAIGHT, Direction.BOTH, ((7.0, 1.0), (9.0, 1.0))),
+    )
     scenario = make_scenario(tmp_path / "run", segments, "1,2,backward,,\n", "1,zigzag,\n")
     assert scenario.tasks[0].goal_segment == 1
     result = run_scenario(scenario, ReservingPlanner())

@@ -70,7 +70,9 @@ def test_the_caption_is_the_first_text_on_top_and_is_escaped(crossing: Scenario,
     assert all(float(t.get("y", "0")) < map_top for t in texts)
 
 
-def test_a_long_caption_wraps_and_leaves_the_picture_as_wide_as_the_map(crossing: Scenario, collided: RunResult) -> None:
+def test_a_long_caption_wraps_and_leaves_the_picture_as_wide_as_the_map(
+    crossing: Scenario, collided: RunResult
+) -> None:
     short = parse(render_frame_svg(crossing, frame(crossing, collided, 1), caption="t = 0.20 s — short"))
     long = parse(render_frame_svg(crossing, frame(crossing, collided, 1), caption="t = 0.20 s — " + "word " * 200))
     assert long.get("width") == short.get("width")
@@ -93,7 +95,9 @@ def test_one_vehicle_shape_per_vehicle_with_nose_and_id(crossing: Scenario, coll
         assert (len(corners(body)), len(corners(nose)), label.text) == (4, 3, group.get("data-vehicle"))
 
 
-def test_a_vehicle_is_drawn_lengthwise_along_its_heading_with_the_nose_in_front(crossing: Scenario, collided: RunResult) -> None:
+def test_a_vehicle_is_drawn_lengthwise_along_its_heading_with_the_nose_in_front(
+    crossing: Scenario, collided: RunResult
+) -> None:
     moment = frame(crossing, collided, 1)
     assert moment.poses[2].heading == pytest.approx(math.pi / 2)  # vehicle 2 drives north (up the picture)
     root = parse(render_frame_svg(crossing, moment, caption="x"))
@@ -101,7 +105,9 @@ def test_a_vehicle_is_drawn_lengthwise_along_its_heading_with_the_nose_in_front(
     [body], [nose] = of_class(group, "vehicle-body"), of_class(group, "vehicle-nose")
     xs, ys = zip(*corners(body))
     vehicle_type = next(v.type for v in crossing.vehicles if v.id == 2)
-    assert (max(ys) - min(ys), max(xs) - min(xs)) == pytest.approx((40 * vehicle_type.length, 40 * vehicle_type.width), abs=0.02)
+    assert (max(ys) - min(ys), max(xs) - min(xs)) == pytest.approx(
+        (40 * vehicle_type.length, 40 * vehicle_type.width), abs=0.02
+    )
     tip = min(corners(nose), key=lambda p: p[1])  # SVG y grows downwards: the top-most point
     assert tip[1] == pytest.approx(min(ys), abs=0.02)
 
@@ -170,7 +176,9 @@ def test_vehicles_get_palette_colours_in_id_order_unless_their_type_has_one(cros
 # -- the moment of failure ------------------------------------------------------------------------
 
 
-def test_failure_picture_is_the_step_of_the_first_collision_with_its_caption(crossing: Scenario, collided: RunResult) -> None:
+def test_failure_picture_is_the_step_of_the_first_collision_with_its_caption(
+    crossing: Scenario, collided: RunResult
+) -> None:
     picture = failure_picture(crossing, collided)
     assert picture is not None
     step, svg = picture
@@ -201,7 +209,11 @@ def test_no_failure_picture_for_a_passed_run_or_a_run_without_its_trace(crossing
         ([Failure("timeout", 300.0, "")], 100, 0),  # clamped to the trace's last step
         ([Failure("expectation", 3.0, ""), Failure("rejection", 1.0, "")], 9, 1),  # the earliest
         ([Failure("collision", 1.0, "a"), Failure("expectation", 1.0, "b")], 9, 0),  # a tie: listed first
-        ([Failure("hash-mismatch", 0.5, "h"), Failure("deadlock", 47.0, "d")], 100, 1),  # a hash has no moment: the deadlock (clamped to the last step)
+        (
+            [Failure("hash-mismatch", 0.5, "h"), Failure("deadlock", 47.0, "d")],
+            100,
+            1,
+        ),  # a hash has no moment: the deadlock (clamped to the last step)
         ([Failure("hash-missing", 3.0, "h")], 100, 0),  # nothing but a hash failure: the last step
     ],
 )
@@ -220,12 +232,20 @@ def test_failure_caption_uses_the_first_line_of_the_message() -> None:
 
 def test_a_deadlock_caption_does_not_repeat_the_word() -> None:
     failure = Failure("deadlock", 47.0, "vehicles 1 and 2 wait for each other (1 -> 2 -> 1) over segments 1 and 3")
-    assert failure_caption(failure) == "t = 47.00 s — deadlock: vehicles 1 and 2 wait for each other (1 -> 2 -> 1) over segments 1 and 3"
-    assert failure_caption(Failure("rejection", 1.0, "plan rejected: wrong-way: vehicle 1")) == "t = 1.00 s — plan rejected: wrong-way: vehicle 1"
+    assert (
+        failure_caption(failure)
+        == "t = 47.00 s — deadlock: vehicles 1 and 2 wait for each other (1 -> 2 -> 1) over segments 1 and 3"
+    )
+    assert (
+        failure_caption(Failure("rejection", 1.0, "plan rejected: wrong-way: vehicle 1"))
+        == "t = 1.00 s — plan rejected: wrong-way: vehicle 1"
+    )
 
 
 def test_a_hash_failure_beside_a_deadlock_goes_into_the_deadlock_pictures_caption() -> None:
-    hash_failure = Failure("hash-mismatch", 0.5, "the trace hash differs from the recorded one since t = 0.5-1.0 s\nrecord ...")
+    hash_failure = Failure(
+        "hash-mismatch", 0.5, "the trace hash differs from the recorded one since t = 0.5-1.0 s\nrecord ..."
+    )
     deadlock = Failure("deadlock", 47.0, "vehicles 1 and 2 wait for each other")
     step, chosen = failure_step([hash_failure, deadlock], time_step=0.1, last_step=500) or (0, hash_failure)
     assert (step, chosen) == (469, deadlock)
@@ -236,7 +256,9 @@ def test_a_hash_failure_beside_a_deadlock_goes_into_the_deadlock_pictures_captio
 
 
 def test_a_hash_failure_alone_is_captioned_at_the_pictures_time() -> None:
-    failure = Failure("hash-missing", 0.0, "no trace hash is recorded for planner 'p' in this scenario; record it with: pytest ...")
+    failure = Failure(
+        "hash-missing", 0.0, "no trace hash is recorded for planner 'p' in this scenario; record it with: pytest ..."
+    )
     assert failure_caption(failure, [failure], at=12.0) == (
         "t = 12.00 s — hash-missing: no trace hash is recorded for planner 'p' in this scenario; record it with: pytest ..."
     )

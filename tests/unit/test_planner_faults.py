@@ -151,11 +151,15 @@ def test_a_planner_returning_something_else_than_a_response_fails_naming_the_val
     assert failure.message.startswith("plan_routes() for vehicle 1 ")
     assert failure.details == {"vehicle": 1}
     assert shown in failure.message
-    assert "must be a FleetPlan or a RouteError" in failure.message or "list of FleetPlan or RouteError" in failure.message
+    assert (
+        "must be a FleetPlan or a RouteError" in failure.message or "list of FleetPlan or RouteError" in failure.message
+    )
     assert_next_run_passes()
 
 
-@pytest.mark.parametrize("planner", [Sleeps(), Spins(), SwallowsEverything()], ids=["sleeps", "spins", "swallows-exception"])
+@pytest.mark.parametrize(
+    "planner", [Sleeps(), Spins(), SwallowsEverything()], ids=["sleeps", "spins", "swallows-exception"]
+)
 def test_a_hanging_planner_is_stopped_by_the_per_call_timeout(planner: object) -> None:
     started = time.monotonic()
     failure = run_faulty(planner).failures[0]

@@ -121,7 +121,9 @@ def test_a_spec_without_a_colon_is_rejected_with_an_example() -> None:
 
 
 def test_an_exec_spec_makes_a_fresh_planner_process_per_run_with_the_call_timeout() -> None:
-    factory = load_planner_factory(f"exec:{sys.executable} -m fleetsim.exec fleetsim.planners:BFSPlanner", call_timeout=2.5)
+    factory = load_planner_factory(
+        f"exec:{sys.executable} -m fleetsim.exec fleetsim.planners:BFSPlanner", call_timeout=2.5
+    )
     first, second = factory(), factory()
     assert isinstance(first, SubprocessPlanner) and first is not second
     assert first.command == [sys.executable, "-m", "fleetsim.exec", "fleetsim.planners:BFSPlanner"]
@@ -248,8 +250,11 @@ def test_a_factory_that_raises_reports_its_error_and_line(project: WriteModule) 
 
 
 def test_a_factory_whose_result_lacks_the_planner_methods_is_rejected(project: WriteModule) -> None:
-    project("half_planner", "class Half:\n    def plan_routes(self, task, fleet, layout):\n        return []\n"
-            "def make():\n    return Half()\n")
+    project(
+        "half_planner",
+        "class Half:\n    def plan_routes(self, task, fleet, layout):\n        return []\n"
+        "def make():\n    return Half()\n",
+    )
     message = spec_error("half_planner:make")
     assert "which has no callable fix_legs" in message
     assert "fix_legs(task, fleet, layout)" in message

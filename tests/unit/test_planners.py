@@ -102,9 +102,13 @@ def test_bfs_planner_ignores_the_goal_direction() -> None:
     assert [leg.segment for leg in tugger_plan.legs] == [4, 5, 7]
 
 
-def _scenario(tmp_path: Path, segments: tuple[Segment, ...], vehicles: str, tasks: str, capability: TurnCapability) -> Scenario:
+def _scenario(
+    tmp_path: Path, segments: tuple[Segment, ...], vehicles: str, tasks: str, capability: TurnCapability
+) -> Scenario:
     write_map(tmp_path / "map.json", segments)
-    (tmp_path / "vehicles.csv").write_text("vehicle_id,start_segment_id,segment_orientation,progress_direction\n" + vehicles)
+    (tmp_path / "vehicles.csv").write_text(
+        "vehicle_id,start_segment_id,segment_orientation,progress_direction\n" + vehicles
+    )
     (tmp_path / "tasks.csv").write_text("vehicle_id,goal_segment_id,goal_progress_direction\n" + tasks)
     vehicle_type = replace(DEFAULT_VEHICLE_TYPE, turn_capability=capability)
     return load_scenario_dir(tmp_path, vehicle_types={"default": vehicle_type})

@@ -100,9 +100,7 @@ def test_peak_equal_to_max_speed_gives_the_same_stop_time_from_both_formulas(v0:
 
 
 @pytest.mark.parametrize(("v0", "a", "vmax", "s"), EVERY_KIND)
-def test_speed_is_continuous_at_phase_boundaries_and_zero_at_stop(
-    v0: float, a: float, vmax: float, s: float
-) -> None:
+def test_speed_is_continuous_at_phase_boundaries_and_zero_at_stop(v0: float, a: float, vmax: float, s: float) -> None:
     profile = SpeedProfile.plan(v0, a, vmax, s)
     assert profile.speed_at(0.0) == v0
     assert profile.speed_at(profile.stop_time) == 0.0

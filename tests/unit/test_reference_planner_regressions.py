@@ -19,7 +19,10 @@ from fleetsim.sim.report import failure_report
 from fleetsim.strategies import load_saved
 
 FOLDER = Path(__file__).resolve().parents[1] / "data" / "planner_regressions"
-TYPES = (replace(DEFAULT_VEHICLE_TYPE, name="agv"), VehicleType("tugger", 1.4, 0.7, 0.5, 1.2, 0.4, TurnCapability.CURVE))
+TYPES = (
+    replace(DEFAULT_VEHICLE_TYPE, name="agv"),
+    VehicleType("tugger", 1.4, 0.7, 0.5, 1.2, 0.4, TurnCapability.CURVE),
+)
 
 
 @pytest.mark.parametrize("name", sorted(p.name for p in FOLDER.iterdir()))

@@ -30,8 +30,13 @@ def _shape(plan: FleetPlan) -> list[tuple[Any, ...]]:
     return [(leg.segment, leg.traverse, leg.progress, leg.fixed) for leg in plan.legs]
 
 
-@pytest.mark.parametrize(("name", "planner"), [("mixed-shapes", ReservingPlanner), ("crossing", BFSPlanner), ("loop-one-way", ReservingPlanner)])
-def test_every_replayed_frame_has_the_simulations_poses_plans_and_alerts(name: str, planner: type, monkeypatch: pytest.MonkeyPatch) -> None:
+@pytest.mark.parametrize(
+    ("name", "planner"),
+    [("mixed-shapes", ReservingPlanner), ("crossing", BFSPlanner), ("loop-one-way", ReservingPlanner)],
+)
+def test_every_replayed_frame_has_the_simulations_poses_plans_and_alerts(
+    name: str, planner: type, monkeypatch: pytest.MonkeyPatch
+) -> None:
     scenario = example(name)
     seen: list[tuple[dict[int, Any], dict[int, Any]]] = []
     move = loop._Run.move

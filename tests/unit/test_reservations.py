@@ -58,7 +58,10 @@ def test_two_vehicles_with_fixed_legs_on_one_segment_are_both_primary_holders() 
 
 def test_fixed_legs_on_conflicting_segments_alert_on_both_segments() -> None:
     alerts = _alerts(_plan(1, fixed=(11,)), _plan(2, fixed=(12,)))
-    assert alerts == (CollisionAlert(11, primary=(1,), secondary=(2,)), CollisionAlert(12, primary=(2,), secondary=(1,)))
+    assert alerts == (
+        CollisionAlert(11, primary=(1,), secondary=(2,)),
+        CollisionAlert(12, primary=(2,), secondary=(1,)),
+    )
 
 
 def test_fixed_legs_with_disjoint_conflict_sets_give_no_alert() -> None:
@@ -119,7 +122,12 @@ def test_alert_text_is_the_thesis_form() -> None:
 
 def test_alert_text_lists_every_holder_and_an_empty_secondary_section() -> None:
     alert = CollisionAlert(11, primary=(1, 2), secondary=())
-    assert alert.text().splitlines()[1:] == ["Primary reservations", " - vehicle_1", " - vehicle_2", "Secondary reservations"]
+    assert alert.text().splitlines()[1:] == [
+        "Primary reservations",
+        " - vehicle_1",
+        " - vehicle_2",
+        "Secondary reservations",
+    ]
 
 
 def test_alert_names_every_vehicle_involved() -> None:
@@ -222,7 +230,11 @@ def test_an_index_follows_legs_driven_past_newly_fixed_and_replaced(data: st.Dat
         if change == "drive past" and len(legs) > 1:
             legs = legs[1:]
         elif change == "fix next" and fixed < len(legs):
-            legs = (*legs[:fixed], FleetLeg(legs[fixed].segment, legs[fixed].traverse, legs[fixed].progress, True), *legs[fixed + 1 :])
+            legs = (
+                *legs[:fixed],
+                FleetLeg(legs[fixed].segment, legs[fixed].traverse, legs[fixed].progress, True),
+                *legs[fixed + 1 :],
+            )
         else:
             legs = data.draw(fleets(layout).filter(bool)).popitem()[1].legs
         plans = {**plans, vid: FleetPlan(vid, legs)}

@@ -55,7 +55,9 @@ def test_pixel_coordinates_are_scaled_by_the_mean_of_the_measurements_with_y_poi
     scale = (20 / 400 + 16.5 / 300) / 2  # metres per pixel: the mean over the measurements
     assert site.format == "rmf" and site.meters_per_pixel == pytest.approx(scale)
     first = site.segments[0]
-    assert [c for point in first.waypoints for c in point] == pytest.approx([100 * scale, -400 * scale, 300 * scale, -400 * scale])
+    assert [c for point in first.waypoints for c in point] == pytest.approx(
+        [100 * scale, -400 * scale, 300 * scale, -400 * scale]
+    )
 
 
 def test_lanes_become_straight_segments_two_way_or_one_way_in_lane_order(tmp_path: Path) -> None:
@@ -79,8 +81,11 @@ def test_metre_coordinates_are_taken_as_they_are(tmp_path: Path) -> None:
 def test_a_level_without_measurements_reads_pixels_as_metres_with_a_warning(tmp_path: Path) -> None:
     site = load(tmp_path, level="L2")
     assert [(s.direction, s.names, s.waypoints) for s in site.segments] == [
-        (Direction.FORWARD, ("up_b--up_a",), ((10.0, -0.0), (0.0, -0.0)))]
-    assert any("a level without measurements (its scale is unknown: pixels are read as metres)" in w for w in site.warnings)
+        (Direction.FORWARD, ("up_b--up_a",), ((10.0, -0.0), (0.0, -0.0)))
+    ]
+    assert any(
+        "a level without measurements (its scale is unknown: pixels are read as metres)" in w for w in site.warnings
+    )
 
 
 def test_another_graph_is_chosen_by_its_graph_idx(tmp_path: Path) -> None:
@@ -121,8 +126,11 @@ def test_the_first_level_is_the_default_and_others_are_chosen_by_name(tmp_path: 
 def test_tasks_name_lanes_by_their_waypoints(tmp_path: Path) -> None:
     from fleetsim.load.scenario import load_scenario_dir
 
-    save_yaml(tmp_path, TWO_LEVELS.replace("      - [0, 1, {bidirectional: [4, true], graph_idx: [2, 0]}]\n", ""),
-              "map.building.yaml")
+    save_yaml(
+        tmp_path,
+        TWO_LEVELS.replace("      - [0, 1, {bidirectional: [4, true], graph_idx: [2, 0]}]\n", ""),
+        "map.building.yaml",
+    )
     (tmp_path / "vehicles.csv").write_text("vehicle_id,start_segment_id,segment_orientation\n1,v1--dock,backward\n")
     (tmp_path / "tasks.csv").write_text("vehicle_id,goal_segment_id\n1,ward--v3\n")
     scenario = load_scenario_dir(tmp_path)

@@ -67,12 +67,15 @@ def test_an_unknown_name_says_what_was_meant(tmp_path: Path) -> None:
     assert problem == "segment 'Dock B' is not in site.lif.json (neither an id nor a name); did you mean 'Dock A'?"
 
 
-@pytest.mark.parametrize(("cell", "problem"), [
-    ("id:x", "'id:x': after 'id:' comes a whole number >= 0"),
-    ("id:9", "segment 9 is not in site.lif.json"),
-    ("name:nothing", "no segment of site.lif.json is named 'nothing'"),
-    ("99", "segment 99 is not in site.lif.json"),
-])
+@pytest.mark.parametrize(
+    ("cell", "problem"),
+    [
+        ("id:x", "'id:x': after 'id:' comes a whole number >= 0"),
+        ("id:9", "segment 9 is not in site.lif.json"),
+        ("name:nothing", "no segment of site.lif.json is named 'nothing'"),
+        ("99", "segment 99 is not in site.lif.json"),
+    ],
+)
 def test_forced_readings_and_unknown_ids_are_located_errors(tmp_path: Path, cell: str, problem: str) -> None:
     assert goal_error(tmp_path, cell) == problem
 

@@ -124,7 +124,9 @@ def test_later_controller_changes_do_not_show_through_an_earlier_snapshot(contro
     fleet = controller.snapshot(0.0)
     before = (dict(fleet.vehicles), dict(fleet.plans), dict(fleet.tasks), fleet.routed)
     moved = fleet.vehicles[1]._replace(distance=1.5, speed=0.5, x=1.5)
-    longer = FleetPlan(1, (*fleet.plans[1].legs, FleetLeg(2, Traverse.FORWARD, Progress.FORWARD, True, goal_for_task=1)))
+    longer = FleetPlan(
+        1, (*fleet.plans[1].legs, FleetLeg(2, Traverse.FORWARD, Progress.FORWARD, True, goal_for_task=1))
+    )
     controller.set_state(moved)
     controller.set_plan(longer)
     controller.tasks.mark_routed(longer)

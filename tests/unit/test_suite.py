@@ -14,8 +14,14 @@ from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Expectations, ScenarioSettin
 
 SUITES = Path(__file__).resolve().parents[2] / "scenario_suites"
 
-FILES = ("crossing/map.json", "crossing/vehicles.csv", "crossing/tasks.csv",
-         "maps/loop.tmx", "loop/vehicles.csv", "loop/tasks.csv")
+FILES = (
+    "crossing/map.json",
+    "crossing/vehicles.csv",
+    "crossing/tasks.csv",
+    "maps/loop.tmx",
+    "loop/vehicles.csv",
+    "loop/tasks.csv",
+)
 
 SUITE = """\
 # yaml-language-server: $schema=../schemas/suite.schema.json
@@ -86,12 +92,8 @@ def test_scenarios_keep_file_order_and_entry_lines(suite: Suite) -> None:
 
 def test_a_scenario_inherits_defaults_and_overrides_only_what_it_sets(suite: Suite) -> None:
     crossing, loop = (spec.settings for spec in suite.scenarios)
-    assert crossing == ScenarioSettings(
-        vehicle_type="agv", time_limit=200.0, conflict_model=ConflictModel.BBOX
-    )
-    assert loop == ScenarioSettings(
-        vehicle_type="tug", time_limit=120.0, conflict_model=ConflictModel.BBOX, stop_on=()
-    )
+    assert crossing == ScenarioSettings(vehicle_type="agv", time_limit=200.0, conflict_model=ConflictModel.BBOX)
+    assert loop == ScenarioSettings(vehicle_type="tug", time_limit=120.0, conflict_model=ConflictModel.BBOX, stop_on=())
 
 
 def test_expectations_tags_and_xfail_are_read(suite: Suite) -> None:
@@ -112,10 +114,14 @@ def test_expectations_tags_and_xfail_default_when_absent(suite: Suite) -> None:
 def test_dir_and_explicit_paths_resolve_relative_to_the_suite_file(tmp_path: Path, suite: Suite) -> None:
     crossing, loop = suite.scenarios
     assert (crossing.map_path, crossing.vehicles_path, crossing.tasks_path) == (
-        tmp_path / "crossing/map.json", tmp_path / "crossing/vehicles.csv", tmp_path / "crossing/tasks.csv"
+        tmp_path / "crossing/map.json",
+        tmp_path / "crossing/vehicles.csv",
+        tmp_path / "crossing/tasks.csv",
     )
     assert (loop.map_path, loop.vehicles_path, loop.tasks_path) == (
-        tmp_path / "maps/loop.tmx", tmp_path / "loop/vehicles.csv", tmp_path / "loop/tasks.csv"
+        tmp_path / "maps/loop.tmx",
+        tmp_path / "loop/vehicles.csv",
+        tmp_path / "loop/tasks.csv",
     )
     assert crossing.suite_path == tmp_path / "crossings.fleetsim.yaml"
 
@@ -142,7 +148,7 @@ def test_without_vehicle_types_the_built_in_default_type_is_used(tmp_path: Path)
 
 def test_a_single_vehicle_type_is_the_default_without_being_named(tmp_path: Path) -> None:
     text = SUITE.replace("  vehicle_type: agv\n", "").replace("    vehicle_type: TUG\n", "")
-    text = text[: text.index("  tug:")] + text[text.index("defaults:"):]
+    text = text[: text.index("  tug:")] + text[text.index("defaults:") :]
     suite = load_suite(make_suite(tmp_path, text))
     assert [spec.settings.vehicle_type for spec in suite.scenarios] == ["agv", "agv"]
 
@@ -157,29 +163,54 @@ def test_several_vehicle_types_and_none_chosen_leave_the_default_open(tmp_path: 
 
 
 CODE_CHECKS = [
-    pytest.param(("name: loop-explicit", "name: crossing"), (25, 11),
-                 "scenarios[1].name: scenario name 'crossing' is already used on line 15",
-                 id="duplicate-name"),
-    pytest.param(("name: loop-explicit", "name: Crossing"), (25, 11),
-                 "names may not differ only in case", id="duplicate-name-differing-in-case"),
-    pytest.param(("  vehicle_type: agv", "  vehicle_type: agx"), (11, 17),
-                 "defaults.vehicle_type: 'agx' is not a vehicle type of this suite (agv, tug); "
-                 "did you mean 'agv'?",
-                 id="unknown-default-vehicle-type"),
-    pytest.param(("vehicle_type: TUG", "vehicle_type: crane"), (31, 19),
-                 "scenarios[1].vehicle_type: 'crane' is not a vehicle type",
-                 id="unknown-scenario-vehicle-type"),
-    pytest.param(("  tug: {", "  AGV: {"), (8, 3),
-                 "vehicle_types: 'AGV' differs from vehicle type 'agv' only in case",
-                 id="type-names-differ-in-case"),
-    pytest.param(("dir: crossing/", "dir: crosing/"), (16, 10),
-                 "scenarios[0].dir: no such directory", id="missing-dir"),
-    pytest.param(("map: maps/loop.tmx", "map: maps/lop.tmx"), (27, 10),
-                 "scenarios[1].map: no such file", id="missing-map-file"),
-    pytest.param(("tasks: loop/tasks.csv", "tasks: loop/task.csv"), (29, 12),
-                 "scenarios[1].tasks: no such file", id="missing-tasks-file"),
-    pytest.param(("time_limit: 200", "time_limit: .nan"), (12, 15),
-                 "defaults.time_limit: nan is not a finite number", id="nan-setting"),
+    pytest.param(
+        ("name: loop-explicit", "name: crossing"),
+        (25, 11),
+        "scenarios[1].name: scenario name 'crossing' is already used on line 15",
+        id="duplicate-name",
+    ),
+    pytest.param(
+        ("name: loop-explicit", "name: Crossing"),
+        (25, 11),
+        "names may not differ only in case",
+        id="duplicate-name-differing-in-case",
+    ),
+    pytest.param(
+        ("  vehicle_type: agv", "  vehicle_type: agx"),
+        (11, 17),
+        "defaults.vehicle_type: 'agx' is not a vehicle type of this suite (agv, tug); did you mean 'agv'?",
+        id="unknown-default-vehicle-type",
+    ),
+    pytest.param(
+        ("vehicle_type: TUG", "vehicle_type: crane"),
+        (31, 19),
+        "scenarios[1].vehicle_type: 'crane' is not a vehicle type",
+        id="unknown-scenario-vehicle-type",
+    ),
+    pytest.param(
+        ("  tug: {", "  AGV: {"),
+        (8, 3),
+        "vehicle_types: 'AGV' differs from vehicle type 'agv' only in case",
+        id="type-names-differ-in-case",
+    ),
+    pytest.param(
+        ("dir: crossing/", "dir: crosing/"), (16, 10), "scenarios[0].dir: no such directory", id="missing-dir"
+    ),
+    pytest.param(
+        ("map: maps/loop.tmx", "map: maps/lop.tmx"), (27, 10), "scenarios[1].map: no such file", id="missing-map-file"
+    ),
+    pytest.param(
+        ("tasks: loop/tasks.csv", "tasks: loop/task.csv"),
+        (29, 12),
+        "scenarios[1].tasks: no such file",
+        id="missing-tasks-file",
+    ),
+    pytest.param(
+        ("time_limit: 200", "time_limit: .nan"),
+        (12, 15),
+        "defaults.time_limit: nan is not a finite number",
+        id="nan-setting",
+    ),
 ]
 
 
@@ -198,7 +229,9 @@ def test_suite_mistakes_give_one_error_at_the_offending_value(
 @pytest.mark.parametrize(
     ("files", "problem"),
     [
-        pytest.param(FILES[1:], "has no map.json, map.tmj, map.tmx, map.lif.json or map.building.yaml", id="no-map-in-dir"),
+        pytest.param(
+            FILES[1:], "has no map.json, map.tmj, map.tmx, map.lif.json or map.building.yaml", id="no-map-in-dir"
+        ),
         pytest.param(FILES + ("crossing/map.tmx",), "has both map.json and map.tmx", id="two-maps-in-dir"),
         pytest.param(FILES[:1] + FILES[2:], "has no vehicles.csv", id="no-vehicles-in-dir"),
     ],
@@ -225,7 +258,9 @@ def test_discover_finds_suite_files_sorted_and_skips_hidden_directories(tmp_path
         (tmp_path / name).write_text("", encoding="utf-8")
     explicit = tmp_path / "b/other.yaml"
     assert discover_suites([tmp_path / "b", tmp_path, explicit]) == [
-        tmp_path / "a.fleetsim.yaml", explicit, tmp_path / "b/z.fleetsim.yaml"
+        tmp_path / "a.fleetsim.yaml",
+        explicit,
+        tmp_path / "b/z.fleetsim.yaml",
     ]
 
 

@@ -32,15 +32,40 @@ def _spec(tmp_path: Path, text: str) -> Path:
 @pytest.mark.parametrize(
     ("old", "new", "line", "words"),
     [
-        ("planners: [fleetsim.planners:ReservingPlanner, fleetsim.planners:BFSPlanner]", "planners: [not a spec]", 3, "planners[0]='not a spec'"),
+        (
+            "planners: [fleetsim.planners:ReservingPlanner, fleetsim.planners:BFSPlanner]",
+            "planners: [not a spec]",
+            3,
+            "planners[0]='not a spec'",
+        ),
         ("    count: 4", "    count: -4", 8, "count=-4 must be a whole number >= 1"),
         ("size: [1, 2]", "size: [3, 2]", 7, "size=[3, 2] must be [min, max]"),
         ("layout: warehouse", "layout: spiral", 7, "'spiral'"),
         ("defaults: {time_limit: 30}", "defaults: {time_limit: fast}", 4, "'fast'"),
-        ("name: small", "name: small\nbaseline: other:Planner", 3, "baseline='other:Planner' must be one of the planners"),
-        ("name: small", "name: small\ndisturbances: {seeds: [1, 1]}", 3, "seeds[1]=1 must be a whole number >= 0, listed once"),
-        ("name: small", "name: small\ndisturbances: {stop: [30, 5], seeds: [1]}", 3, "stop=[30, 5] must be [MIN, MAX] seconds"),
-        ("name: small", "name: small\ndisturbances: {stops_per_vehicle_hour: 0, seeds: [1]}", 3, "stops_per_vehicle_hour=0 must be a number > 0"),
+        (
+            "name: small",
+            "name: small\nbaseline: other:Planner",
+            3,
+            "baseline='other:Planner' must be one of the planners",
+        ),
+        (
+            "name: small",
+            "name: small\ndisturbances: {seeds: [1, 1]}",
+            3,
+            "seeds[1]=1 must be a whole number >= 0, listed once",
+        ),
+        (
+            "name: small",
+            "name: small\ndisturbances: {stop: [30, 5], seeds: [1]}",
+            3,
+            "stop=[30, 5] must be [MIN, MAX] seconds",
+        ),
+        (
+            "name: small",
+            "name: small\ndisturbances: {stops_per_vehicle_hour: 0, seeds: [1]}",
+            3,
+            "stops_per_vehicle_hour=0 must be a number > 0",
+        ),
         ("name: small", "name: small\ndisturbances: {rate: 6}", 3, "disturbances={'rate': 6} must be"),
     ],
 )
@@ -74,16 +99,22 @@ def test_a_faulty_planner_fails_its_run_not_the_sweep(tmp_path: Path) -> None:
 
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "data" / "sweep"))
     try:
-        spec = load_sweep_spec(_spec(tmp_path, GOOD.replace("fleetsim.planners:BFSPlanner", "sweep_planners:Exploding")))
+        spec = load_sweep_spec(
+            _spec(tmp_path, GOOD.replace("fleetsim.planners:BFSPlanner", "sweep_planners:Exploding"))
+        )
         rows = [run_item(item) for item in expand(spec, tmp_path / "runs")]
     finally:
         sys.path.pop(0)
     exploding = [row for row in rows if row["planner"] == "sweep_planners:Exploding"]
-    assert exploding and all(row["status"] == "failed" and "boom in the constructor" in row["error"] for row in exploding)
+    assert exploding and all(
+        row["status"] == "failed" and "boom in the constructor" in row["error"] for row in exploding
+    )
     assert all(row["status"] == "passed" for row in rows if row not in exploding)
 
 
-def test_sweep_without_dask_says_how_to_install_it(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
+def test_sweep_without_dask_says_how_to_install_it(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
     monkeypatch.setitem(sys.modules, "distributed", None)  # import distributed -> ImportError
     assert main(["sweep", str(_spec(tmp_path, GOOD)), "-o", str(tmp_path / "r.jsonl")]) == 1
     assert "pip install 'fleetsim[sweep]'" in capsys.readouterr().err
@@ -113,12 +144,17 @@ def test_sweep_results_feed_fleetsim_compare(tmp_path: Path) -> None:
 
 def test_disturbance_seeds_run_every_scenario_once_per_seed(tmp_path: Path) -> None:
     """The pairs stay pairs: each (scenario, seed) is one id, run by every planner with the same stops."""
-    spec = load_sweep_spec(_spec(tmp_path, GOOD + "disturbances: {stops_per_vehicle_hour: 600, stop: [5, 10], seeds: [3, 4]}\n"))
+    spec = load_sweep_spec(
+        _spec(tmp_path, GOOD + "disturbances: {stops_per_vehicle_hour: 600, stop: [5, 10], seeds: [3, 4]}\n")
+    )
     items = expand(spec, tmp_path)
     assert len(items) == 16 and len({i["key"] for i in items}) == 16
     assert sorted({i["id"].rsplit("~", 1)[1] for i in items}) == ["d3", "d4"]
     drawn = {i["id"]: i["scenario"]["random_disturbances"] for i in items if i["scenario"] is not None}
-    assert {(d["seed"], d["stops_per_vehicle_hour"], tuple(d["stop"])) for d in drawn.values()} == {(3, 600.0, (5.0, 10.0)), (4, 600.0, (5.0, 10.0))}
+    assert {(d["seed"], d["stops_per_vehicle_hour"], tuple(d["stop"])) for d in drawn.values()} == {
+        (3, 600.0, (5.0, 10.0)),
+        (4, 600.0, (5.0, 10.0)),
+    }
     assert load_sweep_spec(_spec(tmp_path, GOOD)).disturbances is None  # narrowly: without the key, no stops
 
 
@@ -129,10 +165,15 @@ def test_a_scenario_sent_to_a_worker_keeps_its_disturbances() -> None:
     from fleetsim.sweep.payload import scenario_from_payload, scenario_payload
 
     root = Path(__file__).resolve().parents[2] / "scenario_suites"
-    for file, name in (("disturbances.fleetsim.yaml", "random-stops-at-the-junction"), ("caught-bugs.fleetsim.yaml", "late-crossing-stop")):
+    for file, name in (
+        ("disturbances.fleetsim.yaml", "random-stops-at-the-junction"),
+        ("caught-bugs.fleetsim.yaml", "late-crossing-stop"),
+    ):
         suite = load_suite(root / file)
         scenario = load_scenario(next(spec for spec in suite.scenarios if spec.name == name), suite)
         assert scenario.disturbances or scenario.random_disturbances
         sent = scenario_from_payload(scenario_payload(scenario))
         assert (sent.disturbances, sent.random_disturbances) == (scenario.disturbances, scenario.random_disturbances)
-        assert run_scenario(sent, ReservingPlanner()).trace_hash == run_scenario(scenario, ReservingPlanner()).trace_hash
+        assert (
+            run_scenario(sent, ReservingPlanner()).trace_hash == run_scenario(scenario, ReservingPlanner()).trace_hash
+        )

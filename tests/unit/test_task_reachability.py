@@ -99,7 +99,9 @@ def test_a_goal_only_entered_backing_refuses_a_forward_arrival_for_a_curve_vehic
 
 
 @pytest.mark.parametrize("arrival", ["reverse", ""])
-def test_a_goal_only_entered_backing_is_fine_when_the_task_asks_for_reverse_or_either(tmp_path: Path, arrival: str) -> None:
+def test_a_goal_only_entered_backing_is_fine_when_the_task_asks_for_reverse_or_either(
+    tmp_path: Path, arrival: str
+) -> None:
     make_scenario(tmp_path, CUSP, "1,1,forward,forward,tugger\n", f"1,2,{arrival}\n")
 
 

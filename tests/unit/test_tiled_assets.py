@@ -23,14 +23,26 @@ def instance(tmp_path: Path, template: str, suffix: str = ".tmx") -> Segment:
     reference = os.path.relpath(ASSETS / template, tmp_path)
     path = tmp_path / ("map" + suffix)
     if suffix == ".tmx":
-        path.write_text('<map orientation="orthogonal" width="20" height="20" tilewidth="32" '
-                        f'tileheight="32"><objectgroup><object id="1" template="{reference}" '
-                        'x="320" y="320"/></objectgroup></map>')
+        path.write_text(
+            '<map orientation="orthogonal" width="20" height="20" tilewidth="32" '
+            f'tileheight="32"><objectgroup><object id="1" template="{reference}" '
+            'x="320" y="320"/></objectgroup></map>'
+        )
     else:
-        path.write_text(json.dumps({
-            "orientation": "orthogonal", "width": 20, "height": 20, "tilewidth": 32,
-            "tileheight": 32, "layers": [{"type": "objectgroup", "objects": [
-                {"id": 1, "template": reference, "x": 320, "y": 320}]}]}))
+        path.write_text(
+            json.dumps(
+                {
+                    "orientation": "orthogonal",
+                    "width": 20,
+                    "height": 20,
+                    "tilewidth": 32,
+                    "tileheight": 32,
+                    "layers": [
+                        {"type": "objectgroup", "objects": [{"id": 1, "template": reference, "x": 320, "y": 320}]}
+                    ],
+                }
+            )
+        )
     (segment,) = load_map(path).segments
     return segment
 

@@ -16,8 +16,10 @@ import pytest
 from fleetsim.errors import MapError
 from fleetsim.load.tiled import load_map
 
-HEADER = ('<?xml version="1.0" encoding="UTF-8"?>\n<map version="1.8" orientation="orthogonal" '
-          'width="10" height="10" tilewidth="32" tileheight="32" infinite="0">\n')
+HEADER = (
+    '<?xml version="1.0" encoding="UTF-8"?>\n<map version="1.8" orientation="orthogonal" '
+    'width="10" height="10" tilewidth="32" tileheight="32" infinite="0">\n'
+)
 
 
 def tmx(tmp_path: Path, body: str, header: str = HEADER, name: str = "bad.tmx") -> Path:
@@ -31,8 +33,7 @@ def objects(*xml_objects: str) -> str:
 
 
 def straight(object_id: int = 7, points: str = "0,0 32,0", extra: str = "", body: str = "") -> str:
-    return (f'<object id="{object_id}" type="straight" x="10" y="10"{extra}>{body}'
-            f'<polyline points="{points}"/></object>')
+    return f'<object id="{object_id}" type="straight" x="10" y="10"{extra}>{body}<polyline points="{points}"/></object>'
 
 
 def direction(value: str, kind: str = "") -> str:
@@ -75,7 +76,9 @@ def test_malformed_xml_reports_line_and_column(tmp_path: Path) -> None:
 
 def test_non_orthogonal_map_names_the_orientation(tmp_path: Path) -> None:
     header = HEADER.replace('"orthogonal"', '"isometric"')
-    assert "the map's orientation is 'isometric'; fleetsim reads orthogonal maps only" in str(map_error(tmx(tmp_path, objects(straight()), header)))
+    assert "the map's orientation is 'isometric'; fleetsim reads orthogonal maps only" in str(
+        map_error(tmx(tmp_path, objects(straight()), header))
+    )
 
 
 def test_infinite_map_is_rejected(tmp_path: Path) -> None:
@@ -85,8 +88,19 @@ def test_infinite_map_is_rejected(tmp_path: Path) -> None:
 
 def test_infinite_json_map_is_rejected(tmp_path: Path) -> None:
     path = tmp_path / "inf.json"
-    path.write_text(json.dumps({"orientation": "orthogonal", "infinite": True, "width": 1,
-                                "height": 1, "tilewidth": 32, "tileheight": 32, "layers": []}))
+    path.write_text(
+        json.dumps(
+            {
+                "orientation": "orthogonal",
+                "infinite": True,
+                "width": 1,
+                "height": 1,
+                "tilewidth": 32,
+                "tileheight": 32,
+                "layers": [],
+            }
+        )
+    )
     assert "the map is infinite (infinite = True); fleetsim reads fixed-size maps only" in str(map_error(path))
 
 
@@ -103,8 +117,7 @@ def test_bad_meters_per_pixel_is_rejected(tmp_path: Path, value: str, shown: str
 
 
 def test_missing_map_width_is_named(tmp_path: Path) -> None:
-    assert "'width' is missing" in str(map_error(tmx(tmp_path, objects(straight()),
-                                                     HEADER.replace('width="10" ', ""))))
+    assert "'width' is missing" in str(map_error(tmx(tmp_path, objects(straight()), HEADER.replace('width="10" ', ""))))
 
 
 # --- objects -------------------------------------------------------------------------------------
@@ -189,15 +202,41 @@ def test_json_template_that_is_not_a_template_is_rejected(tmp_path: Path) -> Non
 
 def json_map() -> dict[str, Any]:
     return {
-        "type": "map", "orientation": "orthogonal", "infinite": False, "width": 10, "height": 10,
-        "tilewidth": 32, "tileheight": 32,
+        "type": "map",
+        "orientation": "orthogonal",
+        "infinite": False,
+        "width": 10,
+        "height": 10,
+        "tilewidth": 32,
+        "tileheight": 32,
         "properties": [{"name": "meters_per_pixel", "type": "float", "value": 0.5}],
-        "layers": [{"type": "group", "name": "g", "offsetx": 3, "offsety": 4, "visible": True,
-                    "layers": [{"type": "objectgroup", "name": "segments", "objects": [
-                        {"id": 7, "type": "curve", "x": 10, "y": 20, "rotation": 30, "visible": True,
-                         "polyline": [{"x": 0, "y": 0}, {"x": 5, "y": 6}],
-                         "properties": [{"name": "direction", "type": "string",
-                                         "value": "forward"}]}]}]}],
+        "layers": [
+            {
+                "type": "group",
+                "name": "g",
+                "offsetx": 3,
+                "offsety": 4,
+                "visible": True,
+                "layers": [
+                    {
+                        "type": "objectgroup",
+                        "name": "segments",
+                        "objects": [
+                            {
+                                "id": 7,
+                                "type": "curve",
+                                "x": 10,
+                                "y": 20,
+                                "rotation": 30,
+                                "visible": True,
+                                "polyline": [{"x": 0, "y": 0}, {"x": 5, "y": 6}],
+                                "properties": [{"name": "direction", "type": "string", "value": "forward"}],
+                            }
+                        ],
+                    }
+                ],
+            }
+        ],
     }
 
 
@@ -209,8 +248,7 @@ def save_json(tmp_path: Path, document: dict[str, Any]) -> Path:
 
 def _leaf_paths(node: Any, prefix: tuple[Any, ...] = ()) -> Iterator[tuple[Any, ...]]:
     yield prefix
-    children = node.items() if isinstance(node, dict) else enumerate(node) if isinstance(
-        node, list) else ()
+    children = node.items() if isinstance(node, dict) else enumerate(node) if isinstance(node, list) else ()
     for key, child in children:
         yield from _leaf_paths(child, (*prefix, key))
 
@@ -234,12 +272,16 @@ def test_any_malformed_json_value_gives_a_map_error_not_a_raw_exception(tmp_path
                 load_map(save_json(tmp_path, document))
 
 
-MUTANT_TMX = (HEADER.replace('infinite="0">', 'infinite="0"><properties><property '
-                             'name="meters_per_pixel" type="float" value="0.5"/></properties>')
-              + '<group name="g" offsetx="3" offsety="4"><objectgroup name="segments">'
-              '<object id="7" type="curve" x="10" y="20" rotation="30">'
-              '<properties><property name="direction" type="int" value="1"/></properties>'
-              '<polyline points="0,0 5,6"/></object></objectgroup></group></map>')
+MUTANT_TMX = (
+    HEADER.replace(
+        'infinite="0">',
+        'infinite="0"><properties><property name="meters_per_pixel" type="float" value="0.5"/></properties>',
+    )
+    + '<group name="g" offsetx="3" offsety="4"><objectgroup name="segments">'
+    '<object id="7" type="curve" x="10" y="20" rotation="30">'
+    '<properties><property name="direction" type="int" value="1"/></properties>'
+    '<polyline points="0,0 5,6"/></object></objectgroup></group></map>'
+)
 
 
 def test_any_malformed_tmx_attribute_gives_a_map_error_not_a_raw_exception(tmp_path: Path) -> None:

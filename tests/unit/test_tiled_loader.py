@@ -37,8 +37,13 @@ def poly(object_id: int | None, points: Any = ((0, 0), (32, 0)), **keys: Any) ->
 
 
 def prop(name: str, value: Any, **extra: Any) -> Json:
-    kind = "bool" if isinstance(value, bool) else "int" if isinstance(value, int) else (
-        "float" if isinstance(value, float) else "string")
+    kind = (
+        "bool"
+        if isinstance(value, bool)
+        else "int"
+        if isinstance(value, int)
+        else ("float" if isinstance(value, float) else "string")
+    )
     return {"name": name, "type": kind, "value": value, **extra}
 
 
@@ -51,8 +56,17 @@ def group(*layers: Json, **keys: Any) -> Json:
 
 
 def tiled_map(*layers: Json, width: int = 20, height: int = 10, tile: int = 32, **keys: Any) -> Json:
-    return {"type": "map", "orientation": "orthogonal", "infinite": False, "width": width,
-            "height": height, "tilewidth": tile, "tileheight": tile, "layers": list(layers), **keys}
+    return {
+        "type": "map",
+        "orientation": "orthogonal",
+        "infinite": False,
+        "width": width,
+        "height": height,
+        "tilewidth": tile,
+        "tileheight": tile,
+        "layers": list(layers),
+        **keys,
+    }
 
 
 def _attr(value: Any) -> str:
@@ -72,8 +86,7 @@ def _xml_properties(props: list[Json]) -> str:
 
 
 def xml_object(obj: Json) -> str:
-    attrs = "".join(f' {k}="{_attr(v)}"' for k, v in obj.items()
-                    if k not in ("polyline", "properties", "polygon"))
+    attrs = "".join(f' {k}="{_attr(v)}"' for k, v in obj.items() if k not in ("polyline", "properties", "polygon"))
     body = _xml_properties(obj.get("properties", []))
     for kind in ("polyline", "polygon"):
         if kind in obj:
@@ -84,8 +97,9 @@ def xml_object(obj: Json) -> str:
 
 def _xml_layer(item: Json) -> str:
     tag = {"tilelayer": "layer"}.get(item["type"], item["type"])
-    attrs = "".join(f' {k}="{_attr(v)}"' for k, v in item.items()
-                    if k not in ("type", "objects", "layers", "properties"))
+    attrs = "".join(
+        f' {k}="{_attr(v)}"' for k, v in item.items() if k not in ("type", "objects", "layers", "properties")
+    )
     if tag == "group":
         inner = "".join(_xml_layer(child) for child in item["layers"])
     elif tag == "objectgroup":
@@ -96,8 +110,7 @@ def _xml_layer(item: Json) -> str:
 
 
 def tmx_text(document: Json) -> str:
-    attrs = "".join(f' {k}="{_attr(v)}"' for k, v in document.items()
-                    if k not in ("type", "layers", "properties"))
+    attrs = "".join(f' {k}="{_attr(v)}"' for k, v in document.items() if k not in ("type", "layers", "properties"))
     body = _xml_properties(document.get("properties", []))
     body += "".join(_xml_layer(item) for item in document["layers"])
     return f'<?xml version="1.0" encoding="UTF-8"?>\n<map version="1.8"{attrs}>{body}</map>\n'
@@ -145,14 +158,25 @@ def assert_points_close(actual: Any, expected: Any, tol: float = 1e-9) -> None:
 
 
 def test_json_and_tmx_of_the_same_map_give_the_same_segments(tmp_path: Path) -> None:
-    document = tiled_map(layer(
-        poly(3, ((0, 0), (10.123456, 20.654321), (40, 5)), x=100.5, y=60.25, rotation=17.5,
-             shape="curve", props={"direction": "forward"}),
-        poly(1, ((0, 0), (64, 0)), x=320, y=160)))
+    document = tiled_map(
+        layer(
+            poly(
+                3,
+                ((0, 0), (10.123456, 20.654321), (40, 5)),
+                x=100.5,
+                y=60.25,
+                rotation=17.5,
+                shape="curve",
+                props={"direction": "forward"},
+            ),
+            poly(1, ((0, 0), (64, 0)), x=320, y=160),
+        )
+    )
     from_tmx = load_map(save(tmp_path, "map.tmx", document))
     from_json = load_map(save(tmp_path, "map.json", document))
     assert [(s.id, s.shape, s.direction) for s in from_tmx.segments] == [
-        (s.id, s.shape, s.direction) for s in from_json.segments]
+        (s.id, s.shape, s.direction) for s in from_json.segments
+    ]
     for a, b in zip(from_tmx.segments, from_json.segments):
         assert_points_close(a.waypoints, b.waypoints, tol=1e-6)
 
@@ -169,10 +193,8 @@ def test_tmj_suffix_is_read_as_json(tmp_path: Path) -> None:
     assert loaded.segments[0].waypoints == ((0.0, 0.0), (1.0, 0.0))
 
 
-def test_meters_per_pixel_map_property_overrides_one_tile_per_metre(tmp_path: Path,
-                                                                    suffix: str) -> None:
-    document = tiled_map(layer(poly(1, ((0, 0), (32, 0)), x=320, y=0)),
-                         properties=[prop("meters_per_pixel", 0.5)])
+def test_meters_per_pixel_map_property_overrides_one_tile_per_metre(tmp_path: Path, suffix: str) -> None:
+    document = tiled_map(layer(poly(1, ((0, 0), (32, 0)), x=320, y=0)), properties=[prop("meters_per_pixel", 0.5)])
     loaded = load(tmp_path, suffix, document)
     assert loaded.meters_per_pixel == 0.5
     assert loaded.segments[0].waypoints == ((0.0, 80.0), (16.0, 80.0))
@@ -192,11 +214,14 @@ def test_offsets_of_nested_groups_and_the_object_layer_add_up(tmp_path: Path, su
     assert loaded.segments[0].waypoints == ((0.0, 0.0), (1.0, 0.0))
 
 
-def test_rotation_turns_points_clockwise_on_screen_about_the_object_origin(tmp_path: Path,
-                                                                          suffix: str) -> None:
-    document = tiled_map(layer(poly(1, ((0, 0), (10, 0)), x=320, y=160, rotation=90),
-                               poly(2, ((0, 0), (10, 0)), x=320, y=160, rotation=-45)),
-                         properties=[prop("meters_per_pixel", 1.0)])
+def test_rotation_turns_points_clockwise_on_screen_about_the_object_origin(tmp_path: Path, suffix: str) -> None:
+    document = tiled_map(
+        layer(
+            poly(1, ((0, 0), (10, 0)), x=320, y=160, rotation=90),
+            poly(2, ((0, 0), (10, 0)), x=320, y=160, rotation=-45),
+        ),
+        properties=[prop("meters_per_pixel", 1.0)],
+    )
     loaded = load(tmp_path, suffix, document)
     # 90° clockwise on screen: pixel (10, 0) -> (0, 10), i.e. 10 px down the screen = world -y.
     assert waypoints(loaded, 1) == ((0.0, 0.0), (0.0, -10.0))
@@ -212,13 +237,21 @@ def test_segments_are_sorted_by_id(tmp_path: Path, suffix: str) -> None:
 # --- classes and visibility ----------------------------------------------------------------------
 
 
-@pytest.mark.parametrize(("name", "shape"), [
-    ("straight", Shape.STRAIGHT), ("Straight", Shape.STRAIGHT), ("CURVE", Shape.CURVE),
-    ("s_curve", Shape.S_CURVE), ("S_Curve", Shape.S_CURVE), ("scurve", Shape.S_CURVE),
-    ("s-curve", Shape.S_CURVE),
-])
-def test_shape_class_names_and_aliases_are_case_insensitive(tmp_path: Path, suffix: str, name: str,
-                                                            shape: Shape) -> None:
+@pytest.mark.parametrize(
+    ("name", "shape"),
+    [
+        ("straight", Shape.STRAIGHT),
+        ("Straight", Shape.STRAIGHT),
+        ("CURVE", Shape.CURVE),
+        ("s_curve", Shape.S_CURVE),
+        ("S_Curve", Shape.S_CURVE),
+        ("scurve", Shape.S_CURVE),
+        ("s-curve", Shape.S_CURVE),
+    ],
+)
+def test_shape_class_names_and_aliases_are_case_insensitive(
+    tmp_path: Path, suffix: str, name: str, shape: Shape
+) -> None:
     assert load(tmp_path, suffix, tiled_map(layer(poly(1, shape=name)))).segments[0].shape is shape
 
 
@@ -232,12 +265,12 @@ def test_invisible_layers_groups_and_objects_are_skipped(tmp_path: Path, suffix:
         layer(poly(1), poly(2, visible=False)),
         layer(poly(3), visible=False, name="hidden"),
         group(layer(poly(4)), visible=False),
-        group(layer(poly(5)), visible=True))
+        group(layer(poly(5)), visible=True),
+    )
     assert [s.id for s in load(tmp_path, suffix, document).segments] == [1, 5]
 
 
-def test_unknown_class_on_a_polyline_is_an_error_naming_file_object_and_class(tmp_path: Path,
-                                                                              suffix: str) -> None:
+def test_unknown_class_on_a_polyline_is_an_error_naming_file_object_and_class(tmp_path: Path, suffix: str) -> None:
     document = tiled_map(layer(poly(1), poly(7, shape="wall")))
     with pytest.raises(MapError) as caught:
         load(tmp_path, suffix, document)
@@ -249,8 +282,7 @@ def test_unknown_class_on_a_polyline_is_an_error_naming_file_object_and_class(tm
 
 
 @pytest.mark.parametrize(("typo", "meant"), [("stright", "straight"), ("Curv", "curve"), ("s-curv", "s_curve")])
-def test_a_misspelt_class_on_a_polyline_says_did_you_mean(tmp_path: Path, suffix: str, typo: str,
-                                                          meant: str) -> None:
+def test_a_misspelt_class_on_a_polyline_says_did_you_mean(tmp_path: Path, suffix: str, typo: str, meant: str) -> None:
     with pytest.raises(MapError, match=f"object 7: unknown class '{typo}' on a polyline; did you mean '{meant}'"):
         load(tmp_path, suffix, tiled_map(layer(poly(1), poly(7, shape=typo))))
 
@@ -284,20 +316,28 @@ def test_shape_class_on_a_non_polyline_is_a_warning(tmp_path: Path, suffix: str)
 # --- direction -----------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize(("value", "expected"), [
-    ("both", Direction.BOTH), ("Forward", Direction.FORWARD), ("BACKWARD", Direction.BACKWARD),
-    ("bidirectional", Direction.BOTH), ("two_way", Direction.BOTH),
-    (0, Direction.BOTH), (1, Direction.FORWARD), (2, Direction.BACKWARD),
-])
-def test_direction_is_a_name_alias_or_enum_index(tmp_path: Path, suffix: str, value: object,
-                                                 expected: Direction) -> None:
+@pytest.mark.parametrize(
+    ("value", "expected"),
+    [
+        ("both", Direction.BOTH),
+        ("Forward", Direction.FORWARD),
+        ("BACKWARD", Direction.BACKWARD),
+        ("bidirectional", Direction.BOTH),
+        ("two_way", Direction.BOTH),
+        (0, Direction.BOTH),
+        (1, Direction.FORWARD),
+        (2, Direction.BACKWARD),
+    ],
+)
+def test_direction_is_a_name_alias_or_enum_index(
+    tmp_path: Path, suffix: str, value: object, expected: Direction
+) -> None:
     loaded = load(tmp_path, suffix, tiled_map(layer(poly(1, props={"direction": value}))))
     assert loaded.segments[0].direction is expected
 
 
 def test_direction_enum_with_propertytype_attribute_is_accepted(tmp_path: Path, suffix: str) -> None:
-    obj = poly(1, properties=[prop("direction", 2, propertytype="direction"),
-                              prop("note", "x", propertytype="other")])
+    obj = poly(1, properties=[prop("direction", 2, propertytype="direction"), prop("note", "x", propertytype="other")])
     assert load(tmp_path, suffix, tiled_map(layer(obj))).segments[0].direction is Direction.BACKWARD
 
 
@@ -307,13 +347,13 @@ def test_absent_direction_means_both(tmp_path: Path, suffix: str) -> None:
 
 # --- templates -----------------------------------------------------------------------------------
 
-TEMPLATE_OBJECT = poly(None, ((0, 0), (64, 0), (64, 64)), shape="curve", rotation=90,
-                       props={"direction": "forward", "colour": "red"})
+TEMPLATE_OBJECT = poly(
+    None, ((0, 0), (64, 0), (64, 64)), shape="curve", rotation=90, props={"direction": "forward", "colour": "red"}
+)
 
 
 @pytest.mark.parametrize("template_suffix", [".tx", ".tj"])
-def test_template_supplies_keys_the_instance_does_not_state(tmp_path: Path, suffix: str,
-                                                            template_suffix: str) -> None:
+def test_template_supplies_keys_the_instance_does_not_state(tmp_path: Path, suffix: str, template_suffix: str) -> None:
     save_template(tmp_path, "templates/bend" + template_suffix, TEMPLATE_OBJECT)
     instance = {"id": 5, "template": "templates/bend" + template_suffix, "x": 320, "y": 160}
     segment = load(tmp_path, suffix, tiled_map(layer(instance))).segments[0]
@@ -322,11 +362,9 @@ def test_template_supplies_keys_the_instance_does_not_state(tmp_path: Path, suff
 
 
 @pytest.mark.parametrize("template_suffix", [".tx", ".tj"])
-def test_instance_keys_override_template_keys(tmp_path: Path, suffix: str,
-                                              template_suffix: str) -> None:
+def test_instance_keys_override_template_keys(tmp_path: Path, suffix: str, template_suffix: str) -> None:
     save_template(tmp_path, "bend" + template_suffix, TEMPLATE_OBJECT)
-    instance = poly(5, ((0, 0), (0, 32)), shape="S-Curve", rotation=0, x=320, y=160,
-                    template="bend" + template_suffix)
+    instance = poly(5, ((0, 0), (0, 32)), shape="S-Curve", rotation=0, x=320, y=160, template="bend" + template_suffix)
     segment = load(tmp_path, suffix, tiled_map(layer(instance))).segments[0]
     assert segment.shape is Shape.S_CURVE
     assert segment.waypoints == ((0.0, 0.0), (0.0, -1.0))
@@ -345,8 +383,7 @@ def test_properties_merge_by_name_with_template_direction_kept(tmp_path: Path, s
     assert load(tmp_path, suffix, tiled_map(layer(instance))).segments[0].direction is Direction.FORWARD
 
 
-def test_template_path_with_backslashes_is_relative_to_the_map_file(tmp_path: Path,
-                                                                    suffix: str) -> None:
+def test_template_path_with_backslashes_is_relative_to_the_map_file(tmp_path: Path, suffix: str) -> None:
     save_template(tmp_path, "shared/bend.tx", TEMPLATE_OBJECT)
     (tmp_path / "maps").mkdir()
     instance = {"id": 5, "template": "..\\shared\\bend.tx"}
@@ -354,23 +391,23 @@ def test_template_path_with_backslashes_is_relative_to_the_map_file(tmp_path: Pa
     assert loaded.segments[0].shape is Shape.CURVE
 
 
-def test_template_invisible_object_is_skipped_unless_instance_shows_it(tmp_path: Path,
-                                                                       suffix: str) -> None:
+def test_template_invisible_object_is_skipped_unless_instance_shows_it(tmp_path: Path, suffix: str) -> None:
     save_template(tmp_path, "hidden.tx", {**TEMPLATE_OBJECT, "visible": False})
-    document = tiled_map(layer({"id": 1, "template": "hidden.tx"},
-                               {"id": 2, "template": "hidden.tx", "visible": True}))
+    document = tiled_map(layer({"id": 1, "template": "hidden.tx"}, {"id": 2, "template": "hidden.tx", "visible": True}))
     assert [s.id for s in load(tmp_path, suffix, document).segments] == [2]
 
 
 def test_tileset_element_in_a_tx_template_is_ignored(tmp_path: Path, suffix: str) -> None:
-    (tmp_path / "t.tx").write_text('<?xml version="1.0"?>\n<template>'
-                                   '<tileset firstgid="1" source="tiles.tsx"/>'
-                                   + xml_object(TEMPLATE_OBJECT) + "</template>")
+    (tmp_path / "t.tx").write_text(
+        '<?xml version="1.0"?>\n<template>'
+        '<tileset firstgid="1" source="tiles.tsx"/>' + xml_object(TEMPLATE_OBJECT) + "</template>"
+    )
     assert load(tmp_path, suffix, tiled_map(layer({"id": 1, "template": "t.tx"}))).segments[0].id == 1
 
 
-def test_template_used_many_times_is_read_once_per_load(tmp_path: Path, suffix: str,
-                                                        monkeypatch: pytest.MonkeyPatch) -> None:
+def test_template_used_many_times_is_read_once_per_load(
+    tmp_path: Path, suffix: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
     save_template(tmp_path, "bend.tx", TEMPLATE_OBJECT)
     reads: list[Path] = []
     original = tiled_templates.read_text_file

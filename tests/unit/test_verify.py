@@ -25,7 +25,13 @@ def crossing() -> Scenario:
 
 
 def gated(scenario: Scenario, make: object = ReservingPlanner, **options: object) -> object:
-    settings: dict[str, object] = {"identity": "p:Q", "mode": "check", "recorded": None, "record_hint": HINT, "planner_timeout": None}
+    settings: dict[str, object] = {
+        "identity": "p:Q",
+        "mode": "check",
+        "recorded": None,
+        "record_hint": HINT,
+        "planner_timeout": None,
+    }
     return run_checked(scenario, make, **{**settings, **options})  # type: ignore[arg-type]
 
 
@@ -106,7 +112,10 @@ def test_the_failure_report_opens_with_one_line_and_lists_broken_expectations_an
     result = replace(result, artifacts=paths)
     report = failure_report(result, heading="fleetsim scenario 'crossing'")
     first, second = report.splitlines()[:2]
-    assert first == "collision at t=0.20 s: COLLISION ALERT: Possible collision detected on segment '2' (+3 more alerts; 1 other failure)"
+    assert (
+        first
+        == "collision at t=0.20 s: COLLISION ALERT: Possible collision detected on segment '2' (+3 more alerts; 1 other failure)"
+    )
     assert second == "fleetsim scenario 'crossing'"
     assert "broken: expect.collisions: none (4 times)" in report and "broken: expect.tasks" in report
     assert f"artifacts: {paths['trace']}\n           {paths['result']}" in report  # the trace first, then the result
