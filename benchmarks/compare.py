@@ -25,7 +25,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent))
 
-from warehouse import write_fleet_scenario  # noqa: E402
+from warehouse import write_fleet_scenario
 
 # Run inside each tree: the best of three runs of the scenario, as one JSON line.
 CHILD = """

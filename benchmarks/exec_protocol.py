@@ -30,14 +30,14 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).parent))
 
-from warehouse import write_fleet_scenario  # noqa: E402
+from warehouse import write_fleet_scenario
 
-from fleetsim.exec import SubprocessPlanner  # noqa: E402
-from fleetsim.load.scenario import load_scenario_dir  # noqa: E402
-from fleetsim.planners import BFSPlanner, ReservingPlanner  # noqa: E402
-from fleetsim.planning.protocol import Planner  # noqa: E402
-from fleetsim.scenario import ScenarioSettings  # noqa: E402
-from fleetsim.sim.loop import run_scenario  # noqa: E402
+from fleetsim.exec import SubprocessPlanner
+from fleetsim.load.scenario import load_scenario_dir
+from fleetsim.planners import BFSPlanner, ReservingPlanner
+from fleetsim.planning.protocol import Planner
+from fleetsim.scenario import ScenarioSettings
+from fleetsim.sim.loop import run_scenario
 
 NODE_PLANNER = Path(__file__).resolve().parents[1] / "examples" / "planners" / "node" / "bfs_planner.js"
 
@@ -111,7 +111,7 @@ def main() -> int:
             return 1
         calls = direct[0].metrics.planner_calls
         inside = min(r.metrics.planner_wall_time for r in direct)
-        outside = min(r.metrics.planner_wall_time - start for r, start in zip(served, starts))
+        outside = min(r.metrics.planner_wall_time - start for r, start in zip(served, starts, strict=True))
         print(f"  {name} in process: {inside / calls * 1e6:6.1f} us per call ({calls} calls)")
         print(
             f"  {name} as `{' '.join(Path(part).name for part in command)}`: {outside / calls * 1e6:6.1f} us per call"

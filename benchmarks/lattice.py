@@ -22,18 +22,18 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent))
 
-from warehouse import spread_starts  # noqa: E402
+from warehouse import spread_starts
 
-from fleetsim.layout import build_layout  # noqa: E402
-from fleetsim.load.scenario import load_scenario_dir  # noqa: E402
-from fleetsim.load.tiled_writer import write_map  # noqa: E402
-from fleetsim.planners import BFSPlanner, GreedyPlanner, ReservingPlanner  # noqa: E402
-from fleetsim.planning.protocol import Planner  # noqa: E402
-from fleetsim.recording.artifacts import write_run_artifacts  # noqa: E402
-from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, ScenarioSettings  # noqa: E402
-from fleetsim.sim.loop import run_scenario  # noqa: E402
-from fleetsim.sim.report import failure_report  # noqa: E402
-from fleetsim.strategies.geometry import grid  # noqa: E402
+from fleetsim.layout import build_layout
+from fleetsim.load.scenario import load_scenario_dir
+from fleetsim.load.tiled_writer import write_map
+from fleetsim.planners import BFSPlanner, GreedyPlanner, ReservingPlanner
+from fleetsim.planning.protocol import Planner
+from fleetsim.recording.artifacts import write_run_artifacts
+from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, ScenarioSettings
+from fleetsim.sim.loop import run_scenario
+from fleetsim.sim.report import failure_report
+from fleetsim.strategies.geometry import grid
 
 __all__ = ["write_lattice_scenario"]
 

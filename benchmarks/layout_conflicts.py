@@ -24,15 +24,15 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
 
-from warehouse import warehouse_with_at_least  # noqa: E402
+from warehouse import warehouse_with_at_least
 
-from fleetsim.enums import ConflictModel  # noqa: E402
-from fleetsim.layout import Segment, build_layout  # noqa: E402
-from fleetsim.layout.conflicts import SubSegments, all_pairs_conflicts, conflict_sets, polyline_distances  # noqa: E402
-from fleetsim.layout.geometry import ragged_arange  # noqa: E402
-from fleetsim.load.tiled import load_map  # noqa: E402
-from fleetsim.load.tiled_writer import write_map  # noqa: E402
-from fleetsim.scenario import DEFAULT_VEHICLE_TYPE  # noqa: E402
+from fleetsim.enums import ConflictModel
+from fleetsim.layout import Segment, build_layout
+from fleetsim.layout.conflicts import SubSegments, all_pairs_conflicts, conflict_sets, polyline_distances
+from fleetsim.layout.geometry import ragged_arange
+from fleetsim.load.tiled import load_map
+from fleetsim.load.tiled_writer import write_map
+from fleetsim.scenario import DEFAULT_VEHICLE_TYPE
 
 T = TypeVar("T")
 TOLERANCE = 0.05
@@ -89,7 +89,7 @@ def main() -> int:
     _, lint_times = timed(layout.lint, 1)
     show("load_map (JSON)", load_times)
     show("conflict sets (grid broad phase + numpy)", conflict_times)
-    load_plus_conflicts = [a + b for a, b in zip(load_times, conflict_times)]
+    load_plus_conflicts = [a + b for a, b in zip(load_times, conflict_times, strict=True)]
     show("load + conflicts            [target < 2 s]", load_plus_conflicts)
     show("build_layout (connections, indexes, conflicts)", build_times)
     show("Layout.lint", lint_times)

@@ -29,7 +29,6 @@ trace hashes):
 from __future__ import annotations
 
 import argparse
-import math
 import random
 import statistics
 import sys
@@ -40,25 +39,25 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent))
 
-import networkx as nx  # noqa: E402
-from hypothesis import HealthCheck, Phase, given, settings  # noqa: E402
-from lattice import write_lattice_scenario  # noqa: E402
-from warehouse import aisles, spread_starts  # noqa: E402
+import networkx as nx
+from hypothesis import HealthCheck, Phase, given, settings
+from lattice import write_lattice_scenario
+from warehouse import aisles, spread_starts
 
-from fleetsim.enums import Direction, JointKind, Traverse, TurnCapability  # noqa: E402
-from fleetsim.layout import Layout, build_layout  # noqa: E402
-from fleetsim.layout.segment import Segment  # noqa: E402
-from fleetsim.load.scenario import load_scenario_dir  # noqa: E402
-from fleetsim.load.tiled_writer import write_map  # noqa: E402
-from fleetsim.planners import BFSPlanner, ReservingPlanner  # noqa: E402
-from fleetsim.planners.routing import legs_along, mark_goal_on_fixed, shortest_route, straight_line_estimate  # noqa: E402
-from fleetsim.planning.protocol import FleetPlan, Planner, Response, RouteError  # noqa: E402
-from fleetsim.planning.snapshot import FleetSnapshot  # noqa: E402
-from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Scenario, ScenarioSettings, Task, VehicleType  # noqa: E402
-from fleetsim.sim.loop import run_scenario  # noqa: E402
-from fleetsim.sim.result import RunResult  # noqa: E402
-from fleetsim.strategies import GenerationSpec, scenarios  # noqa: E402
-from fleetsim.strategies.geometry import corridor, loop, warehouse  # noqa: E402
+from fleetsim.enums import Direction, JointKind, Traverse, TurnCapability
+from fleetsim.layout import Layout, build_layout
+from fleetsim.layout.segment import Segment
+from fleetsim.load.scenario import load_scenario_dir
+from fleetsim.load.tiled_writer import write_map
+from fleetsim.planners import BFSPlanner, ReservingPlanner
+from fleetsim.planners.routing import legs_along, mark_goal_on_fixed, shortest_route, straight_line_estimate
+from fleetsim.planning.protocol import FleetPlan, Planner, Response, RouteError
+from fleetsim.planning.snapshot import FleetSnapshot
+from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Scenario, ScenarioSettings, Task, VehicleType
+from fleetsim.sim.loop import run_scenario
+from fleetsim.sim.result import RunResult
+from fleetsim.strategies import GenerationSpec, scenarios
+from fleetsim.strategies.geometry import corridor, loop, warehouse
 
 PLANNERS: dict[str, Callable[[], Planner]] = {"ReservingPlanner": ReservingPlanner, "BFSPlanner": BFSPlanner}
 AGV = replace(DEFAULT_VEHICLE_TYPE, name="agv")
@@ -181,7 +180,7 @@ def corridor_bay(folder: Path, seed: int) -> Scenario:
     segments = corridor(5, [(2, 1)])
     last = 7  # the corridor's straights are 1..7; the bay is 8..10
     rows = ["vehicle_id,start_segment_id,segment_orientation", "1,1,forward", f"2,{last},backward"]
-    tasks = ["vehicle_id,goal_segment_id", f"1,{last}", f"2,1", "1,1", f"2,{last}"]
+    tasks = ["vehicle_id,goal_segment_id", f"1,{last}", "2,1", "1,1", f"2,{last}"]
     return _write(folder, segments, rows, tasks)
 
 

@@ -21,13 +21,13 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent))
 
-from warehouse import write_fleet_scenario  # noqa: E402
+from warehouse import write_fleet_scenario
 
-from fleetsim.load.scenario import load_scenario_dir  # noqa: E402
-from fleetsim.planners import ReservingPlanner  # noqa: E402
-from fleetsim.recording.recorder import record_mcap  # noqa: E402
-from fleetsim.scenario import ScenarioSettings  # noqa: E402
-from fleetsim.sim.loop import run_scenario  # noqa: E402
+from fleetsim.load.scenario import load_scenario_dir
+from fleetsim.planners import ReservingPlanner
+from fleetsim.recording.recorder import record_mcap
+from fleetsim.scenario import ScenarioSettings
+from fleetsim.sim.loop import run_scenario
 
 TARGET_OVERHEAD = 0.30
 

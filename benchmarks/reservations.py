@@ -40,11 +40,11 @@ from typing import TypeVar
 
 sys.path.insert(0, str(Path(__file__).parent))
 
-from warehouse import warehouse_with_at_least  # noqa: E402
+from warehouse import warehouse_with_at_least
 
-from fleetsim.enums import Progress, Traverse  # noqa: E402
-from fleetsim.layout import Layout, build_layout  # noqa: E402
-from fleetsim.planning import (  # noqa: E402
+from fleetsim.enums import Progress, Traverse
+from fleetsim.layout import Layout, build_layout
+from fleetsim.planning import (
     CheckContext,
     CollisionAlert,
     ConflictTable,
@@ -54,8 +54,8 @@ from fleetsim.planning import (  # noqa: E402
     check_plans,
     find_alerts,
 )
-from fleetsim.planning.reservations import ReservationIndex  # noqa: E402
-from fleetsim.scenario import DEFAULT_VEHICLE_TYPE  # noqa: E402
+from fleetsim.planning.reservations import ReservationIndex
+from fleetsim.scenario import DEFAULT_VEHICLE_TYPE
 
 T = TypeVar("T")
 TARGET_MS = 5.0
@@ -153,8 +153,8 @@ def conflict_free(layout: Layout, vehicles: int, fixed: int, planned: int, seed:
 
 
 def sanity_rejections(layout: Layout, plans: dict[int, FleetPlan]) -> list[Rejection]:
-    types = {vid: DEFAULT_VEHICLE_TYPE for vid in plans}
-    ctx = CheckContext(layout, types, plans, {vid: () for vid in plans})
+    types = dict.fromkeys(plans, DEFAULT_VEHICLE_TYPE)
+    ctx = CheckContext(layout, types, plans, dict.fromkeys(plans, ()))
     return [result for result in check_plans(list(plans.values()), ctx) if isinstance(result, Rejection)]
 
 

@@ -31,7 +31,7 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).parent))
 
-from warehouse import write_fleet_scenario  # noqa: E402
+from warehouse import write_fleet_scenario
 
 PLANNERS = ("BFSPlanner", "GreedyPlanner", "ReservingPlanner")
 

@@ -47,16 +47,16 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).parent))
 
-from warehouse import write_fleet_scenario  # noqa: E402
+from warehouse import write_fleet_scenario
 
-from fleetsim.load.scenario import load_scenario_dir  # noqa: E402
-from fleetsim.planners import BFSPlanner, ReservingPlanner  # noqa: E402
-from fleetsim.planning.protocol import Planner  # noqa: E402
-from fleetsim.scenario import Scenario, ScenarioSettings  # noqa: E402
-from fleetsim.sim.loop import run_scenario  # noqa: E402
-from fleetsim.sim import loop  # noqa: E402
-from fleetsim.sim.result import RunResult  # noqa: E402
-from fleetsim.sim.trace import Trace  # noqa: E402
+from fleetsim.load.scenario import load_scenario_dir
+from fleetsim.planners import BFSPlanner, ReservingPlanner
+from fleetsim.planning.protocol import Planner
+from fleetsim.scenario import Scenario, ScenarioSettings
+from fleetsim.sim import loop
+from fleetsim.sim.loop import run_scenario
+from fleetsim.sim.result import RunResult
+from fleetsim.sim.trace import Trace
 
 PLANNERS: dict[str, type[Planner]] = {"BFSPlanner": BFSPlanner, "ReservingPlanner": ReservingPlanner}
 LARGE_FLEET = 1000

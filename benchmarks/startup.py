@@ -42,7 +42,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             without.append(_seconds([*pytest, "-p", "no:fleetsim"], project))
             helps.append(_seconds([*fleetsim, "--help"], project))
             versions.append(_seconds([*fleetsim, "--version"], project))
-    added = [a - b for a, b in zip(with_plugin, without)]
+    added = [a - b for a, b in zip(with_plugin, without, strict=True)]
     ms = 1000.0
     print(f"pytest, one plain test, {args.rounds} alternating rounds (medians):")
     print(f"  with the fleetsim plugin   {statistics.median(with_plugin) * ms:7.1f} ms")

@@ -63,10 +63,10 @@ if TYPE_CHECKING:
 __version__ = "0.1.0"
 
 __all__ = [
+    "DEFAULT_VEHICLE_TYPE",
     "CollisionAlert",
     "ConflictModel",
     "Connection",
-    "DEFAULT_VEHICLE_TYPE",
     "Direction",
     "Divergence",
     "Expectations",
@@ -106,6 +106,7 @@ __all__ = [
     "Vehicle",
     "VehicleState",
     "VehicleType",
+    "__version__",
     "build_layout",
     "discover_suites",
     "first_divergence",
@@ -116,7 +117,6 @@ __all__ = [
     "load_suite",
     "run_scenario",
     "write_map",
-    "__version__",
 ]
 
 _HOMES: dict[str, str] = {

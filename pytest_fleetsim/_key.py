@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 import pytest
 
 if TYPE_CHECKING:
-    from pytest_fleetsim._state import FleetsimState
+    from pytest_fleetsim._state import FleetsimState  # noqa: F401 (named in the string StashKey[...] below)
 
 __all__ = ["STATE_KEY"]
 

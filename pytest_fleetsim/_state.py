@@ -30,16 +30,16 @@ from fleetsim.gating.baseline import (
     read_metrics,
     write_metrics,
 )
-from fleetsim.gating.lockfile import HashLock, LockEntry, LockFileError, lock_path_for
 from fleetsim.gating.generated import (
     counterexample_entry,
-    counts_story,
     counterexample_story,
+    counts_story,
     hunt,
     hunt_facts,
     hunt_label,
     record_counterexample,
 )
+from fleetsim.gating.lockfile import HashLock, LockEntry, LockFileError, lock_path_for
 from fleetsim.gating.verify import run_checked
 from fleetsim.load.scenario import load_scenario
 from fleetsim.load.suite import load_suite

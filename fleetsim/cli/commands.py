@@ -13,11 +13,10 @@ from fleetsim.enums import ConflictModel
 from fleetsim.errors import LoadError, UnreachableTaskError
 from fleetsim.exec.protocol import encode_layout
 from fleetsim.layout.layout import Layout, build_layout
-from fleetsim.load.scenario import load_scenario
-from fleetsim.load.scenario_files import did_you_mean
-from fleetsim.load.suite import discover_suites, load_suite
 from fleetsim.load.map_options import MapOptions, SiteMap
+from fleetsim.load.scenario import load_scenario
 from fleetsim.load.site_map import load_site_map
+from fleetsim.load.suite import discover_suites, load_suite
 from fleetsim.load.text import write_text_atomically
 from fleetsim.recording.svg import render_layout_svg
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE

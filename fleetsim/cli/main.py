@@ -12,7 +12,6 @@ import os
 import signal
 import sys
 from collections.abc import Sequence
-
 from importlib import import_module
 from typing import Any
 

@@ -23,9 +23,6 @@ from pathlib import Path
 from typing import Any, Literal, TextIO
 
 from fleetsim.errors import FleetsimError, LoadError
-from fleetsim.load.scenario import load_scenario
-from fleetsim.load.scenario_files import did_you_mean
-from fleetsim.load.suite import SUITE_SUFFIX, ScenarioSpec, Suite, discover_suites, load_suite
 from fleetsim.gating.generated import (
     DEFAULT_ARTIFACTS,
     Hunt,
@@ -36,6 +33,9 @@ from fleetsim.gating.generated import (
     hunt_label,
     record_counterexample,
 )
+from fleetsim.load.scenario import load_scenario
+from fleetsim.load.scenario_files import did_you_mean
+from fleetsim.load.suite import SUITE_SUFFIX, ScenarioSpec, Suite, discover_suites, load_suite
 from fleetsim.recording.artifacts import artifact_folder, start_run_folder, write_run_artifacts
 from fleetsim.sim.interrupt import StopSignals, signal_name
 from fleetsim.sim.loop import RunProgress, run_scenario

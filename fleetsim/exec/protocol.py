@@ -59,13 +59,13 @@ from fleetsim.scenario import Task, VehicleType
 __all__ = [
     "PROTOCOL",
     "PROTOCOL_FAMILY",
+    "decode_plan",
     "decode_response",
     "encode_fleet",
     "encode_init",
     "encode_layout",
     "encode_plan",
     "encode_task",
-    "decode_plan",
 ]
 
 PROTOCOL = "fleetsim-planner/1.1"

@@ -14,6 +14,7 @@ import json
 import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import asdict, dataclass, fields
+from itertools import pairwise
 from operator import attrgetter
 from pathlib import Path
 from types import MappingProxyType
@@ -73,7 +74,7 @@ class ScenarioMetrics:
     trace_hash: str
 
     @classmethod
-    def from_result(cls, id: str, outcome: Outcome, result: RunResult) -> ScenarioMetrics:  # noqa: A002 - pytest's word
+    def from_result(cls, id: str, outcome: Outcome, result: RunResult) -> ScenarioMetrics:
         """Floats are rounded to 6 places like ``fleetsim run --json``, so baselines read without noise."""
         m = result.metrics
         return cls(
@@ -142,7 +143,7 @@ _FIELD_CHECKS: dict[str, tuple[Callable[[object], bool], str]] = {
 def metrics_document(rows: Iterable[ScenarioMetrics]) -> dict[str, Any]:
     """The session's document; sorted by id so the same results give the same bytes."""
     ordered = sorted(rows, key=attrgetter("id"))
-    for before, after in zip(ordered, ordered[1:]):
+    for before, after in pairwise(ordered):
         if before.id == after.id:
             msg = f"scenario id {after.id!r} appears twice; each scenario must have one row"
             raise BaselineError(msg)

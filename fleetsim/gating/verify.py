@@ -12,9 +12,8 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, replace
-from typing import Literal
-
 from pathlib import Path
+from typing import Literal
 
 from fleetsim.gating.lockfile import LockEntry, compare_run
 from fleetsim.planning.protocol import Planner
@@ -37,7 +36,7 @@ class CheckedRun:
     record: LockEntry | None = None
 
 
-def run_checked(  # noqa: PLR0913 - the facts of a gated run, named
+def run_checked(
     scenario: Scenario,
     make_planner: Callable[[], Planner],
     *,

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
+from itertools import pairwise
 
 import numpy as np
 import numpy.typing as npt
@@ -96,7 +97,7 @@ def _chunks(total: int, weights: IntArray | None = None) -> Iterator[slice]:
     else:
         bounds = np.unique(np.searchsorted(np.cumsum(weights), np.arange(0, int(weights.sum()), _CHUNK)))
     edges = [*bounds.tolist(), total]
-    for lo, hi in zip(edges, edges[1:]):
+    for lo, hi in pairwise(edges):
         if hi > lo:
             yield slice(lo, hi)
 

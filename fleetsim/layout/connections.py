@@ -113,7 +113,7 @@ def touching_endpoints(segments: Sequence[Segment], radius: float) -> tuple[Touc
     pairs, gaps = close_point_pairs(endpoint_array(segments), radius)
     return tuple(
         Touch(_endpoint(segments, int(i)), _endpoint(segments, int(j)), float(gap))
-        for (i, j), gap in zip(pairs.tolist(), gaps.tolist())
+        for (i, j), gap in zip(pairs.tolist(), gaps.tolist(), strict=True)
     )
 
 
@@ -196,4 +196,6 @@ def find_connections(segments: Sequence[Segment], tolerance: float, angle_tolera
     away = away_vectors(segments, tolerance)
     kinds = joint_kinds(away[leave[order]], away[enter[order]], angle_tolerance)
     columns = (c[order].tolist() for c in (from_id, from_rank, to_id, to_rank))
-    return tuple(Connection(a, _BY_RANK[ra], b, _BY_RANK[rb], kind) for a, ra, b, rb, kind in zip(*columns, kinds))
+    return tuple(
+        Connection(a, _BY_RANK[ra], b, _BY_RANK[rb], kind) for a, ra, b, rb, kind in zip(*columns, kinds, strict=True)
+    )

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from bisect import bisect_right
 from dataclasses import dataclass, field
+from itertools import pairwise
 
 from fleetsim.enums import Direction, Shape, Traverse
 
@@ -15,7 +16,7 @@ Point = tuple[float, float]
 
 def polyline_length(waypoints: tuple[Point, ...]) -> float:
     """Sum of the straight pieces between consecutive waypoints, in metres."""
-    return math.fsum(math.dist(a, b) for a, b in zip(waypoints, waypoints[1:]))
+    return math.fsum(math.dist(a, b) for a, b in pairwise(waypoints))
 
 
 @dataclass(frozen=True, slots=True)
@@ -41,7 +42,7 @@ class Segment:
             msg = f"segment {self.id} needs at least 2 waypoints, got {len(self.waypoints)}"
             raise ValueError(msg)
         along = [0.0]
-        for a, b in zip(self.waypoints, self.waypoints[1:]):
+        for a, b in pairwise(self.waypoints):
             along.append(along[-1] + math.dist(a, b))
         object.__setattr__(self, "_along", tuple(along))
         object.__setattr__(self, "length", polyline_length(self.waypoints))

@@ -13,6 +13,7 @@ The reasons are tried from the most to the least specific, and the first that ho
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
+from itertools import pairwise
 
 import numpy as np
 
@@ -142,7 +143,7 @@ def _corner(layout: Layout, where: Reach, goal: int, type_name: str) -> str | No
     if path is None:
         return None
     curve_states = {(s[0], s[1]) for s in where.starts | where.entered}
-    for (a, _, _), (b, tb, _) in zip(path, path[1:]):
+    for (a, _, _), (b, tb, _) in pairwise(path):
         if (b, tb) not in curve_states:
             return (
                 f"every route to segment {goal} needs turning in place at a corner (the first from "

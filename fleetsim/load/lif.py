@@ -185,7 +185,7 @@ def _choose_layout(root: JsonAt, structure: _Structure, options: MapOptions, not
             f"{did_you_mean(options.layout, ids)}",
             Location(root.path),
         )
-    for layout, layout_id in zip(layouts, ids):
+    for layout, layout_id in zip(layouts, ids, strict=True):
         if layout is not chosen:
             notes.note("not-modelled", "another layout (another level or area)", f"{layout.pointer} ({layout_id!r})")
     _note_unknown(chosen, "layout", notes)
@@ -228,7 +228,7 @@ def _choose_robot_type(
         return options.robot_type
     if len(types) <= 1:
         return types[0] if types else ""
-    for edge, props in zip(edges, per_edge):
+    for edge, props in zip(edges, per_edge, strict=True):
         trajectories = {
             json.dumps(p.value.get("trajectory") if isinstance(p.value, dict) else None, sort_keys=True)
             for p in props.values()
@@ -308,7 +308,7 @@ def _sampled(trajectory: JsonAt) -> tuple[Point, ...]:
         control.append((point.need("x").number(), point.need("y").number()))
         weight = point.get("weight")
         weights.append(weight.number() if weight is not None else 1.0)
-    for knot, at in zip(knots, trajectory.need("knotVector").items()):
+    for knot, at in zip(knots, trajectory.need("knotVector").items(), strict=True):
         if not 0.0 <= knot <= 1.0:
             raise at.error(f"knot {knot!r} is outside [0, 1]")
     try:

@@ -16,6 +16,7 @@ import math
 import os
 from collections.abc import Iterable
 from datetime import datetime, timezone
+from itertools import pairwise
 from pathlib import Path
 from typing import Any
 
@@ -85,7 +86,9 @@ def lif_document(
         ways = [(segment.waypoints, first, last)] if segment.direction is not Direction.BACKWARD else []
         if segment.direction is not Direction.FORWARD:
             ways.append((segment.waypoints[::-1], last, first))
-        for (points, start, end), edge_id in zip(ways, names[segment.id]):
+        for (points, start, end), edge_id in zip(
+            ways, names[segment.id], strict=False
+        ):  # a one-way segment has one edge: the first name
             edges.append(_edge(edge_id, start, end, points, robot_type))
     return {
         "metaInformation": {
@@ -149,7 +152,7 @@ def _edge(edge_id: str, start: int, end: int, points: tuple[Point, ...], robot_t
     if len(points) > 2:
         # Degree 1 through every waypoint: knots at the running length, so each piece keeps its share.
         along = [0.0]
-        for a, b in zip(points, points[1:]):
+        for a, b in pairwise(points):
             along.append(along[-1] + math.dist(a, b))
         total = along[-1]
         inner = [value / total for value in along[1:-1]]

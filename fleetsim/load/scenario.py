@@ -15,6 +15,8 @@ from types import MappingProxyType
 from fleetsim.enums import ConflictModel
 from fleetsim.errors import Location, ScenarioFileError, SuiteError, UnreachableTaskError
 from fleetsim.layout.layout import Layout, build_layout
+from fleetsim.load.disturbances import check_disturbances
+from fleetsim.load.map_options import MapOptions
 from fleetsim.load.scenario_files import (
     MAP_FILE_NAMES,
     TASKS_FILE_NAME,
@@ -23,8 +25,6 @@ from fleetsim.load.scenario_files import (
     read_tasks_with_lines,
     read_vehicles_with_lines,
 )
-from fleetsim.load.disturbances import check_disturbances
-from fleetsim.load.map_options import MapOptions
 from fleetsim.load.site_map import load_site_map
 from fleetsim.load.suite import ScenarioSpec, Suite
 from fleetsim.load.task_reach import check_tasks_reachable

@@ -151,7 +151,7 @@ def _read_rows(path: Path, columns: _Columns) -> tuple[_Row, ...]:
         if len(cells) != len(names):
             msg = f"row has {len(cells)} values but the header has {len(names)} columns: {cells!r}"
             raise ScenarioFileError(msg, Location(path, line=line))
-        rows.append(_Row(path, line, dict(zip(names, cells))))
+        rows.append(_Row(path, line, dict(zip(names, cells, strict=True))))
     return tuple(rows)
 
 

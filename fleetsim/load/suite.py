@@ -16,6 +16,7 @@ from typing import Any
 from fleetsim.enums import ConflictModel, TurnCapability
 from fleetsim.errors import Location, SuiteError
 from fleetsim.load.disturbances import HuntDisturbances, declared_disturbances, hunt_block, random_block
+from fleetsim.load.map_options import MapOptions
 from fleetsim.load.scenario_files import (
     MAP_FILE_NAMES,
     TASKS_FILE_NAME,
@@ -23,7 +24,6 @@ from fleetsim.load.scenario_files import (
     did_you_mean,
     map_candidates,
 )
-from fleetsim.load.map_options import MapOptions
 from fleetsim.load.suite_schema import check_against_schema, suite_error
 from fleetsim.load.yaml_source import Locate, load_yaml_with_marks
 from fleetsim.scenario import (

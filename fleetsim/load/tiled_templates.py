@@ -234,7 +234,7 @@ def _xml_points(text: str, where: Location) -> tuple[Point, ...]:
         except ValueError:
             flat = []
         if len(flat) == 2 * len(pairs) and all(map(math.isfinite, flat)):
-            return tuple(zip(flat[::2], flat[1::2]))
+            return tuple(zip(flat[::2], flat[1::2], strict=True))
     for pair in pairs:  # slow path: find the culprit for the message
         if len(pair) != 2:
             msg = f"the points are {text!r}; they must be 'x,y' pairs separated by spaces"
@@ -283,7 +283,7 @@ def _json_points(raw: object, where: Location) -> tuple[Point, ...]:
     except (TypeError, KeyError, IndexError):
         flat = []
     if len(flat) == 2 * len(raw) and set(map(type, flat)) <= {int, float} and all(map(math.isfinite, flat)):
-        return tuple(zip(map(float, flat[::2]), map(float, flat[1::2])))
+        return tuple(zip(map(float, flat[::2]), map(float, flat[1::2]), strict=True))
     points = []
     for point in raw:
         if not isinstance(point, dict):

@@ -13,6 +13,7 @@ import math
 import os
 from collections.abc import Iterable
 from dataclasses import dataclass
+from itertools import pairwise
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
@@ -70,7 +71,7 @@ def _checked(segments: Iterable[Segment]) -> list[Segment]:
     ordered = sorted(segments, key=lambda segment: segment.id)
     if not ordered:
         raise ValueError("segments must not be empty: a map without segments cannot be loaded")
-    for previous, segment in zip(ordered, ordered[1:]):
+    for previous, segment in pairwise(ordered):
         if previous.id == segment.id:
             raise LayoutError(f"segment id={segment.id!r} occurs twice; Tiled object ids are unique")
     if ordered[0].id <= 0:

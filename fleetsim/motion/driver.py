@@ -16,12 +16,12 @@ from __future__ import annotations
 
 import math
 from bisect import bisect_right
+from itertools import pairwise
 from typing import NamedTuple
 
-from fleetsim.enums import Progress, Traverse
+from fleetsim.enums import Disturbed, Progress, Traverse
 from fleetsim.layout.layout import Layout
 from fleetsim.layout.segment import Segment
-from fleetsim.enums import Disturbed
 from fleetsim.motion.slowdown import Profile, plan_profile
 from fleetsim.planning.protocol import FleetLeg, FleetPlan
 from fleetsim.planning.snapshot import VehicleState
@@ -187,7 +187,7 @@ class Driver:
 
     def _stretch_of(self, legs: list[FleetLeg] | tuple[FleetLeg, ...]) -> tuple[float, bool]:
         total = self._length(legs[0])
-        for before, after in zip(legs, legs[1:]):
+        for before, after in pairwise(legs):
             if not after.fixed:
                 return total, False
             if self.stops_between(before, after):

@@ -100,7 +100,7 @@ class FleetIndex:
         """Count ``new`` instead of ``old``: only the legs that differ (a plan mostly changes by a leg
         fixed or a leg driven)."""
         ahead = self._ahead
-        for table, before, after in zip(self._tables(), _parts(old, ahead), _parts(new, ahead)):
+        for table, before, after in zip(self._tables(), _parts(old, ahead), _parts(new, ahead), strict=True):
             if before == after:
                 continue
             delta = Counter(after)
@@ -108,7 +108,7 @@ class FleetIndex:
             self._add_all(table, vehicle, delta.items(), near=table is not self.drives)
 
     def _apply(self, vehicle: int, parts: tuple[Sequence[object], ...], amount: int) -> None:
-        for table, keys in zip(self._tables(), parts):
+        for table, keys in zip(self._tables(), parts, strict=True):
             self._add_all(table, vehicle, ((key, amount) for key in keys), near=table is not self.drives)
 
     def _tables(self) -> tuple[dict[object, Counts], ...]:

@@ -25,9 +25,9 @@ __all__ = [
     "breadth_first_route",
     "legs_along",
     "mark_goal_on_fixed",
-    "rebuild_path",
     "next_states",
     "next_steps",
+    "rebuild_path",
     "shortest_route",
     "straight_line_estimate",
 ]

@@ -11,6 +11,7 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from enum import Enum
+from itertools import pairwise
 
 from fleetsim.enums import JointKind, TurnCapability
 from fleetsim.layout.layout import Layout
@@ -220,7 +221,7 @@ def _joint(layout: Layout, before: FleetLeg, after: FleetLeg) -> JointKind | Non
 
 
 def not_connected(plan: FleetPlan, ctx: CheckContext) -> Rejection | None:
-    for index, (before, after) in enumerate(zip(plan.legs, plan.legs[1:]), start=1):
+    for index, (before, after) in enumerate(pairwise(plan.legs), start=1):
         if _joint(ctx.layout, before, after) is None:
             msg = (
                 f"segment {before.segment} driven {before.traverse.value} does not lead to segment "
@@ -235,7 +236,7 @@ def illegal_progress_change(plan: FleetPlan, ctx: CheckContext) -> Rejection | N
     vehicle_type = ctx.vehicle_types[plan.vehicle_id]
     if vehicle_type.turn_capability is TurnCapability.IN_PLACE:
         return None  # it stops and turns on the spot wherever its heading changes
-    for index, (before, after) in enumerate(zip(plan.legs, plan.legs[1:]), start=1):
+    for index, (before, after) in enumerate(pairwise(plan.legs), start=1):
         joint = _joint(ctx.layout, before, after)
         flipped = after.progress is not before.progress
         if joint is JointKind.TURN_IN_PLACE:

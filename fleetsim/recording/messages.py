@@ -15,6 +15,7 @@ import math
 import struct
 from collections.abc import Sequence
 from functools import cache
+from itertools import pairwise
 from typing import Any
 
 import numpy as np
@@ -24,10 +25,10 @@ from fleetsim.layout.segment import Point
 
 __all__ = [
     "RGBA",
+    "FleetTransforms",
     "Stamp",
     "clock",
     "colour",
-    "FleetTransforms",
     "delete",
     "delete_all",
     "line_list",
@@ -147,14 +148,16 @@ class FleetTransforms:
         seconds, nanoseconds = divmod(time_ns, 1_000_000_000)
         values: list[Any] = [b"\x00\x01\x00\x00", len(self.children)]
         sin, cos = math.sin, math.cos
-        for head, (x, y, heading) in zip(self._heads, poses):
+        for head, (x, y, heading) in zip(self._heads, poses, strict=True):
             values += (seconds, nanoseconds, *head, x, y, 0.0, 0.0, 0.0, sin(heading / 2.0), cos(heading / 2.0))
         return self._struct.pack(*values)
 
     def _slow(self, time_ns: int, poses: Sequence[tuple[float, float, float]]) -> bytes:
         time = stamp(time_ns)
         return serialise(
-            tf_message([transform(time, self.parent, child, *pose) for child, pose in zip(self.children, poses)])
+            tf_message(
+                [transform(time, self.parent, child, *pose) for child, pose in zip(self.children, poses, strict=True)]
+            )
         )
 
     def serialise(self, time_ns: int, poses: Sequence[tuple[float, float, float]]) -> bytes:
@@ -264,7 +267,7 @@ def points(polyline: Sequence[Point], z: float = 0.0) -> list[Any]:
     point = _type("geometry_msgs/msg/Point")
     return [
         point(x=float(x), y=float(y), z=float(z))
-        for (ax, ay), (bx, by) in zip(polyline, polyline[1:])
+        for (ax, ay), (bx, by) in pairwise(polyline)
         for x, y in ((ax, ay), (bx, by))
     ]
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable
 from dataclasses import dataclass
+from itertools import pairwise
 from xml.sax.saxutils import escape
 
 from fleetsim.enums import Traverse
@@ -82,7 +83,7 @@ def _point_at(segment: Segment, fraction: float) -> tuple[Point, float]:
     """The point ``fraction`` of the way along the polyline and the heading (radians) there."""
     target = fraction * segment.length
     travelled = 0.0
-    for a, b in zip(segment.waypoints, segment.waypoints[1:]):
+    for a, b in pairwise(segment.waypoints):
         piece = math.dist(a, b)
         if piece > 0 and travelled + piece >= target:
             t = (target - travelled) / piece
@@ -135,7 +136,7 @@ def _label_svg(frame: _Frame, segment: Segment, font: float) -> str:
 
 
 def _colours(layout: Layout, highlight: int | None) -> dict[int, str]:
-    colours = {sid: _PLAIN for sid in layout.segments}
+    colours = dict.fromkeys(layout.segments, _PLAIN)
     if highlight is None:
         return colours
     for sid in sorted(layout.conflicts(highlight)):

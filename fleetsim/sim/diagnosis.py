@@ -377,7 +377,7 @@ def _moving(facts: StuckFacts, base: Finding, plan: FleetPlan, state: VehicleSta
 def _cycles(graph: nx.DiGraph[int]) -> tuple[tuple[int, ...], ...]:
     """Every cycle of the wait-for graph (up to a bound), each from its smallest id, shortest first."""
     found: set[tuple[int, ...]] = set()
-    for component in sorted((sorted(c) for c in nx.strongly_connected_components(graph) if len(c) > 1)):
+    for component in sorted(sorted(c) for c in nx.strongly_connected_components(graph) if len(c) > 1):
         for cycle in nx.simple_cycles(graph.subgraph(component)):
             first = cycle.index(min(cycle))
             found.add(tuple(cycle[first:] + cycle[:first]))

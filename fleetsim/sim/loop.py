@@ -75,7 +75,7 @@ class _Run:
         self.collisions: list[AlertEvent] = []
         self.route_errors: list[dict[str, Any]] = []
         self.active_alerts: set[CollisionAlert] = set()
-        self.waiting_time = {vid: 0.0 for vid in self.drivers}
+        self.waiting_time = dict.fromkeys(self.drivers, 0.0)
         self.last_activity = 0.0
         # For explaining a stuck fleet at the end (never hashed): when each vehicle last moved, when the
         # planner last changed its plan, and how many changed plans were accepted in all.

@@ -74,7 +74,7 @@ def format_table(rows: Sequence[Sequence[str]], header: Sequence[str] = SUMMARY_
     """Left-aligned columns two spaces apart, header first."""
     table = [tuple(header), *map(tuple, rows)]
     widths = [max(len(row[i]) for row in table) for i in range(len(header))]
-    return ["  ".join(cell.ljust(width) for cell, width in zip(row, widths)).rstrip() for row in table]
+    return ["  ".join(cell.ljust(width) for cell, width in zip(row, widths, strict=True)).rstrip() for row in table]
 
 
 def failure_text(result: RunResult, failure: Failure) -> str:

@@ -224,7 +224,7 @@ def _first(events: tuple[RejectionEvent, ...] | tuple[AlertEvent, ...]) -> float
     return events[0].time if events else 0.0
 
 
-def judge(  # noqa: PLR0913 - the facts of a run, named
+def judge(
     expect: Expectations,
     *,
     ended: Ending,

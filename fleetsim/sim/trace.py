@@ -225,7 +225,7 @@ def _describe_vehicles(a: dict[int, list[Any]], b: dict[int, list[Any]]) -> list
         if left is None or right is None:
             notes.append(f"vehicle {vid} present in only one trace")
             continue
-        for name, x, y in zip(_FIELDS, left[1:], right[1:]):
+        for name, x, y in zip(_FIELDS, left[1:], right[1:], strict=True):
             if x != y:
                 notes.append(f"vehicle {vid} {name} {x} vs {y}")
     return notes
@@ -237,7 +237,9 @@ def first_divergence(a: Sequence[str], b: Sequence[str], time_step: float) -> Di
         return Divergence(-1, 0.0, ("the trace headers differ (different scenario, settings or format)",))
     state_a: dict[int, list[Any]] = {}
     state_b: dict[int, list[Any]] = {}
-    for line_a, line_b in zip(a[1:], b[1:]):
+    for line_a, line_b in zip(
+        a[1:], b[1:], strict=False
+    ):  # compared up to the shorter; the length check below reports the rest
         step_a, vehicles_a, plans_a, events_a = json.loads(line_a)
         _, vehicles_b, plans_b, events_b = json.loads(line_b)
         state_a.update({record[0]: record for record in vehicles_a})

@@ -81,7 +81,7 @@ def run_items(
             item = futures[future]
             try:
                 row = future.result()
-            except Exception as error:  # noqa: BLE001 - KilledWorker and the like: this run fails, the sweep goes on
+            except Exception as error:
                 row = failed_row(item, f"the run's workers died {type(error).__name__}: {error}")
             results.add(row)
             failing += row["status"] != "passed"

@@ -11,7 +11,7 @@ from html import escape
 
 import numpy as np
 
-__all__ = ["PALETTE", "distribution_plot", "differences_plot", "fleet_size_plot"]
+__all__ = ["PALETTE", "differences_plot", "distribution_plot", "fleet_size_plot"]
 
 PALETTE = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#17becf", "#7f7f7f")
 WIDTH, ROW, LEFT, RIGHT, TOP = 640, 34, 200, 24, 36

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
-from fleetsim.errors import Location, LoadError, SuiteError
+from fleetsim.errors import LoadError, Location, SuiteError
 from fleetsim.gating.generated import check_generate_block
 from fleetsim.load.suite import (
     ScenarioSpec,

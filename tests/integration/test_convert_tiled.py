@@ -40,6 +40,6 @@ def test_a_converted_site_is_opened_and_saved_by_tiled_with_its_segments_intact(
         loaded = load_site_map(path).segments
         assert [(s.id, s.direction, s.names) for s in loaded] == [(s.id, s.direction, s.names) for s in site.segments]
         assert {s.shape for s in loaded} <= {Shape.STRAIGHT, Shape.PATH}
-        for got, want in zip(loaded, site.segments):
+        for got, want in zip(loaded, site.segments, strict=True):
             assert len(got.waypoints) == len(want.waypoints)
-            assert all(math.dist(a, b) <= TOLERANCE_M for a, b in zip(got.waypoints, want.waypoints))
+            assert all(math.dist(a, b) <= TOLERANCE_M for a, b in zip(got.waypoints, want.waypoints, strict=True))

@@ -44,8 +44,8 @@ def test_example_map_resaved_by_tiled_with_templates_detached_loads_the_same(
     original = load_map(path).segments
     resaved = load_map(exported).segments
     assert [s.id for s in resaved] == [s.id for s in original]
-    for before, after in zip(original, resaved):
+    for before, after in zip(original, resaved, strict=True):
         assert (after.shape, after.direction) == (before.shape, before.direction)
         assert len(after.waypoints) == len(before.waypoints)
-        for p, q in zip(before.waypoints, after.waypoints):
+        for p, q in zip(before.waypoints, after.waypoints, strict=True):
             assert q == pytest.approx(p, abs=1e-4)

@@ -40,9 +40,13 @@ def test_saved_generated_map_exported_by_tiled_loads_to_the_same_layout(tiled: T
             assert [(s.id, s.shape, s.direction) for s in exported] == [
                 (s.id, s.shape, s.direction) for s in layout.segments.values()
             ]
-            for got, want in zip(exported, layout.segments.values()):
+            for got, want in zip(exported, layout.segments.values(), strict=True):
                 assert len(got.waypoints) == len(want.waypoints)
-                assert all(abs(g - w) <= tolerance for p, q in zip(got.waypoints, want.waypoints) for g, w in zip(p, q))
+                assert all(
+                    abs(g - w) <= tolerance
+                    for p, q in zip(got.waypoints, want.waypoints, strict=True)
+                    for g, w in zip(p, q, strict=True)
+                )
             again = build_layout(exported, vehicle_radius=layout.vehicle_radius)
             assert again.connections == layout.connections
             assert {s: again.conflicts(s) for s in again.segments} == {s: layout.conflicts(s) for s in layout.segments}

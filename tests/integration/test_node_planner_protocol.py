@@ -175,7 +175,7 @@ class NodePlanner:
 
 
 @pytest.fixture
-def start_node(node: str, tmp_path: Path):  # noqa: ANN201 - a factory fixture
+def start_node(node: str, tmp_path: Path):
     started: list[NodePlanner] = []
 
     def start() -> NodePlanner:

@@ -15,12 +15,12 @@ import pytest
 
 pytest.importorskip("distributed")
 
-from fleetsim.sweep.execute import Progress, run_items  # noqa: E402
-from fleetsim.sweep.items import expand  # noqa: E402
-from fleetsim.sweep.results import ResultsFile, read_results  # noqa: E402
-from fleetsim.sweep.spec import load_sweep_spec  # noqa: E402
+from sweep_support import planners_on_path, write_spec
 
-from sweep_support import planners_on_path, write_spec  # noqa: E402
+from fleetsim.sweep.execute import Progress, run_items
+from fleetsim.sweep.items import expand
+from fleetsim.sweep.results import ResultsFile, read_results
+from fleetsim.sweep.spec import load_sweep_spec
 
 SLOW = ("sweep_planners:SlowReserving", "sweep_planners:SlowBFS")
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import os
+from itertools import pairwise
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -27,13 +28,13 @@ TOLERANCE_M = 1e-3
 
 def assert_same_segments(actual: tuple[Segment, ...], expected: tuple[Segment, ...]) -> None:
     assert [(s.id, s.shape, s.direction) for s in actual] == [(s.id, s.shape, s.direction) for s in expected]
-    for got, want in zip(actual, expected):
+    for got, want in zip(actual, expected, strict=True):
         assert_points(got.waypoints, want.waypoints)
 
 
 def assert_points(actual: tuple[Point, ...], expected: tuple[Point, ...]) -> None:
     assert len(actual) == len(expected), (actual, expected)
-    for (ax, ay), (ex, ey) in zip(actual, expected):
+    for (ax, ay), (ex, ey) in zip(actual, expected, strict=True):
         assert abs(ax - ex) <= TOLERANCE_M and abs(ay - ey) <= TOLERANCE_M, (actual, expected)
 
 
@@ -116,7 +117,7 @@ def test_rotated_template_instance_in_nested_offset_groups_matches_tiled_detache
 
 def _turn_degrees(points: tuple[Point, ...]) -> float:
     """The turn of an evenly sampled arc: its n chords turn by (n - 1)/n of the arc's angle."""
-    headings = [math.atan2(b[1] - a[1], b[0] - a[0]) for a, b in zip(points, points[1:])]
+    headings = [math.atan2(b[1] - a[1], b[0] - a[0]) for a, b in pairwise(points)]
     chords = len(headings)
     return math.degrees(abs(headings[-1] - headings[0])) * chords / (chords - 1)
 

@@ -442,7 +442,9 @@ def test_nondeterministic_planner_is_refused_naming_the_first_diverging_step(
     later.assert_outcomes(failed=1)
     a = (project.path / "fleetsim-results/gating/crossing/trace.jsonl").read_text(encoding="utf-8").splitlines()
     b = (project.path / "later/gating/crossing/trace.jsonl").read_text(encoding="utf-8").splitlines()
-    step = next(json.loads(x)[0] for x, y in zip(a[1:], b[1:]) if x != y)
+    step = next(
+        json.loads(x)[0] for x, y in zip(a[1:], b[1:], strict=False) if x != y
+    )  # the runs may end at different steps
     assert step > 0  # both runs start by waiting, so the divergence is not simply the first step
     assert int(found[2]) == step
     assert float(found[1]) == float(found[3]) == pytest.approx((step + 1) * 0.1)
@@ -508,7 +510,7 @@ def test_result_json_and_junit_xml_describe_every_recorded_run(
     for name, status, kinds in [("crossing", "passed", []), ("corridor-passing-bay", "failed", ["hash-missing"])]:
         folder = f"fleetsim-results/gating/{name}"
         document = json.loads((project.path / folder / "result.json").read_text(encoding="utf-8"))
-        assert RESULT_KEYS <= set(document)
+        assert set(document) >= RESULT_KEYS
         assert (document["scenario"], document["planner"], document["status"]) == (name, RESERVING, status)
         assert [failure["kind"] for failure in document["failures"]] == kinds
         assert document["trace_hash"] == recorded[name].hash

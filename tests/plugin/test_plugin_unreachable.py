@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import pytest
+from plugin_helpers import RESERVING, copy_example_suites
 
 from fleetsim.enums import Direction, Shape
 from fleetsim.layout import Segment
 from fleetsim.load.tiled_writer import write_map
-from plugin_helpers import RESERVING, copy_example_suites
 
 SUITE = """\
 fleetsim: 1

@@ -39,9 +39,9 @@ def test_written_map_loads_back_to_the_same_segments(segments: list[Segment], su
         loaded = load_map(write_map(Path(tmp) / f"map{suffix}", segments)).segments
     expected = sorted(segments, key=lambda s: s.id)
     assert [(s.id, s.shape, s.direction) for s in loaded] == [(s.id, s.shape, s.direction) for s in expected]
-    for got, want in zip(loaded, expected):
+    for got, want in zip(loaded, expected, strict=True):
         assert len(got.waypoints) == len(want.waypoints)
-        for (gx, gy), (wx, wy) in zip(got.waypoints, want.waypoints):
+        for (gx, gy), (wx, wy) in zip(got.waypoints, want.waypoints, strict=True):
             assert abs(gx - wx) <= 1e-9 and abs(gy - wy) <= 1e-9
 
 

@@ -25,8 +25,7 @@ from fleetsim.planners import BFSPlanner, ReservingPlanner
 from fleetsim.planners.routing import State, next_states, shortest_route
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Scenario, ScenarioSettings, VehicleType
 from fleetsim.sim.loop import run_scenario
-from fleetsim.strategies import LAYOUT_KINDS, GenerationSpec, layouts, load_saved, save_scenario, scenarios
-from fleetsim.strategies import geometry
+from fleetsim.strategies import LAYOUT_KINDS, GenerationSpec, geometry, layouts, load_saved, save_scenario, scenarios
 
 AGV = replace(DEFAULT_VEHICLE_TYPE, name="agv")
 TUGGER = VehicleType("tugger", 1.4, 0.7, 0.5, 1.2, 0.4, TurnCapability.CURVE)
@@ -76,7 +75,7 @@ def test_generated_layouts_are_lint_clean_connected_and_numbered_in_order(kind: 
 def test_one_way_loops_run_all_forward_around_one_cycle(one_way: bool, data: st.DataObject) -> None:
     segments = data.draw(layouts("loop", size=(1, 3), one_way=one_way))
     assert {s.direction.value for s in segments} == ({"forward"} if one_way else {"both"})
-    for a, b in zip(segments, segments[1:] + segments[:1]):
+    for a, b in zip(segments, segments[1:] + segments[:1], strict=True):
         assert a.last == b.first  # exactly, so they connect whatever the tolerance
 
 

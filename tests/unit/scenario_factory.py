@@ -5,10 +5,10 @@ from __future__ import annotations
 from dataclasses import replace
 from pathlib import Path
 
+from fleetsim.enums import TurnCapability
 from fleetsim.layout import Segment
 from fleetsim.load.scenario import load_scenario_dir
 from fleetsim.load.tiled_writer import write_map
-from fleetsim.enums import TurnCapability
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Scenario, ScenarioSettings, VehicleType
 
 VEHICLES_HEADER = "vehicle_id,start_segment_id,segment_orientation,progress_direction,type\n"

@@ -115,7 +115,7 @@ def same_layout(a: Layout, b: Layout, tolerance: float = 1e-6) -> None:
         other = b.segments[sid]
         assert segment.direction == other.direction, sid
         assert len(segment.waypoints) == len(other.waypoints), (sid, segment.waypoints, other.waypoints)
-        for p, q in zip(segment.waypoints, other.waypoints):
+        for p, q in zip(segment.waypoints, other.waypoints, strict=True):
             assert math.dist(p, q) <= tolerance, (sid, p, q)
     assert [(c.from_segment, c.from_traverse, c.to_segment, c.to_traverse, c.joint) for c in a.connections] == [
         (c.from_segment, c.from_traverse, c.to_segment, c.to_traverse, c.joint) for c in b.connections

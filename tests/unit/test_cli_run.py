@@ -142,7 +142,7 @@ def test_without_a_terminal_each_result_is_one_line_on_stderr(capsys: pytest.Cap
     _, _, err = run(capsys, "run", str(EXAMPLES), "--planner", RESERVING)
     lines = err.splitlines()
     assert len(lines) == 4
-    for index, (line, name, tasks) in enumerate(zip(lines, NAMES, (2, 4, 2, 3)), 1):
+    for index, (line, name, tasks) in enumerate(zip(lines, NAMES, (2, 4, 2, 3), strict=True), 1):
         assert re.fullmatch(rf"\[{index}/4\] {name}: passed \(tasks {tasks}/{tasks}, t=\d+\.\d s\)", line), line
 
 
@@ -176,8 +176,8 @@ def test_json_prints_one_result_per_scenario_per_line_with_the_direct_runs_hash(
     results = json_lines(out)
     assert [r["scenario"] for r in results] == NAMES
     suite = fleetsim.load_suite(EXAMPLES)
-    for result, spec in zip(results, suite.scenarios):
-        assert RESULT_KEYS <= result.keys()
+    for result, spec in zip(results, suite.scenarios, strict=True):
+        assert result.keys() >= RESULT_KEYS
         assert result["status"] == "passed" and result["planner"] == RESERVING
         direct = run_scenario(fleetsim.load_scenario(spec, suite), ReservingPlanner())
         assert result["trace_hash"] == direct.trace_hash

@@ -17,7 +17,9 @@ def _straight(sid: int, *points: tuple[float, float]) -> Segment:
 def _quarter_arc(sid: int, radius: float, n: int = 10) -> Segment:
     """90° curve centred on the origin, from (radius, 0) to (0, radius)."""
     angles = np.radians(np.linspace(0.0, 90.0, n))
-    return Segment(sid, Shape.CURVE, Direction.BOTH, tuple(zip(radius * np.cos(angles), radius * np.sin(angles))))
+    return Segment(
+        sid, Shape.CURVE, Direction.BOTH, tuple(zip(radius * np.cos(angles), radius * np.sin(angles), strict=True))
+    )
 
 
 def _figure_24() -> list[Segment]:

@@ -8,6 +8,7 @@ from typing import Any
 
 import pytest
 from jsonschema import Draft7Validator
+from site_documents import layout_of, same_layout
 
 from fleetsim.cli.main import main
 from fleetsim.enums import Direction, Traverse
@@ -16,8 +17,6 @@ from fleetsim.layout.segment import Segment
 from fleetsim.load.convert import convert_map
 from fleetsim.load.map_options import MapOptions
 from fleetsim.load.site_map import load_site_map
-
-from site_documents import layout_of, same_layout
 
 ROOT = Path(__file__).resolve().parents[2] / "scenario_suites"
 HALL = ROOT / "sites" / "packing-hall" / "map.lif.json"
@@ -36,7 +35,7 @@ LIF_1_0 = {
         "metaInformation": {
             "type": "object",
             "required": ["projectIdentification", "creator", "exportTimestamp", "lifVersion"],
-            "properties": {k: _STRING for k in ("projectIdentification", "creator", "exportTimestamp", "lifVersion")},
+            "properties": dict.fromkeys(("projectIdentification", "creator", "exportTimestamp", "lifVersion"), _STRING),
         },
         "layouts": {
             "type": "array",

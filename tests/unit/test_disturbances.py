@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import replace
+from itertools import pairwise
 from pathlib import Path
 from typing import Any
 
@@ -71,7 +72,7 @@ def test_a_stop_brakes_at_the_deceleration_stands_its_duration_and_restarts(tmp_
     assert abs(at_rest - (12.0 + before / 0.5)) <= DT + 1e-9  # the closed form v/a, within one step
     # braking is linear at the deceleration, never faster
     braking = [(t, speed) for t, speed, _, _ in seen if 12.0 <= t < at_rest]
-    for (t0, v0), (t1, v1) in zip(braking, braking[1:]):
+    for (t0, v0), (t1, v1) in pairwise(braking):
         assert v0 - v1 == pytest.approx(0.5 * (t1 - t0), abs=1e-6)
     stopped = [t for t, _, disturbed, _ in seen if disturbed is Disturbed.STOPPED]
     assert stopped[0] == pytest.approx(12.0) and stopped[-1] >= at_rest + 5.0 - DT - 1e-9
@@ -96,7 +97,7 @@ def test_a_slowed_vehicle_never_exceeds_the_factor_once_braked_down(tmp_path: Pa
     during = [(t, speed, d) for t, speed, d, _ in seen if 10.0 <= t < 30.0 - 1e-9]
     assert all(d is Disturbed.SLOWED for _, _, d in during)
     assert max(speed for t, speed, _ in during if t >= braked_by) <= 0.4 + 1e-9
-    assert all(speed <= prev + 1e-9 for (t, speed, _), (_, prev, _) in zip(during[1:], during))  # never accelerates
+    assert all(speed <= prev + 1e-9 for (_, prev, _), (t, speed, _) in pairwise(during))  # never accelerates
     assert max(speed for t, speed, _, _ in seen if t > 30.0 + 1.0) > 0.9  # full speed again after
     assert [(d.kind, d.factor, d.start, d.end) for d in result.disturbances] == [
         ("slow", 0.4, 10.0, pytest.approx(30.0))

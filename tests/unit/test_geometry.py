@@ -15,7 +15,6 @@ from fleetsim.layout.geometry import (
     segment_distances,
 )
 
-
 P = tuple[float, float]
 
 

@@ -9,13 +9,12 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from site_documents import edge, layout, lif_v1, node, quarter, save_json, save_yaml, to_v2
 
 from fleetsim.errors import MapError
 from fleetsim.load.map_options import MapOptions
 from fleetsim.load.scenario import load_scenario_dir
 from fleetsim.load.site_map import load_site_map
-
-from site_documents import edge, layout, lif_v1, node, nurbs, quarter, save_json, save_yaml, to_v2
 
 BASE = lif_v1(
     layout(

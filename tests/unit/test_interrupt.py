@@ -42,7 +42,7 @@ class SignalAt(ReservingPlanner):
             if self.twice:  # a planner that swallows the first interruption; the second aborts
                 try:
                     os.kill(os.getpid(), self.signum)
-                except BaseException:  # noqa: BLE001, S110 - what a careless planner does
+                except BaseException:
                     pass
             os.kill(os.getpid(), self.signum)
         return super().fix_legs(task, fleet, layout)

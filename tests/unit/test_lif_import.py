@@ -3,17 +3,17 @@
 from __future__ import annotations
 
 import math
+from itertools import pairwise
 from pathlib import Path
 
 import pytest
+from site_documents import edge, layout, lif_v1, load, node, nurbs, quarter, save_json, to_v2
 
 from fleetsim.enums import Direction, Shape
 from fleetsim.errors import MapError
 from fleetsim.layout.nurbs import CHORD_TOLERANCE
 from fleetsim.load.map_options import MapOptions
 from fleetsim.load.site_map import load_site_map
-
-from site_documents import edge, layout, lif_v1, load, node, nurbs, quarter, save_json, to_v2
 
 SQUARE_NODES = [node("A", 0, 0), node("B", 10, 0), node("C", 10, 10)]
 STRAIGHTS = lif_v1(
@@ -178,9 +178,7 @@ def test_a_rational_quadratic_trajectory_becomes_a_circular_path_within_the_chor
     assert segment.shape is Shape.PATH and segment.first == (5.0, 0.0) and segment.last == (0.0, 5.0)
     assert all(abs(math.hypot(x, y) - 5.0) < 1e-9 for x, y in segment.waypoints)  # every sample on the circle
     # The farthest a chord strays from the circle is at its middle: r − distance of the chord's midpoint.
-    sagitta = max(
-        5.0 - math.hypot((a[0] + b[0]) / 2, (a[1] + b[1]) / 2) for a, b in zip(segment.waypoints, segment.waypoints[1:])
-    )
+    sagitta = max(5.0 - math.hypot((a[0] + b[0]) / 2, (a[1] + b[1]) / 2) for a, b in pairwise(segment.waypoints))
     assert sagitta <= CHORD_TOLERANCE
     assert segment.length == pytest.approx(5.0 * math.pi / 2, abs=0.01)
 

@@ -33,7 +33,7 @@ def deviation(curve: Nurbs, polyline: tuple[tuple[float, float], ...]) -> float:
     points = dense(curve)
     a, b = np.array(polyline[:-1]), np.array(polyline[1:])
     best = np.full(len(points), np.inf)
-    for start, end in zip(a, b):
+    for start, end in zip(a, b, strict=True):
         best = np.minimum(
             best, point_segment_distances(points, np.tile(start, (len(points), 1)), np.tile(end, (len(points), 1)))
         )

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import pytest
 from mcap.reader import make_reader
+from scenario_factory import make_scenario
 
 from fleetsim.enums import Direction, JointKind, Shape, Traverse
 from fleetsim.layout.layout import build_layout
@@ -20,8 +21,6 @@ from fleetsim.planners import ReservingPlanner
 from fleetsim.recording.recorder import record_mcap
 from fleetsim.recording.svg import render_layout_svg
 from fleetsim.sim.loop import run_scenario
-
-from scenario_factory import make_scenario
 
 ASSETS = Path(__file__).resolve().parents[2] / "scenario_suites" / "tiled"
 
@@ -121,7 +120,7 @@ def test_written_path_segments_and_names_load_back(tmp_path: Path, suffix: str) 
         (1, Shape.PATH, Direction.FORWARD, ("zig & zag",)),
         (2, Shape.STRAIGHT, Direction.BOTH, ()),
     ]
-    for a, b in zip(loaded[0].waypoints, ZIGZAG):
+    for a, b in zip(loaded[0].waypoints, ZIGZAG, strict=True):
         assert math.dist(a, b) < 1e-9
 
 

@@ -103,7 +103,7 @@ def test_a_vehicle_is_drawn_lengthwise_along_its_heading_with_the_nose_in_front(
     root = parse(render_frame_svg(crossing, moment, caption="x"))
     [group] = [g for g in of_class(root, "vehicle") if g.get("data-vehicle") == "2"]
     [body], [nose] = of_class(group, "vehicle-body"), of_class(group, "vehicle-nose")
-    xs, ys = zip(*corners(body))
+    xs, ys = zip(*corners(body), strict=True)
     vehicle_type = next(v.type for v in crossing.vehicles if v.id == 2)
     assert (max(ys) - min(ys), max(xs) - min(xs)) == pytest.approx(
         (40 * vehicle_type.length, 40 * vehicle_type.width), abs=0.02

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from itertools import pairwise
 
 import pytest
 from hypothesis import given, settings
@@ -242,7 +243,7 @@ def test_distance_is_monotone_and_bounded_and_speed_stays_in_range(
         + [0.0]
     )
     distances = [profile.distance_at(t) for t in times]
-    assert all(earlier <= later for earlier, later in zip(distances, distances[1:]))
+    assert all(earlier <= later for earlier, later in pairwise(distances))
     assert all(0.0 <= d <= profile.distance for d in distances)
     assert profile.distance_at(profile.stop_time) == profile.distance
     for t in times:

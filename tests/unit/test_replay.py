@@ -53,7 +53,7 @@ def test_every_replayed_frame_has_the_simulations_poses_plans_and_alerts(
     frames = list(replay(scenario, result.trace.lines))
     assert [frame.step for frame in frames] == list(range(result.steps))
     table = ConflictTable(scenario.layout)
-    for frame, (states, plans) in zip(frames, seen):
+    for frame, (states, plans) in zip(frames, seen, strict=True):
         for vid, pose in frame.poses.items():
             x, y, heading = round(pose.x * 1000), round(pose.y * 1000), pose.heading
             assert (x, y) == states[vid][4:6]

@@ -5,12 +5,11 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from site_documents import save_yaml
 
 from fleetsim.enums import Direction, Shape
 from fleetsim.load.map_options import MapOptions
 from fleetsim.load.site_map import load_site_map
-
-from site_documents import save_yaml
 
 TWO_LEVELS = """\
 name: test

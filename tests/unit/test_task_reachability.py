@@ -5,12 +5,11 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from scenario_factory import make_scenario
 
 from fleetsim.enums import Direction, Shape
 from fleetsim.errors import ScenarioFileError, UnreachableTaskError
 from fleetsim.layout import Segment
-
-from scenario_factory import make_scenario
 
 
 def straight(sid: int, a: tuple[float, float], b: tuple[float, float], direction: str = "both") -> Segment:

@@ -150,7 +150,7 @@ def waypoints(loaded: TiledMap, object_id: int) -> tuple[tuple[float, float], ..
 
 def assert_points_close(actual: Any, expected: Any, tol: float = 1e-9) -> None:
     assert len(actual) == len(expected)
-    for (ax, ay), (ex, ey) in zip(actual, expected):
+    for (ax, ay), (ex, ey) in zip(actual, expected, strict=True):
         assert ax == pytest.approx(ex, abs=tol) and ay == pytest.approx(ey, abs=tol), (actual, expected)
 
 
@@ -177,7 +177,7 @@ def test_json_and_tmx_of_the_same_map_give_the_same_segments(tmp_path: Path) -> 
     assert [(s.id, s.shape, s.direction) for s in from_tmx.segments] == [
         (s.id, s.shape, s.direction) for s in from_json.segments
     ]
-    for a, b in zip(from_tmx.segments, from_json.segments):
+    for a, b in zip(from_tmx.segments, from_json.segments, strict=True):
         assert_points_close(a.waypoints, b.waypoints, tol=1e-6)
 
 

@@ -26,9 +26,9 @@ SEGMENTS = (
 def assert_same_segments(loaded: tuple[Segment, ...], expected: tuple[Segment, ...], tol: float) -> None:
     expected = tuple(sorted(expected, key=lambda segment: segment.id))
     assert [(s.id, s.shape, s.direction) for s in loaded] == [(s.id, s.shape, s.direction) for s in expected]
-    for got, want in zip(loaded, expected):
+    for got, want in zip(loaded, expected, strict=True):
         assert len(got.waypoints) == len(want.waypoints)
-        for (gx, gy), (wx, wy) in zip(got.waypoints, want.waypoints):
+        for (gx, gy), (wx, wy) in zip(got.waypoints, want.waypoints, strict=True):
             assert abs(gx - wx) <= tol and abs(gy - wy) <= tol, (got.id, got.waypoints, want.waypoints)
 
 
