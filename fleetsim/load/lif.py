@@ -320,7 +320,7 @@ def _sampled(trajectory: JsonAt) -> tuple[Point, ...]:
 
 def _note_unknown(at: JsonAt, kind: str, notes: ImportNotes) -> None:
     members = at.object_value()
-    for key in at.keys():
+    for key in at.keys():  # noqa: SIM118 - JsonAt.keys(), not a dict's
         if key not in _SILENT[kind] and not (key in _HARMLESS and members[key] == _HARMLESS[key]):
             notes.note("not-modelled", f"{kind} attribute {key!r}", f"{at.pointer}/{key}")
 

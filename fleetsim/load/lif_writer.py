@@ -133,7 +133,7 @@ def _edge_names(segments: list[Segment]) -> dict[int, tuple[str, str]]:
     """Per segment, the ids of its edge along its waypoints and of its edge against them."""
     wanted = {s.id: (s.names[0] if s.names else f"E{s.id}", s.names[1] if len(s.names) > 1 else "") for s in segments}
     taken: dict[str, int] = {}
-    for sid, (along, against) in wanted.items():
+    for along, against in wanted.values():
         for name in (along, against):
             if name:
                 taken[name] = taken.get(name, 0) + 1

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Protocol, Union, runtime_checkable
+from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 from fleetsim.enums import Progress, Traverse
 from fleetsim.errors import FleetsimError
@@ -136,7 +136,7 @@ class RouteError(FleetsimError):
         return hash((self.vehicle_id, self.message))
 
 
-ResponseItem = Union[FleetPlan, RouteError]
+ResponseItem = FleetPlan | RouteError
 Response = Sequence[ResponseItem]
 
 

@@ -188,7 +188,6 @@ class _Scene:
         self.colours = vehicle_colours(scenario)
         self.ids = tuple(sorted(v.id for v in scenario.vehicles))
         self.transforms = m.FleetTransforms("map", [_frame_name(vehicle_id) for vehicle_id in self.ids])
-        layout = scenario.layout
         view = framed_view(scenario)
         self.letter = view.letter
         self.top_left = (view.min_x, view.max_y + 2.0 * self.letter)

@@ -353,7 +353,7 @@ def _finding(facts: StuckFacts, vid: int, holders: Mapping[int, list[int]]) -> F
         other
         for other in sorted(facts.plans)
         if other != vid
-        and any(l.segment in near_set for l in facts.plans[other].legs[len(facts.plans[other].fixed_legs) :])
+        and any(leg.segment in near_set for leg in facts.plans[other].legs[len(facts.plans[other].fixed_legs) :])
     )
     return replace(
         base,

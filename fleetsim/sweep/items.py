@@ -8,6 +8,7 @@ distinct ones are the source's scenarios; a larger ``count`` keeps the earlier o
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
@@ -75,10 +76,8 @@ def generate_scenarios(source: GeneratedSource) -> list[Scenario]:
     )  # fmt: skip
     with hypothesis_storage_elsewhere(), warnings.catch_warnings():
         warnings.filterwarnings("ignore", "Generating overly large repr", HypothesisWarning)
-        try:
+        with contextlib.suppress(NoSuchExample):  # fewer distinct scenarios than asked for: the space is small
             find(strategy, collect, settings=draw, random=random.Random(source.seed))
-        except NoSuchExample:  # fewer distinct scenarios than asked for: the space is small
-            pass
     return [_named(scenario, f"{source.entry.name}-{index}") for index, scenario in enumerate(found)]
 
 

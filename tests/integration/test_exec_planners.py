@@ -137,7 +137,7 @@ def test_each_fault_fails_the_run_with_a_planner_error_and_the_stderr_tail(
 
 def test_a_hanging_planner_is_stopped_at_the_call_timeout_and_killed(faulty: Path) -> None:
     started = time.monotonic()
-    result, planner = _run_faulty(faulty, "hang", "1", timeout=1.0)
+    result, _planner = _run_faulty(faulty, "hang", "1", timeout=1.0)
 
     assert time.monotonic() - started < 8.0
     [failure] = result.failures

@@ -168,7 +168,7 @@ def trace_lines(folder: Path, *, whole: bool = True) -> list[str]:
     lines, clean = complete_lines((folder / "trace.jsonl").read_text(encoding="utf-8"))
     assert clean or not whole
     for line in lines[1:]:
-        step, vehicles, plans, events = json.loads(line)
+        _step, _vehicles, _plans, _events = json.loads(line)
     return lines
 
 
@@ -259,7 +259,7 @@ def test_a_signal_while_a_recording_is_written_lets_it_finish(folder: Path) -> N
     crossing = folder / "rec" / "examples" / "crossing"
     result = json.loads((crossing / "result.json").read_text())
     assert result["status"] == "passed" and "mcap" in result["artifacts"]
-    messages, last_clock = mcap_facts(crossing / "run.mcap")
+    _messages, last_clock = mcap_facts(crossing / "run.mcap")
     assert last_clock == round(result["sim_time"] * 1e9)
     no_temporary_files(folder / "rec")
 
@@ -288,7 +288,7 @@ def test_a_second_signal_while_a_recording_is_written_aborts_and_record_rebuilds
     )
     assert done.returncode == 0, done.stdout + done.stderr
     assert "note:" not in done.stdout, "a complete trace does not end early"
-    messages, last_clock = mcap_facts(crossing / "run.mcap")
+    _messages, last_clock = mcap_facts(crossing / "run.mcap")
     assert last_clock == round(result["sim_time"] * 1e9)
 
 

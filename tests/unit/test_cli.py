@@ -86,7 +86,7 @@ def test_inspect_text_shows_the_sections(capsys: pytest.CaptureFixture[str]) -> 
 
 
 def test_inspect_of_a_missing_map_is_a_one_line_error(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    status, out, err = run(capsys, "inspect", str(tmp_path / "nope.json"))
+    status, _out, err = run(capsys, "inspect", str(tmp_path / "nope.json"))
     assert status == 1
     assert "nope.json" in err and "Traceback" not in err
 
@@ -103,7 +103,7 @@ def test_render_highlight_colours_segment_successors_and_conflicts(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     out_svg = tmp_path / "pic" / "crossing.svg"
-    status, out, _ = run(capsys, "render", str(CROSSING_MAP), "-o", str(out_svg), "--highlight", "2")
+    status, _out, _ = run(capsys, "render", str(CROSSING_MAP), "-o", str(out_svg), "--highlight", "2")
     assert status == 0 and out_svg.exists()
     svg = ET.parse(out_svg).getroot()
     # Yellow: the highlighted segment, although its U-turns make it one of its own successors.

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
@@ -40,10 +41,8 @@ class SignalAt(ReservingPlanner):
         self.calls += 1
         if self.calls == self.at:
             if self.twice:  # a planner that swallows the first interruption; the second aborts
-                try:
+                with contextlib.suppress(BaseException):
                     os.kill(os.getpid(), self.signum)
-                except BaseException:
-                    pass
             os.kill(os.getpid(), self.signum)
         return super().fix_legs(task, fleet, layout)
 

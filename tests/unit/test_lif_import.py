@@ -50,7 +50,7 @@ def test_a_json_file_is_lif_by_its_content_whatever_its_name(tmp_path: Path) -> 
 
 
 def test_a_lif_json_file_without_lif_content_is_refused(tmp_path: Path) -> None:
-    with pytest.raises(MapError, match="this .lif.json file is not LIF: its top level needs 'metaInformation'"):
+    with pytest.raises(MapError, match=r"this \.lif\.json file is not LIF: its top level needs 'metaInformation'"):
         load(tmp_path, {"metaInformation": {}, "nodes": []})
 
 

@@ -67,7 +67,7 @@ def test_vehicles_starting_on_conflicting_segments_are_rejected_naming_both(tmp_
 
 
 def test_two_vehicles_on_the_same_segment_conflict(tmp_path: Path) -> None:
-    with pytest.raises(ScenarioFileError, match="vehicles 1 .* and 2 .* start on conflicting segments"):
+    with pytest.raises(ScenarioFileError, match=r"vehicles 1 .* and 2 .* start on conflicting segments"):
         load_scenario_dir(make_dir(tmp_path, "1,3,forward,,\n2,3,backward,,\n"))
 
 
@@ -133,7 +133,7 @@ def test_a_missing_folder_is_a_located_error(tmp_path: Path) -> None:
 def test_a_missing_tasks_file_is_a_located_error(tmp_path: Path) -> None:
     folder = make_dir(tmp_path, "1,1,forward,,\n")
     (folder / "tasks.csv").unlink()
-    with pytest.raises(ScenarioFileError, match="tasks.csv: file not found"):
+    with pytest.raises(ScenarioFileError, match=r"tasks\.csv: file not found"):
         load_scenario_dir(folder)
 
 

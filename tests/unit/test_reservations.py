@@ -168,7 +168,7 @@ def layouts(draw: st.DrawFn) -> Layout:
     segments = []
     for sid in ids:
         start = draw(st.tuples(coordinate, coordinate))
-        end = draw(st.tuples(coordinate, coordinate).filter(lambda point: point != start))
+        end = draw(st.tuples(coordinate, coordinate).filter(lambda point, start=start: point != start))
         segments.append(_straight(sid, start, end))
     return build_layout(segments, vehicle_radius=draw(st.sampled_from([0.2, 0.5, 1.5])))
 

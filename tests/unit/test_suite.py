@@ -135,7 +135,7 @@ def test_a_file_named_next_to_dir_replaces_the_folders_file(tmp_path: Path) -> N
 
 def test_an_explicit_map_next_to_dir_settles_two_map_candidates(tmp_path: Path) -> None:
     text = SUITE.replace("    dir: crossing/\n", "    dir: crossing/\n    map: crossing/map.tmx\n")
-    crossing = load_suite(make_suite(tmp_path, text, FILES + ("crossing/map.tmx",))).scenarios[0]
+    crossing = load_suite(make_suite(tmp_path, text, (*FILES, "crossing/map.tmx"))).scenarios[0]
     assert crossing.map_path == tmp_path / "crossing/map.tmx"
 
 
@@ -232,7 +232,7 @@ def test_suite_mistakes_give_one_error_at_the_offending_value(
         pytest.param(
             FILES[1:], "has no map.json, map.tmj, map.tmx, map.lif.json or map.building.yaml", id="no-map-in-dir"
         ),
-        pytest.param(FILES + ("crossing/map.tmx",), "has both map.json and map.tmx", id="two-maps-in-dir"),
+        pytest.param((*FILES, "crossing/map.tmx"), "has both map.json and map.tmx", id="two-maps-in-dir"),
         pytest.param(FILES[:1] + FILES[2:], "has no vehicles.csv", id="no-vehicles-in-dir"),
     ],
 )

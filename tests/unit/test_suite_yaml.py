@@ -103,7 +103,7 @@ def test_empty_file_loads_as_none(tmp_path: Path) -> None:
 
 
 def test_missing_file_is_a_located_error(tmp_path: Path) -> None:
-    with pytest.raises(SuiteError, match="nope.yaml: file not found"):
+    with pytest.raises(SuiteError, match=r"nope\.yaml: file not found"):
         load_yaml_with_marks(tmp_path / "nope.yaml")
 
 

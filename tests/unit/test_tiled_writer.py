@@ -97,7 +97,7 @@ def test_writer_refuses_bad_parameters(tmp_path: Path, kwargs: dict[str, float],
 
 
 def test_writer_refuses_unknown_suffix_and_empty_maps(tmp_path: Path) -> None:
-    with pytest.raises(ValueError, match="map.yaml"):
+    with pytest.raises(ValueError, match=r"map\.yaml"):
         write_map(tmp_path / "map.yaml", SEGMENTS)
     with pytest.raises(ValueError, match="empty"):
         write_map(tmp_path / "map.json", [])
