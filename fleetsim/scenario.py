@@ -31,7 +31,21 @@ RGBA = tuple[float, float, float, float]
 
 @dataclass(frozen=True, slots=True)
 class VehicleType:
-    """A kind of vehicle: dimensions in metres, speed limits and how it turns."""
+    """A kind of vehicle: its size, how fast it drives and how it turns (``vehicle_types`` in a suite).
+
+    Attributes:
+        name: The type's name, as ``vehicles.csv``'s ``type`` column gives it.
+        length: Metres, nose to tail.
+        width: Metres, side to side.
+        height: Metres (drawn in recordings only).
+        max_speed: Metres per second, the most it drives at on any leg.
+        acceleration: Metres per second squared, both speeding up and braking (the motion model is
+            symmetric: a vehicle at ``max_speed`` needs ``max_speed**2 / (2 * acceleration)`` metres to stop).
+        turn_capability: ``IN_PLACE`` (it may stop and turn on the spot, so it can take a
+            ``TURN_IN_PLACE`` joint and meet any goal direction) or ``CURVE`` (it follows curves only).
+        turn_rate: Degrees per second of an in-place turn.
+        color: RGBA (0-1 each) for recordings and pictures, or ``None`` for the default palette.
+    """
 
     name: str
     length: float
@@ -67,7 +81,15 @@ DEFAULT_VEHICLE_TYPE = VehicleType(
 
 @dataclass(frozen=True, slots=True)
 class Vehicle:
-    """A vehicle as it starts: at the entry point of its start segment."""
+    """A vehicle as it starts: at rest at the entry point of its start segment.
+
+    Attributes:
+        id: The vehicle's id (``vehicles.csv``), unique in the scenario.
+        start_segment: The segment it starts on.
+        traverse: Which way along that segment's waypoints it faces (``FORWARD``: first to last).
+        progress: ``FORWARD`` nose first, ``REVERSE`` backing.
+        type: Its :class:`VehicleType`.
+    """
 
     id: int
     start_segment: int
@@ -85,7 +107,17 @@ def longest_vehicle(vehicles: Iterable[Vehicle], vehicle_types: Iterable[Vehicle
 
 @dataclass(frozen=True, slots=True)
 class Task:
-    """Drive ``vehicle_id`` to ``goal_segment``; id = 1-based data-row number in tasks.csv."""
+    """Drive ``vehicle_id`` to ``goal_segment``: the task is done when the vehicle enters a leg on that
+    segment that its plan marks with the task's id (``FleetLeg.goal_for_task``).
+
+    Attributes:
+        id: The 1-based data-row number in ``tasks.csv``; unique in the scenario.
+        vehicle_id: The vehicle that must do it. A vehicle's tasks are done in file order: only the head
+            of its queue (``FleetSnapshot.head_task``) is asked about.
+        goal_segment: The segment to reach.
+        goal_progress: ``FORWARD`` (nose first) or ``REVERSE`` (backing) if the vehicle must arrive that
+            way (check code ``goal-direction``), ``None`` if either will do.
+    """
 
     id: int
     vehicle_id: int

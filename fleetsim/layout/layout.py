@@ -34,7 +34,23 @@ StepIndex = Mapping[tuple[int, Traverse], tuple[Step, ...]]
 
 @dataclass(frozen=True, slots=True, eq=False, repr=False)
 class Layout:
-    """Segments, how they connect and which of them conflict; built by :func:`build_layout`."""
+    """Segments, how they connect and which of them conflict; built by :func:`build_layout`.
+
+    Attributes:
+        segments: Every :class:`~fleetsim.layout.segment.Segment`, by id.
+        connections: Every :class:`~fleetsim.layout.connections.Connection`: a way from one segment
+            driven one way onto another, and the ``JointKind`` (``SAME``: drive on; ``OPPOSITE``: a cusp, the vehicle reverses
+            its progress; ``TURN_IN_PLACE``: a corner only a vehicle that turns in place can take).
+        connection_tolerance: Metres within which two segment ends count as meeting.
+        joint_angle_tolerance: Degrees within which two ends count as tangent (a smooth joint).
+        vehicle_radius: Metres, the circle swept along a segment when conflicts are computed.
+        safety_margin: Metres added between two swept circles.
+        conflict_model: ``SWEPT`` (swept circles, the default) or ``BBOX`` (the thesis's bounding boxes).
+        source: The map file the layout came from, if any.
+
+    Use :meth:`successors` / :meth:`predecessors` for where a vehicle may drive next and
+    :meth:`conflicts` for the segments a leg reserves (its own included).
+    """
 
     segments: Mapping[int, Segment]
     connections: tuple[Connection, ...]

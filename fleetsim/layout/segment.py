@@ -23,9 +23,16 @@ def polyline_length(waypoints: tuple[Point, ...]) -> float:
 class Segment:
     """An immutable segment: Tiled object id, world waypoints in metres, shape and allowed direction.
 
-    ``names`` are what the site calls it (a Tiled object's name, a LIF edge id, an RMF lane's waypoints):
-    the first is its name, a second one the id of the opposite LIF edge merged into a two-way segment.
-    ``vehicles.csv`` and ``tasks.csv`` may name a segment by any of them.
+    Attributes:
+        id: The segment's id (a Tiled object's id; assigned in file order for LIF and RMF sites).
+        shape: ``STRAIGHT``, ``CURVE``, ``S_CURVE`` or ``PATH`` (any polyline).
+        direction: Which traverses are allowed: ``FORWARD`` (along the waypoints only), ``BACKWARD``
+            (against them only) or ``BOTH``.
+        waypoints: The polyline in metres, map frame (y up), first to last.
+        names: What the site calls it (a Tiled object's name, a LIF edge id, an RMF lane's waypoints): the
+            first is its name, a second one the id of the opposite LIF edge merged into a two-way segment.
+            ``vehicles.csv`` and ``tasks.csv`` may name a segment by any of them.
+        length: Metres along the polyline.
     """
 
     id: int

@@ -43,9 +43,19 @@ def _whole_number(value: object, name: str) -> int:
 class FleetLeg:
     """An instruction to drive one segment: which way, nose first or backing, committed or not.
 
-    ``fixed`` legs are committed (VDA 5050 "base"): the vehicle may drive them and they can never change.
-    Planned legs (VDA 5050 "horizon") may still change. ``goal_for_task`` marks the leg that completes a
-    task. The strings ``"forward"``, ``"backward"`` and ``"reverse"`` are accepted for the enums.
+    The strings ``"forward"``, ``"backward"`` and ``"reverse"`` are accepted for the enums.
+
+    Attributes:
+        segment: The segment's id.
+        traverse: ``FORWARD`` along the segment's waypoints (first to last), ``BACKWARD`` against them;
+            one-way segments allow one of the two (check code ``wrong-way``).
+        progress: ``FORWARD`` nose first, ``REVERSE`` backing; it changes only where the joint allows
+            (a cusp, ``JointKind.OPPOSITE``, or an in-place turn; check code ``illegal-progress-change``).
+        fixed: Committed (VDA 5050 "base"): the vehicle may drive it, the harness reserves its segment's
+            conflict set, and it can never change (check code ``fixed-legs-changed``). Planned legs (VDA 5050
+            "horizon") may still change; fixed legs come first in a plan.
+        goal_for_task: The id of the task this leg completes (the vehicle's head task, on its goal
+            segment), or ``None``.
     """
 
     segment: int
@@ -83,6 +93,12 @@ class FleetPlan:
     """A vehicle's route plan: its legs in driving order, the first being the one it is on now.
 
     A list of legs is accepted and frozen into a tuple.
+
+    Attributes:
+        vehicle_id: Whose plan it is (a response may carry plans for other vehicles than the one asked
+            about, to move them out of the way, say).
+        legs: The :class:`FleetLeg` s, the one the vehicle is on first; the fixed ones come first
+            (``fixed_legs``), then the planned ones.
     """
 
     vehicle_id: int
@@ -116,7 +132,12 @@ class FleetPlan:
 
 
 class RouteError(FleetsimError):
-    """A planner cannot route: returned as a response item for one vehicle, or raised for the request."""
+    """A planner cannot route: returned as a response item for one vehicle, or raised for the request.
+
+    Attributes:
+        vehicle_id: The vehicle it is about, or ``None`` for the whole request (when raised).
+        message: What went wrong, in words (shown in the run's report and the summary's route errors).
+    """
 
     def __init__(self, vehicle_id: int | None, message: str) -> None:
         self.vehicle_id = vehicle_id

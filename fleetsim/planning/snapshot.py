@@ -23,11 +23,23 @@ __all__ = ["FleetSnapshot", "VehicleState", "initial_plan", "initial_state", "re
 class VehicleState(NamedTuple):
     """Where a vehicle is and how it moves: on which leg, how far along it, its pose and speed.
 
-    ``distance`` is metres driven along the current leg; ``heading`` (radians, counter-clockwise from +x)
-    is where the vehicle's nose points, the travel direction plus π when it is backing. ``disturbed``:
-    whether a disturbance stops or slows it now (``None``: it drives as planned). Immutable (a
-    named tuple: made for every moving vehicle on every step, so it must be cheap); use ``_replace`` to
-    derive a changed copy.
+    Immutable (a named tuple: made for every moving vehicle on every step, so it must be cheap); use
+    ``_replace`` to derive a changed copy.
+
+    Attributes:
+        id: The vehicle's id.
+        segment: The segment of the leg it is on (its plan's first leg).
+        traverse: Which way along that segment's waypoints it drives (``FORWARD``: first to last).
+        progress: ``FORWARD`` nose first, ``REVERSE`` backing.
+        distance: Metres driven along the current leg (0 at its entry, the segment's length at its exit).
+        speed: Metres per second, never negative (the direction is ``traverse``).
+        x: Metres, map frame.
+        y: Metres, map frame.
+        heading: Radians counter-clockwise from +x: where the nose points (the travel direction plus π
+            when backing).
+        type: Its :class:`~fleetsim.scenario.VehicleType` (``type.turn_capability``, ``type.max_speed``, ...).
+        disturbed: ``STOPPED`` or ``SLOWED`` while a disturbance holds it, ``None`` while it drives as
+            planned (how long a disturbance lasts is not told, as a fleet manager would not know).
     """
 
     id: int
@@ -45,7 +57,21 @@ class VehicleState(NamedTuple):
 
 @dataclass(frozen=True, slots=True)
 class FleetSnapshot:
-    """The fleet at one moment: every vehicle's state, current plan and task queue, and the sim time."""
+    """The fleet at one moment: every vehicle's state, current plan and task queue, and the sim time.
+
+    A planner call gets the snapshot of the moment it is asked at; plans accepted earlier in the same
+    planning round are already in it. Its mappings are read-only copies.
+
+    Attributes:
+        time: Simulated seconds since the start.
+        vehicles: Every vehicle's :class:`VehicleState`, by id.
+        plans: Every vehicle's plan in force, by id. At the start a vehicle's plan is its start leg alone,
+            fixed (the leg it stands on is always the plan's first, fixed leg).
+        tasks: Every vehicle's queue of :class:`~fleetsim.scenario.Task`, head first, by id (an empty
+            tuple: no tasks left).
+        routed: Ids of queued tasks whose goal an accepted plan already marks (``goal_for_task``): the
+            harness then asks ``fix_legs`` for them, else ``plan_routes``.
+    """
 
     time: float
     vehicles: Mapping[int, VehicleState]
@@ -63,6 +89,7 @@ class FleetSnapshot:
         return tuple(task for task in self.tasks.get(vehicle_id, ()) if task.id in self.routed)
 
     def is_routed(self, task: Task) -> bool:
+        """Whether an accepted plan already marks ``task``'s goal."""
         return task.id in self.routed
 
 
