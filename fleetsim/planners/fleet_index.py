@@ -94,7 +94,8 @@ class FleetIndex:
             self._seen[vehicle] = old
 
     def _count(self, vehicle: int, plan: FleetPlan, amount: int) -> None:
-        self._apply(vehicle, _parts(plan, self._ahead), amount)
+        for table, keys in zip(self._tables(), _parts(plan, self._ahead), strict=True):
+            self._add_all(table, vehicle, ((key, amount) for key in keys))
 
     def _recount(self, vehicle: int, old: FleetPlan, new: FleetPlan) -> None:
         """Count ``new`` instead of ``old``: only the legs that differ (a plan mostly changes by a leg
@@ -105,19 +106,15 @@ class FleetIndex:
                 continue
             delta = Counter(after)
             delta.subtract(before)
-            self._add_all(table, vehicle, delta.items(), near=table is not self.drives)
-
-    def _apply(self, vehicle: int, parts: tuple[Sequence[object], ...], amount: int) -> None:
-        for table, keys in zip(self._tables(), parts, strict=True):
-            self._add_all(table, vehicle, ((key, amount) for key in keys), near=table is not self.drives)
+            self._add_all(table, vehicle, delta.items())
 
     def _tables(self) -> tuple[dict[object, Counts], ...]:
         return (self.fixed_near, self.ahead_near, self.route_near, self.drives)  # type: ignore[return-value]
 
-    def _add_all(
-        self, table: dict[object, Counts], vehicle: int, changes: Iterable[tuple[object, int]], *, near: bool
-    ) -> None:
+    def _add_all(self, table: dict[object, Counts], vehicle: int, changes: Iterable[tuple[object, int]]) -> None:
+        """Add each ``(key, amount)``: to the segments near the key's segment, or (drives) to the key itself."""
         conflicts = self._conflicts
+        near = table is not self.drives
         for key, amount in changes:
             if not amount:
                 continue
