@@ -24,12 +24,14 @@ from xml.etree import ElementTree
 import pytest
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
+from result_document import RESULT_KEYS
 
 from fleetsim.gating.lockfile import HashLock, LockEntry, lock_path_for
 from fleetsim.load.scenario import load_scenario
 from fleetsim.load.suite import load_suite
 from fleetsim.planners import ReservingPlanner
 from fleetsim.sim import run_scenario
+from fleetsim.sim.report import SUMMARY_COLUMNS
 
 SUITES = Path(__file__).resolve().parents[2] / "scenario_suites"
 RESERVING = "fleetsim.planners:ReservingPlanner"
@@ -38,20 +40,6 @@ FOLDERS = {"crossing": "crossing", "corridor-passing-bay": "corridor", "loop-one
 TWO = ("crossing", "corridor-passing-bay")
 SUITE_FILE = "gating.fleetsim.yaml"
 LOCK_FILE = "gating.fleetsim.lock.json"
-RESULT_KEYS = {
-    "scenario",
-    "planner",
-    "status",
-    "failures",
-    "trace_hash",
-    "sim_time",
-    "steps",
-    "tasks",
-    "rejections",
-    "collisions",
-    "metrics",
-    "artifacts",
-}  # SPEC §10
 NO_BASELINE = "*--fleetsim-compare: *missing.json: no such metrics file; write one with --fleetsim-metrics-json*"
 WALL_CLOCK = {"wall_time", "planner_wall_time", "realtime_factor"}  # the only figures that may differ
 
@@ -542,17 +530,7 @@ def test_summary_table_and_metrics_json_have_one_row_per_scenario(
     rows = {row["id"]: row for row in metric_rows(project.path / "metrics.json")}
     assert list(rows) == [f"{SUITE_FILE}::corridor-passing-bay", f"{SUITE_FILE}::crossing"]  # sorted by id
     table = fleetsim_table(result)
-    assert table[0] == [
-        "scenario",
-        "outcome",
-        "tasks",
-        "makespan",
-        "alerts",
-        "rejections",
-        "route errors",
-        "hash",
-        "realtime",
-    ]
+    assert table[0] == list(SUMMARY_COLUMNS)  # the same columns as fleetsim run
     assert [row[:2] for row in table[1:]] == [["crossing", "passed"], ["corridor-passing-bay", "failed"]]  # suite order
     for cells in table[1:]:
         row = rows[f"{SUITE_FILE}::{cells[0]}"]

@@ -15,6 +15,7 @@ from typing import Any
 
 import pytest
 from mcap.reader import make_reader
+from result_document import RESULT_KEYS
 
 import fleetsim
 from fleetsim.cli import main
@@ -25,20 +26,6 @@ SUITES = Path(__file__).resolve().parents[2] / "scenario_suites"
 EXAMPLES = SUITES / "examples.fleetsim.yaml"
 NAMES = ["crossing", "loop-one-way", "corridor-passing-bay", "mixed-shapes"]
 RESERVING = "fleetsim.planners:ReservingPlanner"
-RESULT_KEYS = {
-    "scenario",
-    "planner",
-    "status",
-    "failures",
-    "trace_hash",
-    "sim_time",
-    "steps",
-    "tasks",
-    "rejections",
-    "collisions",
-    "metrics",
-    "artifacts",
-}  # SPEC §10
 
 FAULTY_PLANNERS = """\
 import time

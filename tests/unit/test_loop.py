@@ -7,6 +7,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
+from result_document import RESULT_KEYS
 from scenario_factory import make_scenario
 
 from fleetsim import load_scenario, load_suite
@@ -176,20 +177,7 @@ def test_a_one_line_planner_change_changes_the_hash_and_the_divergence_is_locate
 def test_metrics_and_the_json_form() -> None:
     result = run_scenario(example("corridor-passing-bay"), ReservingPlanner())
     data = json.loads(json.dumps(result.to_dict()))
-    assert set(data) >= {
-        "scenario",
-        "planner",
-        "status",
-        "failures",
-        "trace_hash",
-        "sim_time",
-        "steps",
-        "tasks",
-        "rejections",
-        "collisions",
-        "metrics",
-        "artifacts",
-    }
+    assert set(data) >= RESULT_KEYS
     assert data["planner"] == "ReservingPlanner" and data["tasks"] == {"total": 2, "completed": 2}
     metrics = data["metrics"]
     assert metrics["distance"]["1"] == pytest.approx(36.0, abs=0.01)  # the corridor's main line end to end
