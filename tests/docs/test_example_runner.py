@@ -1,0 +1,71 @@
+"""The example runner itself: what it accepts, and that a drifted example fails."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from tests.docs.examples import PageRun, blocks, commands, normalise, output_pattern
+
+
+def test_blocks_reads_titles_indentation_and_lines() -> None:
+    text = 'text\n\n```python title="a.py"\nx = 1\n```\n\n- item\n\n    ```yaml\n    scenarios: []\n    ```\n'
+    found = list(blocks(text))
+    assert [(b.lang, b.title, b.text, b.line) for b in found] == [
+        ("python", "a.py", "x = 1\n", 4),
+        ("yaml", None, "scenarios: []\n", 10),
+    ]
+
+
+def test_console_blocks_split_into_commands_and_outputs() -> None:
+    (block,) = blocks("```console\n$ echo a \\\n  b\na b\n$ true\n```\n")
+    assert list(commands(block)) == [("echo a \\\n  b", "a b"), ("true", "")]
+
+
+@pytest.mark.parametrize(
+    ("expected", "actual", "matches"),
+    [
+        ("a\nb", "a\nb", True),
+        ("a\n...\nd", "a\nb\nc\nd", True),
+        ("a\n...\nd", "a\nd", True),
+        ("passed in ...s", "passed in 1.23s", True),
+        ("a\nb", "a\nc", False),
+        ("a\n...\nd", "a\nb\nc", False),
+        ("passed in ...s", "passed in 1.23s\nmore", False),
+        ("a.b", "axb", False),  # a dot is a dot, not any character
+    ],
+)
+def test_output_patterns(expected: str, actual: str, matches: bool) -> None:
+    assert bool(output_pattern(normalise(expected)).fullmatch(normalise(actual))) is matches
+
+
+def test_a_command_whose_output_drifted_fails(tmp_path: Path) -> None:
+    page = tmp_path / "page.md"
+    page.write_text("```console\n$ echo actual\nshown\n```\n")
+    with pytest.raises(AssertionError, match="printed"):
+        PageRun(page, tmp_path / "work").run()
+
+
+def test_a_yaml_example_that_does_not_load_fails(tmp_path: Path) -> None:
+    page = tmp_path / "page.md"
+    page.write_text("```yaml\nscenarios:\n  - name: x\n    dir: no/such/folder\n```\n")
+    with pytest.raises(Exception, match="no/such/folder"):
+        PageRun(page, tmp_path / "work").run()
+
+
+def test_a_python_example_that_raises_fails(tmp_path: Path) -> None:
+    page = tmp_path / "page.md"
+    page.write_text("```python\nimport fleetsim\nfleetsim.no_such_name\n```\n")
+    with pytest.raises(AttributeError):
+        PageRun(page, tmp_path / "work").run()
+
+
+def test_titled_blocks_are_written_and_suites_loaded(tmp_path: Path) -> None:
+    page = tmp_path / "page.md"
+    page.write_text(
+        '```yaml title="mine.fleetsim.yaml"\nfleetsim: 1\nname: mine\nscenarios:\n'
+        "  - {name: c, dir: scenario_suites/examples/crossing}\n```\n"
+        "```console\n$ ls mine.fleetsim.yaml\nmine.fleetsim.yaml\n```\n"
+    )
+    assert PageRun(page, tmp_path / "work").run() == 2
