@@ -215,18 +215,19 @@ class PageRun:
     def check_command(self, block: Block, command: str, expected: str) -> None:
         env = dict(os.environ)
         env["PYTHONPATH"] = os.pathsep.join([str(self.work), str(REPO), env.get("PYTHONPATH", "")]).rstrip(os.pathsep)
-        env["COLUMNS"] = "120"
+        env["COLUMNS"] = "80"  # as the pages show it
         env.pop("PYTEST_ADDOPTS", None)
         env.pop("PYTEST_XDIST_WORKER", None)
         done = subprocess.run(
             ["bash", "-c", command],
             cwd=self.work,
             env=env,
-            capture_output=True,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,  # one stream, in the order a terminal shows them
             text=True,
             timeout=600,
         )
-        actual = normalise(done.stdout + done.stderr)
+        actual = normalise(done.stdout)
         if not output_pattern(normalise(expected)).fullmatch(actual):
             raise AssertionError(
                 f"{block.where(self.page)}: `{command}` printed (exit {done.returncode}):\n{actual}\n"

@@ -69,3 +69,10 @@ def test_titled_blocks_are_written_and_suites_loaded(tmp_path: Path) -> None:
         "```console\n$ ls mine.fleetsim.yaml\nmine.fleetsim.yaml\n```\n"
     )
     assert PageRun(page, tmp_path / "work").run() == 2
+
+
+def test_a_session_whose_shown_result_drifted_fails(tmp_path: Path) -> None:
+    page = tmp_path / "page.md"
+    page.write_text("```pycon\n>>> 1 + 1\n3\n```\n")
+    with pytest.raises(AssertionError, match="doctest failed"):
+        PageRun(page, tmp_path / "work").run()

@@ -1,4 +1,4 @@
-"""The README's stuck-fleet example: 30 vehicles on a 21 x 21 grid with a greedy planner.
+"""The stuck-fleet example of the documentation (docs/reviewing.md): 30 vehicles on a 21 x 21 grid with a greedy planner.
 
 Whatever the planner does about it, every vehicle that still has a task at the end must be explained:
 a reason, the vehicles and segments involved, a root cause in the headline, and all of it in the picture.

@@ -26,3 +26,10 @@ def test_readme_opens_with_the_main_job_and_the_test_commands() -> None:
 def test_packaged_schema_is_the_top_level_schema() -> None:
     packaged = ROOT / "fleetsim" / "schemas" / "suite.schema.json"
     assert packaged.read_bytes() == (ROOT / "schemas" / "suite.schema.json").read_bytes()
+
+
+def test_readme_fits_on_two_screens_and_links_into_the_docs() -> None:
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    assert len(readme) <= 10_000
+    for target in re.findall(r"\]\((docs/[^)#]+)", readme):
+        assert (ROOT / target).is_file(), target
