@@ -59,12 +59,16 @@ class VehicleType:
 
     @property
     def swept_radius(self) -> float:
-        """Radius of the circle that covers the vehicle whatever its heading (SPEC §4)."""
+        """Metres: the radius of the circle that covers the vehicle whatever its heading (half its diagonal).
+
+        Segments conflict when such circles on them could touch (``ConflictModel.SWEPT``); the layout's
+        ``vehicle_radius`` is the largest over the vehicle types the scenario's vehicles use.
+        """
         return 0.5 * math.hypot(self.length, self.width)
 
     @property
     def bbox_radius(self) -> float:
-        """The thesis's vehicle circle: diameter = the larger of length and width."""
+        """Metres: the thesis's vehicle circle, half the larger of length and width (``ConflictModel.BBOX``)."""
         return 0.5 * max(self.length, self.width)
 
 
@@ -88,7 +92,7 @@ class Vehicle:
         start_segment: The segment it starts on.
         traverse: Which way along that segment's waypoints it faces (``FORWARD``: first to last).
         progress: ``FORWARD`` nose first, ``REVERSE`` backing.
-        type: Its :class:`VehicleType`.
+        type: Its [`VehicleType`][fleetsim.scenario.VehicleType].
     """
 
     id: int

@@ -133,7 +133,10 @@ def discover_suites(paths: Iterable[Path | str]) -> list[Path]:
 
 
 def load_suite(path: Path | str) -> Suite:
-    """Load and check a suite file; every problem is one :class:`SuiteError` at its ``file:line:column``."""
+    """Load and check a suite file.
+
+    Every problem is one [`SuiteError`][fleetsim.errors.SuiteError] at its ``file:line:column``.
+    """
     path = Path(path)
     data, locate = load_yaml_with_marks(path, error_type=SuiteError)
     if data is None:
