@@ -46,8 +46,8 @@ class Connection:
     ``to_traverse``; ``joint`` says how the two meet.
 
     Connections exist only between ends that meet (within the layout's ``connection_tolerance``) and
-    only for traverses both segments allow. A segment's end also connects to itself: a U-turn, always a
-    cusp (``OPPOSITE``).
+    only for traverses both segments allow. The end of a two-way segment also connects to itself: a
+    U-turn, a cusp (``OPPOSITE``).
 
     Attributes:
         from_segment: The id of the segment the vehicle leaves.
