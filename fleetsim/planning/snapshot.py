@@ -40,7 +40,8 @@ class VehicleState(NamedTuple):
         type: Its [`VehicleType`][fleetsim.scenario.VehicleType] (``type.turn_capability``,
             ``type.max_speed``, ...).
         disturbed: [`Disturbed`][fleetsim.enums.Disturbed] ``STOPPED`` or ``SLOWED`` while a disturbance
-            holds it, ``None`` while it drives as planned (how long a disturbance lasts is not told, as a fleet manager would not know).
+            holds it, ``None`` while it drives as planned (how long a disturbance lasts is not told, as a
+            fleet manager would not know).
     """
 
     id: int
