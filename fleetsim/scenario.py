@@ -59,12 +59,16 @@ class VehicleType:
 
     @property
     def swept_radius(self) -> float:
-        """Radius of the circle that covers the vehicle whatever its heading (SPEC §4)."""
+        """Metres: the radius of the circle that covers the vehicle whatever its heading (half its diagonal).
+
+        Segments conflict when such circles on them could touch (``ConflictModel.SWEPT``); the layout's
+        ``vehicle_radius`` is the largest over the vehicle types the scenario's vehicles use.
+        """
         return 0.5 * math.hypot(self.length, self.width)
 
     @property
     def bbox_radius(self) -> float:
-        """The thesis's vehicle circle: diameter = the larger of length and width."""
+        """Metres: the thesis's vehicle circle, half the larger of length and width (``ConflictModel.BBOX``)."""
         return 0.5 * max(self.length, self.width)
 
 
@@ -88,7 +92,7 @@ class Vehicle:
         start_segment: The segment it starts on.
         traverse: Which way along that segment's waypoints it faces (``FORWARD``: first to last).
         progress: ``FORWARD`` nose first, ``REVERSE`` backing.
-        type: Its :class:`VehicleType`.
+        type: Its [`VehicleType`][fleetsim.scenario.VehicleType].
     """
 
     id: int
@@ -163,7 +167,25 @@ StopOn = Literal["rejection", "collision"]
 
 @dataclass(frozen=True, slots=True)
 class ScenarioSettings:
-    """Run and layout settings; suite ``defaults`` and each scenario entry override these."""
+    """Run and layout settings; suite ``defaults`` and each scenario entry override these.
+
+    Attributes:
+        vehicle_type: The name of the vehicle type of ``vehicles.csv`` rows that name none, or ``None``:
+            then the suite's only type (without ``vehicle_types``, the built-in default type), and with
+            several types every row must name its own.
+        time_step: Seconds simulated per step.
+        time_limit: Seconds of simulated time after which a run with tasks left fails (``timeout``).
+        planning_period: Seconds between planning rounds (rounded to whole steps).
+        deadlock_after: Seconds with tasks pending, nothing moving and no plan changing after which the
+            run ends in a deadlock.
+        stop_on: The events that end a run at once: ``"rejection"``, ``"collision"``, both (the
+            default) or none (run on and collect everything).
+        connection_tolerance: Metres within which two segment ends meet.
+        joint_angle_tolerance: Degrees within which two segments meeting count as smooth (or as a cusp).
+        conflict_model: How conflicting segments are found (``SWEPT`` or ``BBOX``).
+        safety_margin: Metres added between two vehicles' circles when conflicts are found.
+        allow_start_conflicts: Whether vehicles may start on conflicting segments (else a load error).
+    """
 
     vehicle_type: str | None = None
     time_step: float = 0.1
@@ -180,7 +202,15 @@ class ScenarioSettings:
 
 @dataclass(frozen=True, slots=True)
 class Expectations:
-    """What a scenario's run must show to pass (SPEC §13 ``expect``)."""
+    """What a scenario's run must show to pass (a scenario entry's ``expect``).
+
+    Attributes:
+        tasks: ``"all"``, or how many tasks must be completed.
+        collisions: ``"none"``, ``"any"`` (at least one alert), or the segment ids that must be flagged.
+        rejections: ``"none"``, ``"any"`` (at least one), or the check codes that must occur.
+        deadlock: Whether the run must end in a deadlock.
+        max_makespan: Seconds by which the last task must be completed, or ``None``.
+    """
 
     tasks: Literal["all"] | int = "all"
     collisions: Literal["none", "any"] | tuple[int, ...] = "none"
@@ -191,7 +221,23 @@ class Expectations:
 
 @dataclass(frozen=True, slots=True)
 class Scenario:
-    """A completely loaded scenario: layout, fleet, tasks, settings and expectations."""
+    """A completely loaded scenario: layout, fleet, tasks, settings and expectations.
+
+    Attributes:
+        name: The scenario's name (its suite entry's, or its folder's).
+        layout: The map, built with the scenario's settings.
+        vehicle_types: The suite's vehicle types, by name.
+        vehicles: The fleet as it starts, in ``vehicles.csv`` order.
+        tasks: Every task, in ``tasks.csv`` order (ids 1, 2, ...).
+        settings: Run and layout settings.
+        expect: What a run must show to pass.
+        map_path: The map file it was loaded from, if any.
+        vehicles_path: The ``vehicles.csv`` it was loaded from, if any.
+        tasks_path: The ``tasks.csv`` it was loaded from, if any.
+        disturbances: Declared disturbances (stops and slow-downs), in suite order.
+        random_disturbances: Randomly drawn stops, if the entry asks for them.
+        warnings: Notes from loading that did not stop it (shapes given to non-polylines, say).
+    """
 
     name: str
     layout: Layout
@@ -205,9 +251,10 @@ class Scenario:
     tasks_path: Path | None = None
     disturbances: tuple[Disturbance, ...] = ()
     random_disturbances: RandomDisturbances | None = None
-    warnings: tuple[str, ...] = ()  # load-time notes that did not stop loading (e.g. shapes on non-polylines)
+    warnings: tuple[str, ...] = ()
 
     @property
     def vehicle_length(self) -> float:
-        """The longest vehicle type the scenario's vehicles use (lint reports gaps up to this long)."""
+        """Metres: the length of the longest vehicle type the scenario's vehicles use (lint reports gaps
+        up to this long)."""
         return longest_vehicle(self.vehicles, self.vehicle_types.values())

@@ -43,7 +43,22 @@ BoolArray = npt.NDArray[np.bool_]
 @dataclass(frozen=True, slots=True)
 class Connection:
     """A vehicle leaving ``from_segment`` driven ``from_traverse`` may enter ``to_segment`` driven
-    ``to_traverse``; ``joint`` says how the two meet."""
+    ``to_traverse``; ``joint`` says how the two meet.
+
+    Connections exist only between ends that meet (within the layout's ``connection_tolerance``) and
+    only for traverses both segments allow. The end of a two-way segment also connects to itself: a
+    U-turn, a cusp (``OPPOSITE``).
+
+    Attributes:
+        from_segment: The id of the segment the vehicle leaves.
+        from_traverse: How it drives that segment: ``FORWARD`` leaves through its last waypoint,
+            ``BACKWARD`` through its first.
+        to_segment: The id of the segment it enters.
+        to_traverse: How it drives that one: ``FORWARD`` enters through its first waypoint, ``BACKWARD``
+            through its last.
+        joint: ``SAME`` (smooth), ``OPPOSITE`` (a cusp: a ``CURVE`` vehicle flips its progress) or
+            ``TURN_IN_PLACE`` (a corner only an ``IN_PLACE`` vehicle can take).
+    """
 
     from_segment: int
     from_traverse: Traverse

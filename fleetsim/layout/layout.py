@@ -34,13 +34,15 @@ StepIndex = Mapping[tuple[int, Traverse], tuple[Step, ...]]
 
 @dataclass(frozen=True, slots=True, eq=False, repr=False)
 class Layout:
-    """Segments, how they connect and which of them conflict; built by :func:`build_layout`.
+    """Segments, how they connect and which of them conflict; built by
+    [`build_layout`][fleetsim.layout.layout.build_layout].
 
     Attributes:
-        segments: Every :class:`~fleetsim.layout.segment.Segment`, by id.
-        connections: Every :class:`~fleetsim.layout.connections.Connection`: a way from one segment
-            driven one way onto another, and the ``JointKind`` (``SAME``: drive on; ``OPPOSITE``: a cusp, the vehicle reverses
-            its progress; ``TURN_IN_PLACE``: a corner only a vehicle that turns in place can take).
+        segments: Every [`Segment`][fleetsim.layout.segment.Segment], by id (a read-only mapping).
+        connections: Every [`Connection`][fleetsim.layout.connections.Connection]: a way from one segment
+            driven one way onto another, and the ``JointKind`` (``SAME``: drive on; ``OPPOSITE``: a cusp,
+            the vehicle reverses its progress; ``TURN_IN_PLACE``: a corner only a vehicle that turns in
+            place can take).
         connection_tolerance: Metres within which two segment ends count as meeting.
         joint_angle_tolerance: Degrees within which two ends count as tangent (a smooth joint).
         vehicle_radius: Metres, the circle swept along a segment when conflicts are computed.
@@ -48,8 +50,9 @@ class Layout:
         conflict_model: ``SWEPT`` (swept circles, the default) or ``BBOX`` (the thesis's bounding boxes).
         source: The map file the layout came from, if any.
 
-    Use :meth:`successors` / :meth:`predecessors` for where a vehicle may drive next and
-    :meth:`conflicts` for the segments a leg reserves (its own included).
+    Use ``successors`` / ``predecessors`` for where a vehicle may drive next, ``joint`` for how two legs
+    meet and ``conflicts`` for the segments a fixed leg reserves (its own included). Asking about a
+    segment id the layout does not have raises [`LayoutError`][fleetsim.errors.LayoutError].
     """
 
     segments: Mapping[int, Segment]
@@ -70,8 +73,8 @@ class Layout:
     def graph(self) -> StateGraph:
         """The frozen networkx graph over ``(segment, traverse)`` states; edges carry ``joint``.
 
-        Built on first use: on large maps it costs more than everything else in :func:`build_layout`,
-        and :meth:`successors` / :meth:`predecessors` answer most questions without it.
+        Built on first use: on large maps it costs more than everything else in ``build_layout``,
+        and ``successors`` / ``predecessors`` answer most questions without it.
         """
         if not self._graph_cache:
             self._graph_cache.append(_state_graph(self.segments, self.connections))
@@ -90,7 +93,9 @@ class Layout:
     def successors(self, segment: int, traverse: Traverse) -> tuple[Step, ...]:
         """Where a vehicle driving ``segment`` with ``traverse`` may go next, with the joint kind.
 
-        A traverse the segment does not allow has no successors (empty tuple).
+        A tuple of ``(next_segment, next_traverse, joint)``, sorted by segment id then traverse
+        (``FORWARD`` first); empty for a traverse the segment does not allow. Whether a vehicle may take
+        one depends on its type and progress (``JointKind``, ``TurnCapability``).
         """
         found = self._successors.get((segment, traverse))  # hot in route searches: no checks on a hit
         if found is not None:
@@ -104,7 +109,8 @@ class Layout:
         return self._joints.get((segment, traverse, next_segment, next_traverse))
 
     def predecessors(self, segment: int, traverse: Traverse) -> tuple[Step, ...]:
-        """The states from which a vehicle may enter ``segment`` driving ``traverse``."""
+        """Where a vehicle may come from to enter ``segment`` driving ``traverse``: a tuple of
+        ``(previous_segment, previous_traverse, joint)``, sorted as in ``successors``."""
         found = self._predecessors.get((segment, traverse))
         if found is not None:
             return found
@@ -112,12 +118,17 @@ class Layout:
         return self._predecessors.get((segment, Traverse(traverse)), ())
 
     def conflicts(self, segment: int) -> frozenset[int]:
-        """Segments a vehicle on ``segment`` could collide with, ``segment`` itself included."""
+        """Ids of the segments a vehicle on ``segment`` could collide with, ``segment`` itself included.
+
+        A fixed leg on ``segment`` reserves all of them: ``segment`` as its vehicle's primary reservation,
+        the others as secondary ones; another vehicle's fixed leg on any of them is a collision alert.
+        """
         self._require(segment)
         return self._conflicts[segment]
 
     def lint(self, vehicle_length: float | None = None) -> tuple[LintFinding, ...]:
-        """Warnings about the map's drawing (dangling ends, near misses, ...); see :mod:`.lint`.
+        """Warnings about the map's drawing (dangling ends, near misses, ...), as ``fleetsim validate``
+        shows them.
 
         With ``vehicle_length`` (metres), dangling ends that close to another segment's end are
         reported as ``gap`` too.
@@ -206,7 +217,7 @@ def build_layout(
     """Connect the segments, build the state graph and compute conflicts.
 
     ``vehicle_radius`` is the largest swept radius over the scenario's vehicle types. Raises
-    :class:`~fleetsim.errors.LayoutError` for duplicate segment ids or invalid settings.
+    [`LayoutError`][fleetsim.errors.LayoutError] for duplicate segment ids or invalid settings.
     """
     radius = _check_setting("vehicle_radius", vehicle_radius)
     tolerance = _check_setting("connection_tolerance", connection_tolerance)

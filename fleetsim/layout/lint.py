@@ -56,7 +56,15 @@ _NEAR_MISS_FACTOR = 10.0
 
 @dataclass(frozen=True, slots=True)
 class LintFinding:
-    """One lint result: a stable ``code``, the segments concerned and a message for the map's author."""
+    """One lint result: a stable ``code``, the segments concerned and a message for the map's author.
+
+    Attributes:
+        code: ``dangling-end``, ``unreachable``, ``near-miss``, ``gap``, ``no-connection`` or
+            ``zero-length`` (the Maps page of the documentation says what each means).
+        severity: ``"warning"`` for every code today (a map with findings still loads).
+        segments: Ids of the segments concerned, ascending.
+        message: The finding in words, with the ends' coordinates and distances in metres.
+    """
 
     code: str
     severity: Severity

@@ -82,24 +82,27 @@ class Segment:
 
     @property
     def along(self) -> tuple[float, ...]:
-        """The distance along the polyline at each waypoint (0 first, ``length`` last up to rounding)."""
+        """Metres along the polyline at each waypoint (0 first, ``length`` last up to rounding)."""
         return self._along
 
     @property
     def first(self) -> Point:
+        """``(x, y)`` in metres: the first waypoint, where a ``FORWARD`` traverse enters."""
         return self.waypoints[0]
 
     @property
     def last(self) -> Point:
+        """``(x, y)`` in metres: the last waypoint, where a ``FORWARD`` traverse leaves."""
         return self.waypoints[-1]
 
     def entry(self, traverse: Traverse) -> Point:
-        """Where a vehicle driving ``traverse`` enters this segment."""
+        """``(x, y)`` in metres: where a vehicle driving ``traverse`` enters this segment."""
         return self.first if traverse is Traverse.FORWARD else self.last
 
     def exit(self, traverse: Traverse) -> Point:
-        """Where a vehicle driving ``traverse`` leaves this segment."""
+        """``(x, y)`` in metres: where a vehicle driving ``traverse`` leaves this segment."""
         return self.last if traverse is Traverse.FORWARD else self.first
 
     def allows(self, traverse: Traverse) -> bool:
+        """Whether ``direction`` lets a leg drive this segment with ``traverse`` (else check code ``wrong-way``)."""
         return self.direction.allows(traverse)

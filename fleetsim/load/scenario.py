@@ -66,7 +66,8 @@ def load_scenario_dir(
     settings: ScenarioSettings | None = None,
     map_options: MapOptions | None = None,
 ) -> Scenario:
-    """Load a scenario folder (one map file of :data:`MAP_FILE_NAMES`, vehicles.csv, tasks.csv) without a suite.
+    """Load a scenario folder without a suite: a map file (``map.json``, ``map.tmj``, ``map.tmx``,
+    ``map.lif.json`` or ``map.building.yaml``), ``vehicles.csv`` and ``tasks.csv``.
 
     The scenario is named after the folder. Without ``vehicle_types`` every vehicle is the built-in
     default type; expectations are the defaults (all tasks, no collisions, no rejections).

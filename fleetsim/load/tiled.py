@@ -118,7 +118,7 @@ def parse_direction(raw: PropertyValue, where: Location) -> Direction:
 
 
 def load_map(path: str | os.PathLike[str]) -> TiledMap:
-    """Load a Tiled map; every problem with the file is a :class:`~fleetsim.errors.MapError`."""
+    """Load a Tiled map; every problem with the file is a [`MapError`][fleetsim.errors.MapError]."""
     map_path = Path(path)
     suffix = map_path.suffix.lower()
     if suffix not in MAP_SUFFIXES:

@@ -28,7 +28,34 @@ __all__ = [
 
 
 class RejectionCode(str, Enum):
-    """The stable codes of SPEC §7; suites name them in ``expect.rejections``."""
+    """Why a plan was rejected: a stable code that suites name in ``expect.rejections``.
+
+    The checks run in the order below, and the first that fails rejects the plan: the response checks,
+    the task checks (goal markers), then the sanity checks. The documentation's page "Errors and check
+    codes" shows a plan that triggers each.
+
+    Attributes:
+        UNKNOWN_VEHICLE: ``"unknown-vehicle"``: the plan is for a vehicle not in the scenario.
+        DUPLICATE_PLAN: ``"duplicate-plan"``: the response holds two or more plans for one vehicle (all
+            are rejected).
+        GOAL_NOT_ASSIGNED: ``"goal-not-assigned"``: a ``goal_for_task`` names a task that is not in the
+            vehicle's queue.
+        GOAL_ORDER: ``"goal-order"``: the goal markers do not follow the queue from its head, or drop the
+            marker of a routed task.
+        GOAL_SEGMENT_MISMATCH: ``"goal-segment-mismatch"``: a goal marker is on a leg whose segment is not
+            the task's ``goal_segment``.
+        GOAL_DIRECTION: ``"goal-direction"``: the goal leg's progress is not the task's ``goal_progress``.
+        EMPTY_PLAN: ``"empty-plan"``: the plan has no legs.
+        UNKNOWN_SEGMENT: ``"unknown-segment"``: a leg names a segment not in the layout.
+        FIXED_LEGS_CHANGED: ``"fixed-legs-changed"``: the plan does not start with all of the vehicle's
+            fixed legs, unchanged and still fixed (a goal marker may be added to one).
+        FIXED_NOT_CONTIGUOUS: ``"fixed-not-contiguous"``: a fixed leg follows a planned one.
+        WRONG_WAY: ``"wrong-way"``: a leg drives a one-way segment against its ``direction``.
+        NOT_CONNECTED: ``"not-connected"``: a leg does not lead to the next (no connection between them
+            for their traverses).
+        ILLEGAL_PROGRESS_CHANGE: ``"illegal-progress-change"``: a ``CURVE`` vehicle changes progress at a
+            ``SAME`` joint, keeps it at an ``OPPOSITE`` one, or meets a ``TURN_IN_PLACE`` joint.
+    """
 
     __hash__ = str.__hash__
 
@@ -52,14 +79,27 @@ class RejectionCode(str, Enum):
 
 @dataclass(frozen=True, slots=True)
 class Rejection:
-    """A plan the checks refused: which check, for which vehicle, where in the plan, and why."""
+    """A plan the checks refused: which check, for which vehicle, where in the plan, and why.
+
+    The vehicle keeps the plan it had. ``str(rejection)`` reads ``code: vehicle V, leg I (segment S):
+    message``, as in a run's report.
+
+    Attributes:
+        code: The check that failed.
+        vehicle_id: The plan's vehicle.
+        leg_index: The index in ``plan.legs`` (0-based) of the leg that failed the check, or ``None``
+            when the check is about the plan as a whole.
+        segment: That leg's segment id, or ``None``.
+        message: What is wrong, in words, naming the values concerned.
+        plan: The plan refused (``None`` only in rejections made by hand).
+    """
 
     code: RejectionCode
     vehicle_id: int
     leg_index: int | None
     segment: int | None
     message: str
-    plan: FleetPlan | None = field(default=None, compare=False, repr=False)  # the plan refused
+    plan: FleetPlan | None = field(default=None, compare=False, repr=False)
 
     def __str__(self) -> str:
         where = f"vehicle {self.vehicle_id}"

@@ -97,8 +97,9 @@ class FleetPlan:
     Attributes:
         vehicle_id: Whose plan it is (a response may carry plans for other vehicles than the one asked
             about, to move them out of the way, say).
-        legs: The :class:`FleetLeg` s, the one the vehicle is on first; the fixed ones come first
-            (``fixed_legs``), then the planned ones.
+        legs: The [`FleetLeg`][fleetsim.planning.protocol.FleetLeg]s in driving order, the one the
+            vehicle is on first; the fixed ones come first (``fixed_legs``), then the planned ones. Never
+            empty in a plan the harness accepts (check code ``empty-plan``).
     """
 
     vehicle_id: int
@@ -124,7 +125,12 @@ class FleetPlan:
 
     @property
     def fixed_legs(self) -> tuple[FleetLeg, ...]:
-        """The committed prefix (for a well-formed plan; see the ``fixed-not-contiguous`` check)."""
+        """The legs before the first planned one: the committed prefix the vehicle may drive.
+
+        For a well-formed plan these are all its fixed legs (check code ``fixed-not-contiguous``). A
+        planner's new plan for a vehicle must start with the vehicle's current ``fixed_legs`` unchanged
+        (check code ``fixed-legs-changed``).
+        """
         return self.legs[: self._fixed_count]
 
     def __str__(self) -> str:
@@ -138,6 +144,9 @@ class RouteError(FleetsimError):
         vehicle_id: The vehicle it is about, or ``None`` for the whole request (when raised).
         message: What went wrong, in words (shown in the run's report and the summary's route errors).
     """
+
+    vehicle_id: int | None
+    message: str
 
     def __init__(self, vehicle_id: int | None, message: str) -> None:
         self.vehicle_id = vehicle_id
@@ -163,12 +172,55 @@ Response = Sequence[ResponseItem]
 
 @runtime_checkable
 class Planner(Protocol):
-    """A fleet route planner (the thesis's ``RoutePlannerInterface``). A fresh instance serves one run."""
+    """A fleet route planner (the thesis's ``RoutePlannerInterface``). A fresh instance serves one run.
+
+    Any object with these two methods will do; no base class is needed. On each planning round the
+    harness asks about each vehicle with tasks left, in ascending id: ``plan_routes`` while the head of its
+    queue is not routed (no accepted plan marks its goal), else ``fix_legs``. Each response is checked and
+    applied before the next call, so a later call's ``fleet`` holds what an earlier one changed.
+
+    A response is a sequence of [`FleetPlan`][fleetsim.planning.protocol.FleetPlan]s and
+    [`RouteError`][fleetsim.planning.protocol.RouteError]s, at most one plan per vehicle (check code
+    ``duplicate-plan``). A plan replaces its vehicle's plan unless a check rejects it
+    ([`Rejection`][fleetsim.planning.checks.Rejection]), in which case the vehicle keeps its old one. An
+    empty list changes nothing.
+    """
 
     def plan_routes(self, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
-        """The vehicle's head task has not been routed yet: return a plan marking its goal leg."""
+        """The vehicle's head task has not been routed yet: return a plan marking its goal leg.
+
+        Args:
+            task: The head of the vehicle's task queue; ``task.vehicle_id`` is the vehicle asked about.
+            fleet: The whole fleet now, read-only: the vehicle's plan in force is
+                ``fleet.plans[task.vehicle_id]``, and a new plan must start with its ``fixed_legs``.
+            layout: The map: segments, their connections with joint kinds, and conflicts.
+
+        Returns:
+            The vehicle's new plan, with ``goal_for_task=task.id`` on the leg that reaches
+                ``task.goal_segment`` (later tasks of its queue may be marked after it, in queue order);
+                plans for other vehicles may come with it. A ``RouteError`` for the vehicle when no route
+                exists; an empty list to change nothing (the harness asks again next round).
+
+        Raises:
+            RouteError: The request cannot be answered at all: nothing of it is applied.
+        """
         ...
 
     def fix_legs(self, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
-        """The task is routed: return the vehicle's plan with more legs fixed (or unchanged)."""
+        """The task is routed: return the vehicle's plan with more legs fixed (or unchanged).
+
+        The vehicle drives only its fixed legs, so it waits at the end of them until this fixes more.
+
+        Args:
+            task: The head of the vehicle's task queue (routed: its goal leg is in the plan in force).
+            fleet: The whole fleet now, read-only.
+            layout: The map.
+
+        Returns:
+            The vehicle's plan with a longer fixed prefix (or a new route, keeping the fixed legs and
+                the goal marker), plans for other vehicles, or an empty list to change nothing.
+
+        Raises:
+            RouteError: The request cannot be answered at all: nothing of it is applied.
+        """
         ...

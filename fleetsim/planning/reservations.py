@@ -27,18 +27,29 @@ __all__ = ["CollisionAlert", "ConflictTable", "ReservationIndex", "find_alerts",
 
 @dataclass(frozen=True, slots=True)
 class CollisionAlert:
-    """A possible collision: a segment reserved by one vehicle's fixed leg and also by another vehicle."""
+    """A possible collision: a segment reserved by one vehicle's fixed leg and also by another vehicle.
+
+    Alerts reject no plan, but a scenario fails on them unless it expects them (``expect.collisions``).
+
+    Attributes:
+        segment: The segment's id.
+        primary: Ids of the vehicles with a fixed leg on the segment, ascending.
+        secondary: Ids of the other vehicles with a fixed leg on a segment that conflicts with it
+            ([`Layout.conflicts`][fleetsim.layout.layout.Layout.conflicts]), ascending.
+    """
 
     segment: int
-    primary: tuple[int, ...]  # vehicles with a fixed leg on the segment
-    secondary: tuple[int, ...]  # other vehicles whose fixed legs conflict with it
+    primary: tuple[int, ...]
+    secondary: tuple[int, ...]
 
     @property
     def vehicles(self) -> tuple[int, ...]:
+        """Every vehicle involved, primary and secondary, by ascending id."""
         return tuple(sorted({*self.primary, *self.secondary}))
 
     def text(self) -> str:
-        """The thesis's alert text."""
+        """The thesis's alert text: ``COLLISION ALERT: Possible collision detected on segment '11'``,
+        then the primary and the secondary holders, one ``- vehicle_N`` line each."""
         lines = [
             f"COLLISION ALERT: Possible collision detected on segment '{self.segment}'",
             "Primary reservations",

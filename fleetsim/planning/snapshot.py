@@ -37,9 +37,11 @@ class VehicleState(NamedTuple):
         y: Metres, map frame.
         heading: Radians counter-clockwise from +x: where the nose points (the travel direction plus π
             when backing).
-        type: Its :class:`~fleetsim.scenario.VehicleType` (``type.turn_capability``, ``type.max_speed``, ...).
-        disturbed: ``STOPPED`` or ``SLOWED`` while a disturbance holds it, ``None`` while it drives as
-            planned (how long a disturbance lasts is not told, as a fleet manager would not know).
+        type: Its [`VehicleType`][fleetsim.scenario.VehicleType] (``type.turn_capability``,
+            ``type.max_speed``, ...).
+        disturbed: [`Disturbed`][fleetsim.enums.Disturbed] ``STOPPED`` or ``SLOWED`` while a disturbance
+            holds it, ``None`` while it drives as planned (how long a disturbance lasts is not told, as a
+            fleet manager would not know).
     """
 
     id: int
@@ -64,10 +66,10 @@ class FleetSnapshot:
 
     Attributes:
         time: Simulated seconds since the start.
-        vehicles: Every vehicle's :class:`VehicleState`, by id.
+        vehicles: Every vehicle's [`VehicleState`][fleetsim.planning.snapshot.VehicleState], by id.
         plans: Every vehicle's plan in force, by id. At the start a vehicle's plan is its start leg alone,
             fixed (the leg it stands on is always the plan's first, fixed leg).
-        tasks: Every vehicle's queue of :class:`~fleetsim.scenario.Task`, head first, by id (an empty
+        tasks: Every vehicle's queue of [`Task`][fleetsim.scenario.Task]s, head first, by id (an empty
             tuple: no tasks left).
         routed: Ids of queued tasks whose goal an accepted plan already marks (``goal_for_task``): the
             harness then asks ``fix_legs`` for them, else ``plan_routes``.

@@ -212,9 +212,9 @@ def run_scenario(
     """Simulate ``scenario`` with ``planner`` (a fresh instance) and judge the run against its ``expect``.
 
     A planner with a ``close()`` method (a planner process, say) is closed when the run ends, however it ends.
-    ``stop``: the active :class:`StopSignals`; once it has received a signal, the run ends at the end of
+    ``stop``: the active ``StopSignals``; once it has received a signal, the run ends at the end of
     the step (``ended: "interrupted"``). ``trace_file``: where to write the trace while the run goes
-    (:class:`TraceFile`); it holds every step written, however the run ends.
+    (``TraceFile``); it holds every step written, however the run ends.
     """
     sink = TraceFile(trace_file) if trace_file is not None else None
     try:

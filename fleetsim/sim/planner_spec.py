@@ -72,9 +72,13 @@ class PlannerFactory:
 
 
 def load_planner_factory(spec: str, *, call_timeout: float | None = 10.0) -> PlannerFactory:
-    """The factory that ``spec`` names: ``module:attr`` (attr possibly dotted; see the module docstring),
-    or ``exec:COMMAND``, a planner process per run speaking the JSON-lines protocol (whose per-call
-    timeout is ``call_timeout``)."""
+    """The factory that ``spec`` names: ``module:attr`` (a planner class or zero-argument factory; attr
+    possibly dotted), or ``exec:COMMAND``, a planner process per run speaking the JSON-lines protocol
+    (whose per-call timeout is ``call_timeout`` seconds).
+
+    The factory makes a fresh planner for every run; the current working directory is importable.
+    Every mistake in ``spec`` is a [`PlannerSpecError`][fleetsim.sim.planner_spec.PlannerSpecError].
+    """
     if isinstance(spec, str) and spec.startswith(EXEC_PREFIX):
         return _exec_factory(spec, call_timeout)
     module_name, attr_path = _split(spec)

@@ -56,7 +56,17 @@ MOMENTLESS = frozenset({"hash-mismatch", "hash-missing", "load-error"})
 
 @dataclass(frozen=True, slots=True)
 class Failure:
-    """One reason a run failed its scenario."""
+    """One reason a run failed its scenario.
+
+    Attributes:
+        kind: What went wrong: ``rejection``, ``collision``, ``timeout``, ``deadlock``,
+            ``planner-error``, ``interrupted``, ``expectation`` (something the scenario's ``expect``
+            required did not happen); when hashes are checked, ``hash-mismatch``, ``hash-missing`` or
+            ``nondeterministic``; ``load-error`` for a scenario that did not load.
+        time: Simulated seconds when it happened (the run's end for what is judged at the end).
+        message: The failure in words, as the report shows it.
+        details: More about it, by kind (a rejection's code, vehicle and leg, say), as in the JSON form.
+    """
 
     kind: str
     time: float
@@ -69,6 +79,14 @@ class Failure:
 
 @dataclass(frozen=True, slots=True)
 class RejectionEvent:
+    """A plan the checks rejected during a run.
+
+    Attributes:
+        time: Simulated seconds: the step it was rejected at.
+        rejection: The [`Rejection`][fleetsim.planning.checks.Rejection]: its code, vehicle, leg and
+            message, and the plan refused.
+    """
+
     time: float
     rejection: Rejection
 
@@ -101,6 +119,14 @@ def plan_legs(plan: FleetPlan) -> list[dict[str, Any]]:
 
 @dataclass(frozen=True, slots=True)
 class AlertEvent:
+    """A collision alert raised during a run.
+
+    Attributes:
+        time: Simulated seconds: the step it was raised at.
+        alert: The [`CollisionAlert`][fleetsim.planning.reservations.CollisionAlert]: the segment and
+            the vehicles whose reservations overlap on it.
+    """
+
     time: float
     alert: CollisionAlert
 
@@ -136,16 +162,29 @@ class DeadlockReport:
 
 @dataclass(frozen=True, slots=True)
 class Metrics:
-    makespan: float | None  # sim time when the last task was completed
-    distance: Mapping[int, float]  # metres driven per vehicle
-    waiting_time: Mapping[int, float]  # seconds standing still with tasks pending, per vehicle
+    """What a run measured, for comparing planners and runs.
+
+    Attributes:
+        makespan: Simulated seconds when the last task was completed, or ``None`` when not all were.
+        distance: Metres driven, by vehicle id.
+        waiting_time: Seconds each vehicle stood still with tasks pending, by vehicle id.
+        planner_calls: How many times the planner was called.
+        planner_wall_time: Wall-clock seconds spent inside the planner (never in the trace hash).
+        wall_time: Wall-clock seconds for the whole run.
+        sim_time: Seconds simulated.
+    """
+
+    makespan: float | None
+    distance: Mapping[int, float]
+    waiting_time: Mapping[int, float]
     planner_calls: int
-    planner_wall_time: float  # seconds inside the planner (wall clock; never in the hash)
-    wall_time: float  # seconds for the whole run (wall clock)
-    sim_time: float  # seconds simulated
+    planner_wall_time: float
+    wall_time: float
+    sim_time: float
 
     @property
     def realtime_factor(self) -> float | None:
+        """Simulated seconds per wall-clock second, or ``None`` for a run that took no measurable time."""
         return None if self.wall_time <= 0 else self.sim_time / self.wall_time
 
     def to_dict(self) -> dict[str, Any]:
@@ -164,7 +203,33 @@ class Metrics:
 
 @dataclass(frozen=True, slots=True)
 class RunResult:
-    """Everything a run produced; ``to_dict`` is the JSON object of ``fleetsim run --json``."""
+    """Everything a run produced; ``to_dict`` is the JSON object of ``fleetsim run --json``.
+
+    Attributes:
+        scenario: The scenario's name.
+        planner: The planner's name: the spec it was given by, else its class's name.
+        status: ``"passed"`` when the run met its scenario's ``expect``, else ``"failed"``.
+        failures: Why it failed, in a fixed order; empty when it passed.
+        trace_hash: The hex digest of the run's trace: equal for runs that behaved the same.
+        sim_time: Seconds simulated.
+        steps: Simulation steps run (``sim_time`` / ``time_step``).
+        tasks_total: How many tasks the scenario has.
+        tasks_completed: How many of them were completed.
+        pending: The tasks not completed, in task order.
+        rejections: Every plan rejected, in order ([`RejectionEvent`][fleetsim.sim.result.RejectionEvent]).
+        collisions: Every collision alert, in order ([`AlertEvent`][fleetsim.sim.result.AlertEvent]).
+        route_errors: Every route error a planner answered, as ``{time, vehicle, message}``.
+        ended: How the run ended: ``completed``, ``time-limit``, ``deadlock``, ``rejection``,
+            ``collision`` (a ``stop_on`` event), ``planner-error`` or ``interrupted``.
+        deadlock: The deadlock that ended the run (when, who waits for whom), or ``None``.
+        metrics: What the run measured ([`Metrics`][fleetsim.sim.result.Metrics]).
+        diagnosis: Why tasks were still pending at a deadlock or the time limit, or ``None``.
+        checkpoints: ``(step, digest so far)`` every 100 steps, for finding where two runs diverge.
+        disturbances: The disturbances that happened, in the order they began.
+        artifacts: Files the run left (recording, picture, trace), by kind; empty unless a caller
+            recorded them.
+        trace: The trace itself (every step's lines), unless the run was asked not to keep it.
+    """
 
     scenario: str
     planner: str
@@ -190,6 +255,7 @@ class RunResult:
 
     @property
     def passed(self) -> bool:
+        """Whether ``status`` is ``"passed"``."""
         return self.status == "passed"
 
     def to_dict(self) -> dict[str, Any]:
