@@ -13,7 +13,7 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from fleetsim.enums import ConflictModel, Direction, JointKind, Progress, Shape, Traverse, TurnCapability
+    from fleetsim.enums import ConflictModel, Direction, Disturbed, JointKind, Progress, Shape, Traverse, TurnCapability
     from fleetsim.errors import (
         FleetsimError,
         LayoutError,
@@ -68,6 +68,7 @@ __all__ = [
     "ConflictModel",
     "Connection",
     "Direction",
+    "Disturbed",
     "Divergence",
     "Expectations",
     "Failure",
@@ -125,6 +126,7 @@ _HOMES: dict[str, str] = {
     "Connection": "fleetsim.layout",
     "DEFAULT_VEHICLE_TYPE": "fleetsim.scenario",
     "Direction": "fleetsim.enums",
+    "Disturbed": "fleetsim.enums",
     "Divergence": "fleetsim.sim",
     "Expectations": "fleetsim.scenario",
     "Failure": "fleetsim.sim",
