@@ -6,7 +6,8 @@ that holds a copy of the repository's `scenario_suites/`, `examples/` and `schem
 - a line `--8<-- "PATH"` in a block (pymdownx.snippets) stands for the repository's file at PATH;
 - a block with a title (```` ```python title="my_planner.py" ````, Material's code-block title) is
   written to that path; Python files are imported and suites loaded completely once the page's files
-  are all written;
+  are all written — unless a console command on the page names the suite, which then shows what
+  loading it gives (a broken suite's error, say);
 - an untitled ```` ```python ```` block is executed (the page's blocks share one namespace, as in a
   tutorial read top to bottom), ```` ```pycon ```` blocks are run as doctests;
 - an untitled ```` ```yaml ```` block is loaded as what it shows: a suite (a mapping with `scenarios`;
@@ -121,6 +122,7 @@ class PageRun:
         self.suites: list[tuple[Block, Path]] = []
         self.modules: list[tuple[Block, Path]] = []
         self.sweeps: list[Path] = []
+        self.commands: list[str] = []
         for name in COPIED:
             shutil.copytree(REPO / name, work / name)
 
@@ -136,7 +138,8 @@ class PageRun:
             for block, path in self.modules:
                 self.import_module(block, path)
             for block, path in self.suites:
-                load_suite_fully(block, path, self.page)
+                if not any(block.title in command for command in self.commands):
+                    load_suite_fully(block, path, self.page)
             for path in self.sweeps:
                 load_sweep(path)
         finally:
@@ -172,6 +175,7 @@ class PageRun:
             return 1
         if block.lang == "console":
             for command, expected in commands(block):
+                self.commands.append(command)
                 self.check_command(block, command, expected)
             return 1
         return 0

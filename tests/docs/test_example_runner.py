@@ -76,3 +76,13 @@ def test_a_session_whose_shown_result_drifted_fails(tmp_path: Path) -> None:
     page.write_text("```pycon\n>>> 1 + 1\n3\n```\n")
     with pytest.raises(AssertionError, match="doctest failed"):
         PageRun(page, tmp_path / "work").run()
+
+
+def test_a_broken_suite_is_checked_by_the_command_that_shows_its_error(tmp_path: Path) -> None:
+    page = tmp_path / "page.md"
+    suite = '```yaml title="bad.fleetsim.yaml"\nfleetsim: 1\nname: bad\nscenarios:\n  - {name: c, dir: nowhere}\n```\n'
+    page.write_text(suite)
+    with pytest.raises(Exception, match="nowhere"):  # loaded, and it does not load
+        PageRun(page, tmp_path / "alone").run()
+    page.write_text(suite + "```console\n$ fleetsim validate bad.fleetsim.yaml\n...\n```\n")
+    assert PageRun(page, tmp_path / "shown").run() == 2
