@@ -242,10 +242,14 @@ class PageRun:
 def load_suite_fully(block: Block, path: Path, page: Path) -> None:
     """Load a suite and every scenario in it, as `fleetsim validate` does."""
     from fleetsim import load_scenario, load_suite
+    from fleetsim.gating.generated import check_generate_block
 
     suite = load_suite(path)
     for spec in suite.scenarios:
-        load_scenario(spec, suite)
+        if spec.generate is None:
+            load_scenario(spec, suite)
+        else:  # a generate entry has no files of its own: its settings are checked, as validate does
+            check_generate_block(spec, suite)
     assert suite.scenarios, f"{block.where(page)}: the suite has no scenarios"
 
 
