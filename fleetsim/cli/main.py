@@ -150,7 +150,10 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     render.add_argument(
-        "map", nargs="?", metavar="MAP", help="a Tiled map (.json, .tmj or .tmx); leave out with --trace"
+        "map",
+        nargs="?",
+        metavar="MAP",
+        help="a Tiled map (.json, .tmj, .tmx), LIF file or RMF building map; leave out with --trace",
     )
     render.add_argument("-o", "--output", required=True, metavar="OUT.svg", help="where to write the picture")
     render.add_argument(

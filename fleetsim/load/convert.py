@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 from fleetsim.errors import Location, MapError
@@ -23,6 +24,9 @@ def convert_map(
         msg = "the output must end in .lif.json (LIF 1.0) or .json, .tmj, .tmx (Tiled)"
         raise MapError(f"{msg}, not {target.suffix or 'no suffix'!r}", Location(target))
     site = load_site_map(source, options)
+    if name.endswith(".lif.json") and site.format != "lif" and (options.layout or options.robot_type):
+        # From a Tiled or RMF map, --layout and --robot-type name the LIF written, not a part to read.
+        site = load_site_map(source, replace(options, layout=None, robot_type=None))
     if name.endswith(".lif.json"):
         layout_id = options.layout or source.name.split(".")[0] or "layout"
         written = write_lif(

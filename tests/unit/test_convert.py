@@ -264,3 +264,19 @@ def test_segments_keep_their_names_through_a_tiled_file(tmp_path: Path) -> None:
     )
     for suffix in (".json", ".tmx"):
         assert load_site_map(write_map(tmp_path / f"m{suffix}", [segment])).segments[0].names == ('a "quoted" name',)
+
+
+def test_naming_the_lif_written_from_a_tiled_map_is_not_an_ignored_option(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    tiled = tmp_path / "hall.json"
+    convert_map(HALL, tiled, TUG)
+    out = tmp_path / "hall.lif.json"
+    assert main(["convert", str(tiled), str(out), "--robot-type", "Acme.Tug", "--layout", "ground"]) == 0
+    assert "option-ignored" not in capsys.readouterr().out
+    document = json.loads(out.read_text(encoding="utf-8"))
+    assert document["layouts"][0]["layoutId"] == "ground"
+    assert load_site_map(out, MapOptions(robot_type="Acme.Tug")).format == "lif"
+    # Read from a Tiled map into another Tiled map, the options still do not apply, and say so.
+    assert main(["convert", str(tiled), str(tmp_path / "again.json"), "--robot-type", "Acme.Tug"]) == 0
+    assert "warning option-ignored: map option 'robot_type'" in capsys.readouterr().out
