@@ -50,6 +50,7 @@ from fleetsim.layout.segment import Segment
 from fleetsim.planning.protocol import FleetPlan
 from fleetsim.planning.reservations import CollisionAlert
 from fleetsim.recording import messages as m
+from fleetsim.recording.cdr import pack_clock
 from fleetsim.recording.colours import vehicle_colours
 from fleetsim.recording.replay import Frame, replay
 from fleetsim.recording.rviz import framed_view
@@ -191,38 +192,39 @@ class _Scene:
         view = framed_view(scenario)
         self.letter = view.letter
         self.top_left = (view.min_x, view.max_y + 2.0 * self.letter)
-        self._points: dict[tuple[int, float], list[Any]] = {}
+        self._points: dict[tuple[int, float], m.Points] = {}
         self._shown: dict[int, FleetPlan] = {}  # the plan each vehicle's markers show
         self._sent: dict[tuple[str, int], tuple[tuple[int, Traverse], ...]] = {}  # (namespace, vehicle) -> legs drawn
-        self._paths: dict[tuple[int, Traverse, float], list[Any]] = {}
+        # (segment, traverse, z) -> the leg's points in driving order, and the same without the first
+        self._paths: dict[tuple[int, Traverse, float], tuple[m.Points, m.Points]] = {}
 
-    def points(self, segments: Iterable[int], z: float) -> list[Any]:
-        """LINE_LIST points of ``segments`` at height ``z`` (each segment's made once)."""
-        pairs: list[Any] = []
+    def points(self, segments: Iterable[int], z: float) -> m.Points:
+        """LINE_LIST points of ``segments`` at height ``z`` (each segment's packed once)."""
+        parts: list[m.Points] = []
         for segment in segments:
             cached = self._points.get((segment, z))
             if cached is None:
                 cached = self._points[(segment, z)] = m.points(self.scenario.layout.segments[segment].waypoints, z)
-            pairs += cached
-        return pairs
+            parts.append(cached)
+        return m.Points.joined(parts)
 
-    def path(self, legs: Iterable[tuple[int, Traverse]], z: float) -> list[Any]:
+    def path(self, legs: Iterable[tuple[int, Traverse]], z: float) -> m.Points:
         """LINE_STRIP points along consecutive legs in driving order (each joint once)."""
-        path: list[Any] = []
+        parts: list[m.Points] = []
         for segment, traverse in legs:
             cached = self._paths.get((segment, traverse, z))
             if cached is None:
                 waypoints = self.scenario.layout.segments[segment].waypoints
-                ordered = waypoints if traverse is Traverse.FORWARD else waypoints[::-1]
-                cached = self._paths[(segment, traverse, z)] = m.path_points(ordered, z)
-            path += cached[1:] if path else cached
-        return path
+                ordered = m.path_points(waypoints if traverse is Traverse.FORWARD else waypoints[::-1], z)
+                cached = self._paths[(segment, traverse, z)] = (ordered, ordered.rest())
+            parts.append(cached[1] if parts else cached[0])
+        return m.Points.joined(parts)
 
-    def map_markers(self, time: m.Stamp) -> Any:
+    def map_markers(self, time: m.Stamp) -> m.MarkerArray:
         pairs = self.points(sorted(self.scenario.layout.segments), 0.0)
         return m.marker_array([m.line_list(time, "segments", 0, pairs, _MAP_WIDTH, _MAP_GREY)])
 
-    def labels(self, time: m.Stamp) -> Any:
+    def labels(self, time: m.Stamp) -> m.MarkerArray:
         markers = []
         for vehicle in sorted(self.scenario.vehicles, key=lambda v: v.id):
             at = (0.0, 0.0, vehicle.type.height + 0.4)
@@ -234,7 +236,7 @@ class _Scene:
             )
         return m.marker_array(markers)
 
-    def plans(self, time: m.Stamp, plans: Mapping[int, FleetPlan]) -> Any | None:
+    def plans(self, time: m.Stamp, plans: Mapping[int, FleetPlan]) -> m.MarkerArray | None:
         """Markers for the plans that changed since the last call (``None``: none did).
 
         Each vehicle has two markers, its fixed legs and its planned legs; only a marker whose segments
@@ -259,7 +261,7 @@ class _Scene:
                     markers.append(m.delete(time, namespace, vehicle_id))
         return m.marker_array(markers) if markers else None
 
-    def alerts(self, time: m.Stamp, alerts: Sequence[CollisionAlert]) -> Any:
+    def alerts(self, time: m.Stamp, alerts: Sequence[CollisionAlert]) -> m.MarkerArray:
         """The alert segments in orange and a short label each (``segment 7: 1 ⟂ 2``) beside its middle.
 
         Labels are placed one by one, each at the first spot near its segment's middle where it does not
@@ -293,7 +295,7 @@ class _Scene:
         placed.append(box)
         return (box[0] + box[2]) / 2, (box[1] + box[3]) / 2
 
-    def stuck(self, time: m.Stamp, poses: Mapping[int, Any], stuck: Mapping[str, Any]) -> Any:
+    def stuck(self, time: m.Stamp, poses: Mapping[int, Any], stuck: Mapping[str, Any]) -> m.MarkerArray:
         """Who waits for whom at the end of a stuck run (the failure's details, as in result.json)."""
         markers = [m.delete_all(time, "")]
         contested = sorted(
@@ -337,7 +339,7 @@ class _Scene:
             )
         return m.marker_array(markers)
 
-    def disturbed(self, time: m.Stamp, disturbed: Mapping[int, str]) -> Any:
+    def disturbed(self, time: m.Stamp, disturbed: Mapping[int, str]) -> m.MarkerArray:
         """A magenta outline round each disturbed vehicle and STOP/SLOW above it, locked to its frame."""
         markers = [m.delete_all(time, "")]
         types = {v.id: v.type for v in self.scenario.vehicles}
@@ -357,7 +359,7 @@ class _Scene:
             )
         return m.marker_array(markers)
 
-    def sim_time(self, time: m.Stamp, seconds: float) -> Any:
+    def sim_time(self, time: m.Stamp, seconds: float) -> m.MarkerArray:
         x, y = self.top_left
         return m.marker_array(
             [m.text_marker(time, "map", "sim_time", 0, f"t = {seconds:.2f} s", (x, y, 0.0), self.letter, _WHITE)]
@@ -436,7 +438,7 @@ def _write_frames(
 def _write_frame(bag: _Bag, scene: _Scene, frame: Frame, *, first: bool, tick: bool, alerts_changed: bool) -> None:
     time_ns = round(frame.time * 1e9)
     time = m.stamp(time_ns)
-    bag.write("/clock", time_ns, m.clock(time))
+    bag.write_bytes("/clock", time_ns, pack_clock(time))
     if first:
         bag.write("/robot_description", time_ns, m.string(fleet_urdf(scene.scenario)))
         bag.write("/tf_static", time_ns, m.tf_message([m.transform(time, "map", "fleet", 0.0, 0.0, 0.0)]))
