@@ -124,6 +124,7 @@ def replay(scenario: Scenario, lines: Iterable[str]) -> Iterator[Frame]:
     header = _header(next(iterator, ""), scenario)
     dt = header["time_step_us"] / 1e6
     layout = scenario.layout
+    segments = layout.segments
     poses = {}
     for vehicle in sorted(scenario.vehicles, key=lambda v: v.id):
         state = initial_state(vehicle, layout)
@@ -152,13 +153,18 @@ def replay(scenario: Scenario, lines: Iterable[str]) -> Iterator[Frame]:
         moved = []
         for record in vehicles:
             vehicle_id = record[0]
-            if vehicle_id not in poses or record[1] not in layout.segments:
+            if vehicle_id not in poses or record[1] not in segments:
                 msg = f"trace line {number} places vehicle {vehicle_id} on segment {record[1]}, which scenario {scenario.name!r} does not have"
                 raise TraceError(msg)
             poses[vehicle_id] = pose = _pose(record)
             moved.append(vehicle_id)
-            passed = _passed(plans[vehicle_id], pose)
-            if passed is not plans[vehicle_id]:
+            plan = plans[vehicle_id]
+            # Most vehicles are on their plan's first leg, which leaves the plan as it is.
+            first = plan.legs[0] if plan.legs else None
+            if first is not None and (first.segment, first.traverse, first.progress) == pose[:3]:
+                continue
+            passed = _passed(plan, pose)
+            if passed is not plan:
                 plans[vehicle_id] = passed
                 trimmed = True
         # An alert in force was reported (an "alert" event) when it appeared, so before the first report
