@@ -148,15 +148,13 @@ class FleetTransforms:
         self.children = tuple(children)
         fields = ["<4sI"]  # encapsulation header (CDR little endian), then the sequence length
         offset = 4  # CDR aligns relative to the end of the encapsulation header
+        # Per frame, the bytes after the stamp that never change: both strings and the padding after each.
+        self._names: list[bytes] = []
         for child in self.children:
-            parts, offset = _transform_layout(offset, parent, child)
+            parts, names, offset = _transform_layout(offset, parent, child)
             fields += parts
+            self._names.append(names)
         self._struct = struct.Struct("".join(fields))
-        # Per frame, the fields after the stamp that never change: both strings with their lengths.
-        self._heads = []
-        for child in self.children:
-            parent_bytes, child_bytes = parent.encode() + b"\0", child.encode() + b"\0"
-            self._heads.append((len(parent_bytes), parent_bytes, len(child_bytes), child_bytes))
         sample = [(float(k), float(-k), 0.25 * k) for k in range(len(self.children))]
         self._fast = bool(self.children) and self._pack(1_234_567_890_123, sample) == self._slow(
             1_234_567_890_123, sample
@@ -166,8 +164,8 @@ class FleetTransforms:
         seconds, nanoseconds = divmod(time_ns, 1_000_000_000)
         values: list[Any] = [b"\x00\x01\x00\x00", len(self.children)]
         sin, cos = math.sin, math.cos
-        for head, (x, y, heading) in zip(self._heads, poses, strict=True):
-            values += (seconds, nanoseconds, *head, x, y, 0.0, 0.0, 0.0, sin(heading / 2.0), cos(heading / 2.0))
+        for names, (x, y, heading) in zip(self._names, poses, strict=True):
+            values += (seconds, nanoseconds, names, x, y, 0.0, 0.0, 0.0, sin(heading / 2.0), cos(heading / 2.0))
         return self._struct.pack(*values)
 
     def _slow(self, time_ns: int, poses: Sequence[tuple[float, float, float]]) -> bytes:
@@ -186,29 +184,28 @@ class FleetTransforms:
         return self._pack(time_ns, poses) if self._fast else self._slow(time_ns, poses)
 
 
-def _transform_layout(offset: int, parent: str, child: str) -> tuple[list[str], int]:
-    """``struct`` fields of one TransformStamped starting at CDR ``offset``, and the offset after it."""
+def _transform_layout(offset: int, parent: str, child: str) -> tuple[list[str], bytes, int]:
+    """``struct`` fields of one TransformStamped starting at CDR ``offset``, the bytes of its frame names
+    (from the end of the stamp to the translation: each string's length, text and NUL, padded), and the
+    offset after it."""
     parts = []
-
-    def align(size: int) -> None:
-        nonlocal offset
-        pad = -offset % size
-        if pad:
-            parts.append(f"{pad}x")
-            offset += pad
-
-    align(4)
-    parts.append("iI")  # stamp
-    offset += 8
+    pad = -offset % 4
+    if pad:
+        parts.append(f"{pad}x")
+        offset += pad
+    offset += 8  # stamp
+    names = b""
     for text in (parent, child):
-        align(4)
-        length = len(text.encode()) + 1
-        parts.append(f"I{length}s")
-        offset += 4 + length
-    align(8)
-    parts.append("7d")  # translation x y z, rotation x y z w
+        names += bytes(-offset % 4)
+        offset += -offset % 4
+        encoded = text.encode() + b"\0"
+        names += struct.pack("<I", len(encoded)) + encoded
+        offset += 4 + len(encoded)
+    names += bytes(-offset % 8)
+    offset += -offset % 8
+    parts.append(f"iI{len(names)}s7d")  # stamp, names, translation x y z, rotation x y z w
     offset += 56
-    return parts, offset
+    return parts, names, offset
 
 
 def _marker(
