@@ -236,14 +236,16 @@ class _Scene:
             )
         return m.marker_array(markers)
 
-    def plans(self, time: m.Stamp, plans: Mapping[int, FleetPlan]) -> m.MarkerArray | None:
+    def plans(self, time: m.Stamp, plans: Mapping[int, FleetPlan], replanned: Iterable[int]) -> m.MarkerArray | None:
         """Markers for the plans that changed since the last call (``None``: none did).
 
-        Each vehicle has two markers, its fixed legs and its planned legs; only a marker whose segments
-        changed is sent again (passing a leg changes the fixed ones only), an emptied one is deleted.
+        ``replanned``: the vehicles whose plans may have changed since the last call, in id order (every
+        vehicle at the first call). Each vehicle has two markers, its fixed legs and its planned legs;
+        only a marker whose segments changed is sent again (passing a leg changes the fixed ones only),
+        an emptied one is deleted.
         """
         markers = [] if self._shown else [m.delete_all(time, "")]
-        for vehicle_id in self.ids:
+        for vehicle_id in replanned:
             plan = plans[vehicle_id]
             if self._shown.get(vehicle_id) is plan:
                 continue
@@ -449,7 +451,7 @@ def _write_frame(bag: _Bag, scene: _Scene, frame: Frame, *, first: bool, tick: b
         planar = [poses[vehicle_id][3:6] for vehicle_id in scene.ids]  # Pose fields 3-5: (x, y, heading)
         bag.write_bytes("/tf", time_ns, scene.transforms.serialise(time_ns, planar))
     if first or frame.plans_changed:
-        plans = scene.plans(time, frame.plans)
+        plans = scene.plans(time, frame.plans, scene.ids if first else frame.replanned)
         if plans is not None:
             bag.write("/fleetsim/plans", time_ns, plans)
     if first or alerts_changed:

@@ -59,10 +59,15 @@ class Frame:
     alerts: tuple[CollisionAlert, ...]  # in force over these plans
     events: tuple[tuple[Any, ...], ...]
     moved: tuple[int, ...]  # vehicles whose pose changed in this step
-    plans_changed: bool  # a plan was accepted or a vehicle passed a leg in this step
+    replanned: tuple[int, ...]  # vehicles whose plan was accepted or passed a leg in this step, in id order
     # Vehicles a disturbance stops or slows in this step, by id: "stop" or "slow" (the trace's
     # "disturb"/"resume" events; a disturbance that begins at t and ends at t' marks the frames in (t, t']).
     disturbed: Mapping[int, str] = field(default_factory=lambda: MappingProxyType({}))
+
+    @property
+    def plans_changed(self) -> bool:
+        """A plan was accepted or a vehicle passed a leg in this step."""
+        return bool(self.replanned)
 
 
 _new = tuple.__new__
@@ -141,7 +146,7 @@ def replay(scenario: Scenario, lines: Iterable[str]) -> Iterator[Frame]:
         except (json.JSONDecodeError, ValueError, TypeError):
             msg = f"trace line {number}={line[:80]!r} is not a step record [step, vehicles, plans, events]"
             raise TraceError(msg) from None
-        changed = trimmed = False
+        replanned = set()
         for record in accepted:
             plan = _plan(record)
             unknown = [leg.segment for leg in plan.legs if leg.segment not in layout.segments]
@@ -150,6 +155,7 @@ def replay(scenario: Scenario, lines: Iterable[str]) -> Iterator[Frame]:
                 msg = f"trace line {number} names {what}, which scenario {scenario.name!r} does not have"
                 raise TraceError(msg)
             plans[plan.vehicle_id] = plan
+            replanned.add(plan.vehicle_id)
         moved = []
         for record in vehicles:
             vehicle_id = record[0]
@@ -166,14 +172,13 @@ def replay(scenario: Scenario, lines: Iterable[str]) -> Iterator[Frame]:
             passed = _passed(plan, pose)
             if passed is not plan:
                 plans[vehicle_id] = passed
-                trimmed = True
+                replanned.add(vehicle_id)
         # An alert in force was reported (an "alert" event) when it appeared, so before the first report
         # there is nothing to compute; and legs driven past reserve nothing more, so dropping them can
         # end an alert but never raise one.
         reported = reported or any(event[0] == "alert" for event in events)
-        if reported and (accepted or (trimmed and alerts)):
+        if reported and (accepted or (replanned and alerts)):
             alerts = index.alerts(plans)
-        changed = bool(accepted) or trimmed
         if any(event[0] in ("disturb", "resume") for event in events):
             shown = _disturbed(disturbed, events)
         yield Frame(
@@ -184,7 +189,7 @@ def replay(scenario: Scenario, lines: Iterable[str]) -> Iterator[Frame]:
             alerts=alerts,
             events=tuple(tuple(event) for event in events),
             moved=tuple(moved),
-            plans_changed=changed,
+            replanned=tuple(sorted(replanned)),
             disturbed=shown,
         )
 
