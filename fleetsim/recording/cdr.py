@@ -1,8 +1,8 @@
 """CDR bytes of the marker messages, packed directly from their values (``visualization_msgs`` on Humble).
 
 A recording writes thousands of markers: every step's sim time, and every plan that changed, each a line
-strip along tens of points. Built as ``rosbags`` typestore objects and serialised field by field, they
-made writing the recording cost a third of the run. Here a marker is a :class:`Marker` (a named tuple
+strip along tens of points. Built as ``rosbags`` typestore objects and serialised field by field (each
+point a message of its own), they were the largest part of writing a recording. Here a marker is a :class:`Marker` (a named tuple
 with every field fleetsim varies, all required, so a missing or misspelt one is a ``TypeError`` exactly
 as with the typestore's classes) and its points are packed once into :class:`Points`; a
 :class:`MarkerArray` is then packed with a few ``struct`` calls, the parts fleetsim never varies (identity
