@@ -1,12 +1,14 @@
 """What recording a run as MCAP costs: time over an unrecorded run, and file size.
 
-    python benchmarks/recording.py [--vehicles 100] [--seconds 60] [--every 1] [--repeat 3] [--seed 1]
+    python benchmarks/recording.py [--vehicles 100] [--seconds 60] [--every 1] [--repeat 5] [--seed 1]
 
-Target (issue): on the 100-vehicle benchmark (generated warehouse, ReservingPlanner, 60 s simulated),
-recording adds at most 30 % to the wall time of an unrecorded run. The recorded run keeps its trace (the
-recording is drawn from it) and then writes the MCAP; the unrecorded run keeps no trace, as a CI run
-without artifacts does. Each part is timed on its own, best of ``--repeat`` (a shared machine's noise only
-ever adds time): overhead = (max(run with trace - run without, 0) + writing) / run without trace.
+Target (issue 18): on the 100-vehicle benchmark (generated warehouse, ReservingPlanner, 60 s simulated),
+recording every step adds at most 25 % (median of 5) to the wall time of an unrecorded run. The recorded
+run keeps its trace (the recording is drawn from it) and then writes the MCAP; the unrecorded run keeps
+no trace, as a CI run without artifacts does. Each part is timed on its own, one after the other, in each of
+``--repeat`` rounds; a round's overhead is (max(run with trace - run without, 0) + writing) / run without
+trace (its parts ran seconds apart, so a busy spell on a shared machine weighs on all of them), and the
+median of the rounds' overheads is the figure. The parts are printed as median (best).
 Also printed: the file size per 1000 vehicle-seconds (vehicles x simulated seconds).
 """
 
@@ -14,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import gc
+import statistics
 import sys
 import tempfile
 import time
@@ -29,7 +32,7 @@ from fleetsim.recording.recorder import record_mcap
 from fleetsim.scenario import ScenarioSettings
 from fleetsim.sim.loop import run_scenario
 
-TARGET_OVERHEAD = 0.30
+TARGET_OVERHEAD = 0.25
 
 
 def main() -> int:
@@ -62,18 +65,18 @@ def main() -> int:
             recording = record_mcap(folder / "run.mcap", scenario, result.trace.lines, every=args.every)
             writing.append(time.perf_counter() - started)
             size, messages = recording.size, recording.messages
-        # Best of each part: the noise of a shared machine only ever adds time.
-        base, with_trace, write = min(plain), min(kept), min(writing)
+        median = statistics.median
+        base, with_trace, write = median(plain), median(kept), median(writing)
         # Keeping the trace costs what it measurably costs (never less than nothing), writing the rest.
-        overhead = (max(with_trace - base, 0.0) + write) / base
+        overhead = median((max(k - p, 0.0) + w) / p for p, k, w in zip(plain, kept, writing, strict=True))
         vehicle_seconds = args.vehicles * result.sim_time
         print(
-            f"{args.vehicles} vehicles, ReservingPlanner, {result.sim_time:.0f} s simulated, every {args.every} step(s), best of {args.repeat}"
+            f"{args.vehicles} vehicles, ReservingPlanner, {result.sim_time:.0f} s simulated, every {args.every} step(s); median (best) of {args.repeat} rounds"
         )
-        print(f"  run, no trace kept    {base:7.3f} s")
-        print(f"  run, trace kept       {with_trace:7.3f} s")
-        print(f"  writing the MCAP      {write:7.3f} s")
-        print(f"  overhead              {overhead:7.1%}  [target <= {TARGET_OVERHEAD:.0%}]")
+        print(f"  run, no trace kept    {base:7.3f} s  ({min(plain):.3f} s)")
+        print(f"  run, trace kept       {with_trace:7.3f} s  ({min(kept):.3f} s)")
+        print(f"  writing the MCAP      {write:7.3f} s  ({min(writing):.3f} s)")
+        print(f"  overhead              {overhead:7.1%}  median of the rounds  [target <= {TARGET_OVERHEAD:.0%}]")
         print(f"  file                  {size / 1e6:7.2f} MB, {messages} messages")
         print(f"  per 1000 vehicle-s    {size / vehicle_seconds * 1000 / 1e6:7.2f} MB")
         return 0 if overhead <= TARGET_OVERHEAD else 1

@@ -3,8 +3,14 @@
 Messages are ``rosbags`` typestore classes: dataclasses generated from the standard ROS 2 message
 definitions, so a missing or misspelt field is a ``TypeError`` when the message is built, never a silent
 zero (an invisible marker with alpha 0, say). The same typestore gives each type's CDR serialisation and
-its ``ros2msg`` schema text. ``rosbags`` was chosen over hand-written CDR or ``mcap_ros2``'s dynamic writer
-for exactly that strictness, and because it knows the standard types without a ROS installation.
+its ``ros2msg`` schema text. ``rosbags`` was chosen over ``mcap_ros2``'s dynamic writer for exactly that
+strictness, and because it knows the standard types without a ROS installation.
+
+The messages written every step are the exception: markers are :class:`~fleetsim.recording.cdr.Marker`
+tuples, as strict (every field required, by name) and packed directly (:mod:`fleetsim.recording.cdr`),
+and the ``/tf`` of the whole fleet is laid out once (:class:`FleetTransforms`); both produce the
+typestore's bytes exactly (:func:`marker_array_message` gives the typestore message a marker array
+stands for).
 
 Everything here is geometry and colour; what is shown when lives in :mod:`fleetsim.recording.recorder`.
 """
@@ -22,19 +28,26 @@ import numpy as np
 from rosbags.typesys import Stores, get_typestore
 
 from fleetsim.layout.segment import Point
+from fleetsim.recording.cdr import NO_POINTS, Marker, MarkerArray, Points, Stamp, pack_marker_array
 
 __all__ = [
     "RGBA",
     "FleetTransforms",
+    "Marker",
+    "MarkerArray",
+    "Points",
     "Stamp",
+    "arrow",
     "clock",
     "colour",
     "delete",
     "delete_all",
+    "disc",
     "line_list",
     "line_strip",
     "log",
     "marker_array",
+    "marker_array_message",
     "path_points",
     "points",
     "schema_text",
@@ -47,7 +60,6 @@ __all__ = [
 ]
 
 RGBA = tuple[float, float, float, float]
-Stamp = Any  # builtin_interfaces/msg/Time
 
 
 @cache
@@ -62,6 +74,8 @@ def _type(name: str) -> Any:
 
 def serialise(message: Any) -> bytes:
     """CDR bytes of ``message`` (little endian, as rosbag2 writes)."""
+    if isinstance(message, MarkerArray):
+        return pack_marker_array(message)
     data: memoryview = _store().serialize_cdr(message, message.__msgtype__)
     return bytes(data)
 
@@ -74,16 +88,20 @@ def schema_text(typename: str) -> bytes:
 
 
 def stamp(nanoseconds: int) -> Stamp:
-    seconds, rest = divmod(nanoseconds, 1_000_000_000)
-    return _type("builtin_interfaces/msg/Time")(sec=seconds, nanosec=rest)
+    return Stamp(*divmod(nanoseconds, 1_000_000_000))
+
+
+def _time(time: Stamp) -> Any:
+    return _type("builtin_interfaces/msg/Time")(sec=time.sec, nanosec=time.nanosec)
 
 
 def _header(time: Stamp, frame: str) -> Any:
-    return _type("std_msgs/msg/Header")(stamp=time, frame_id=frame)
+    return _type("std_msgs/msg/Header")(stamp=_time(time), frame_id=frame)
 
 
 def clock(time: Stamp) -> Any:
-    return _type("rosgraph_msgs/msg/Clock")(clock=time)
+    """The ``/clock`` message (the recorder packs it directly: :func:`fleetsim.recording.cdr.pack_clock`)."""
+    return _type("rosgraph_msgs/msg/Clock")(clock=_time(time))
 
 
 def string(text: str) -> Any:
@@ -130,15 +148,13 @@ class FleetTransforms:
         self.children = tuple(children)
         fields = ["<4sI"]  # encapsulation header (CDR little endian), then the sequence length
         offset = 4  # CDR aligns relative to the end of the encapsulation header
+        # Per frame, the bytes after the stamp that never change: both strings and the padding after each.
+        self._names: list[bytes] = []
         for child in self.children:
-            parts, offset = _transform_layout(offset, parent, child)
+            parts, names, offset = _transform_layout(offset, parent, child)
             fields += parts
+            self._names.append(names)
         self._struct = struct.Struct("".join(fields))
-        # Per frame, the fields after the stamp that never change: both strings with their lengths.
-        self._heads = []
-        for child in self.children:
-            parent_bytes, child_bytes = parent.encode() + b"\0", child.encode() + b"\0"
-            self._heads.append((len(parent_bytes), parent_bytes, len(child_bytes), child_bytes))
         sample = [(float(k), float(-k), 0.25 * k) for k in range(len(self.children))]
         self._fast = bool(self.children) and self._pack(1_234_567_890_123, sample) == self._slow(
             1_234_567_890_123, sample
@@ -148,8 +164,8 @@ class FleetTransforms:
         seconds, nanoseconds = divmod(time_ns, 1_000_000_000)
         values: list[Any] = [b"\x00\x01\x00\x00", len(self.children)]
         sin, cos = math.sin, math.cos
-        for head, (x, y, heading) in zip(self._heads, poses, strict=True):
-            values += (seconds, nanoseconds, *head, x, y, 0.0, 0.0, 0.0, sin(heading / 2.0), cos(heading / 2.0))
+        for names, (x, y, heading) in zip(self._names, poses, strict=True):
+            values += (seconds, nanoseconds, names, x, y, 0.0, 0.0, 0.0, sin(heading / 2.0), cos(heading / 2.0))
         return self._struct.pack(*values)
 
     def _slow(self, time_ns: int, poses: Sequence[tuple[float, float, float]]) -> bytes:
@@ -168,54 +184,28 @@ class FleetTransforms:
         return self._pack(time_ns, poses) if self._fast else self._slow(time_ns, poses)
 
 
-def _transform_layout(offset: int, parent: str, child: str) -> tuple[list[str], int]:
-    """``struct`` fields of one TransformStamped starting at CDR ``offset``, and the offset after it."""
+def _transform_layout(offset: int, parent: str, child: str) -> tuple[list[str], bytes, int]:
+    """``struct`` fields of one TransformStamped starting at CDR ``offset``, the bytes of its frame names
+    (from the end of the stamp to the translation: each string's length, text and NUL, padded), and the
+    offset after it."""
     parts = []
-
-    def align(size: int) -> None:
-        nonlocal offset
-        pad = -offset % size
-        if pad:
-            parts.append(f"{pad}x")
-            offset += pad
-
-    align(4)
-    parts.append("iI")  # stamp
-    offset += 8
+    pad = -offset % 4
+    if pad:
+        parts.append(f"{pad}x")
+        offset += pad
+    offset += 8  # stamp
+    names = b""
     for text in (parent, child):
-        align(4)
-        length = len(text.encode()) + 1
-        parts.append(f"I{length}s")
-        offset += 4 + length
-    align(8)
-    parts.append("7d")  # translation x y z, rotation x y z w
+        names += bytes(-offset % 4)
+        offset += -offset % 4
+        encoded = text.encode() + b"\0"
+        names += struct.pack("<I", len(encoded)) + encoded
+        offset += 4 + len(encoded)
+    names += bytes(-offset % 8)
+    offset += -offset % 8
+    parts.append(f"iI{len(names)}s7d")  # stamp, names, translation x y z, rotation x y z w
     offset += 56
-    return parts, offset
-
-
-def _pose(x: float = 0.0, y: float = 0.0, z: float = 0.0) -> Any:
-    types = _store().types
-    return types["geometry_msgs/msg/Pose"](
-        position=types["geometry_msgs/msg/Point"](x=float(x), y=float(y), z=float(z)),
-        orientation=types["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=1.0),
-    )
-
-
-@cache
-def _unused_parts() -> tuple[Any, Any, Any, Any]:
-    """The parts of a marker fleetsim never varies: identity pose, no lifetime, no texture, no mesh.
-
-    Made once and shared by every marker (messages are only ever serialised, never modified).
-    """
-    types = _store().types
-    no_texture = types["sensor_msgs/msg/CompressedImage"](header=_header(stamp(0), ""), format="", data=_no_bytes())
-    no_mesh = types["visualization_msgs/msg/MeshFile"](filename="", data=_no_bytes())
-    return _pose(), types["builtin_interfaces/msg/Duration"](sec=0, nanosec=0), no_texture, no_mesh
-
-
-@cache
-def _colour(rgba: RGBA) -> Any:
-    return colour(rgba)
+    return parts, names, offset
 
 
 def _marker(
@@ -226,66 +216,47 @@ def _marker(
     kind: int,
     *,
     action: int = 0,
-    pose: Any = None,
+    at: tuple[float, float, float] = (0.0, 0.0, 0.0),
     scale: tuple[float, float, float] = (1.0, 1.0, 1.0),
     rgba: RGBA = (1.0, 1.0, 1.0, 1.0),
-    points: Sequence[Any] = (),
+    points: Points = NO_POINTS,
     text: str = "",
     frame_locked: bool = False,
-) -> Any:
-    types = _store().types
-    identity, forever, no_texture, no_mesh = _unused_parts()
-    return types["visualization_msgs/msg/Marker"](
-        header=_header(time, frame),
+) -> Marker:
+    return Marker(
+        stamp=time,
+        frame_id=frame,
         ns=namespace,
         id=marker_id,
         type=kind,
         action=action,
-        pose=pose if pose is not None else identity,
-        scale=types["geometry_msgs/msg/Vector3"](x=scale[0], y=scale[1], z=scale[2]),
-        color=_colour(rgba),
-        lifetime=forever,
+        position=(float(at[0]), float(at[1]), float(at[2])),
+        scale=(float(scale[0]), float(scale[1]), float(scale[2])),
+        color=(float(rgba[0]), float(rgba[1]), float(rgba[2]), float(rgba[3])),
         frame_locked=frame_locked,
-        points=list(points),
-        colors=[],
-        texture_resource="",
-        texture=no_texture,
-        uv_coordinates=[],
+        points=points,
         text=text,
-        mesh_resource="",
-        mesh_file=no_mesh,
-        mesh_use_embedded_materials=False,
     )
 
 
-def _no_bytes() -> Any:
-    return np.zeros(0, dtype=np.uint8)  # the typestore wants uint8[] fields as numpy arrays
-
-
-def points(polyline: Sequence[Point], z: float = 0.0) -> list[Any]:
+def points(polyline: Sequence[Point], z: float = 0.0) -> Points:
     """A polyline as LINE_LIST points: each piece as a pair (so the count is always even)."""
-    point = _type("geometry_msgs/msg/Point")
-    return [
-        point(x=float(x), y=float(y), z=float(z))
-        for (ax, ay), (bx, by) in pairwise(polyline)
-        for x, y in ((ax, ay), (bx, by))
-    ]
+    return Points.of((x, y, z) for (ax, ay), (bx, by) in pairwise(polyline) for x, y in ((ax, ay), (bx, by)))
 
 
-def line_list(time: Stamp, namespace: str, marker_id: int, pairs: Sequence[Any], width: float, rgba: RGBA) -> Any:
-    """One LINE_LIST marker in ``map`` through ``pairs`` (from :func:`points`; shared, never modified)."""
+def line_list(time: Stamp, namespace: str, marker_id: int, pairs: Points, width: float, rgba: RGBA) -> Marker:
+    """One LINE_LIST marker in ``map`` through ``pairs`` (from :func:`points`)."""
     return _marker(time, "map", namespace, marker_id, 5, scale=(width, 0.0, 0.0), rgba=rgba, points=pairs)
 
 
-def path_points(polyline: Sequence[Point], z: float = 0.0) -> list[Any]:
+def path_points(polyline: Sequence[Point], z: float = 0.0) -> Points:
     """A polyline as LINE_STRIP points, in order."""
-    point = _type("geometry_msgs/msg/Point")
-    return [point(x=float(x), y=float(y), z=float(z)) for x, y in polyline]
+    return Points.of((x, y, z) for x, y in polyline)
 
 
 def line_strip(
-    time: Stamp, namespace: str, marker_id: int, path: Sequence[Any], width: float, rgba: RGBA, frame: str = "map"
-) -> Any:
+    time: Stamp, namespace: str, marker_id: int, path: Points, width: float, rgba: RGBA, frame: str = "map"
+) -> Marker:
     """One LINE_STRIP marker in ``frame`` (locked to it unless ``map``) along ``path`` (from :func:`path_points`)."""
     return _marker(
         time,
@@ -310,10 +281,10 @@ def text_marker(
     size: float,
     rgba: RGBA,
     frame_locked: bool = False,
-) -> Any:
+) -> Marker:
     """A TEXT_VIEW_FACING marker (``scale.z`` is the letter height)."""
     return _marker(
-        time, frame, namespace, marker_id, 9, pose=_pose(*at), scale=(0.0, 0.0, size), rgba=rgba, text=text,
+        time, frame, namespace, marker_id, 9, at=at, scale=(0.0, 0.0, size), rgba=rgba, text=text,
         frame_locked=frame_locked,
     )  # fmt: skip
 
@@ -326,13 +297,9 @@ def arrow(
     end: tuple[float, float, float],
     shaft: float,
     rgba: RGBA,
-) -> Any:
+) -> Marker:
     """An ARROW marker in ``map`` from ``start`` to ``end`` (head diameter and length follow the shaft)."""
-    point = _type("geometry_msgs/msg/Point")
-    ends = [
-        point(x=float(start[0]), y=float(start[1]), z=float(start[2])),
-        point(x=float(end[0]), y=float(end[1]), z=float(end[2])),
-    ]
+    ends = Points.of([start, end])
     return _marker(
         time, "map", namespace, marker_id, 0, scale=(shaft, 2.5 * shaft, 3.0 * shaft), rgba=rgba, points=ends
     )
@@ -340,27 +307,66 @@ def arrow(
 
 def disc(
     time: Stamp, namespace: str, marker_id: int, at: tuple[float, float, float], diameter: float, rgba: RGBA
-) -> Any:
+) -> Marker:
     """A flat CYLINDER marker in ``map`` centred at ``at`` (a ring-like mark round a vehicle)."""
-    return _marker(time, "map", namespace, marker_id, 3, pose=_pose(*at), scale=(diameter, diameter, 0.04), rgba=rgba)
+    return _marker(time, "map", namespace, marker_id, 3, at=at, scale=(diameter, diameter, 0.04), rgba=rgba)
 
 
-def delete_all(time: Stamp, namespace: str) -> Any:
+def delete_all(time: Stamp, namespace: str) -> Marker:
     """DELETEALL: the content of an array topic is replaced, not added to."""
     return _marker(time, "map", namespace, 0, 0, action=3)
 
 
-def delete(time: Stamp, namespace: str, marker_id: int) -> Any:
+def delete(time: Stamp, namespace: str, marker_id: int) -> Marker:
     """DELETE one marker (a vehicle's plan lost its fixed or its planned part)."""
     return _marker(time, "map", namespace, marker_id, 5, action=2)
 
 
-def marker_array(markers: Sequence[Any]) -> Any:
-    return _type("visualization_msgs/msg/MarkerArray")(markers=list(markers))
+def marker_array(markers: Sequence[Marker]) -> MarkerArray:
+    return MarkerArray(tuple(markers))
+
+
+def marker_array_message(array: MarkerArray) -> Any:
+    """``array`` as the typestore's message (what :func:`serialise` packs it as, field for field)."""
+    types = _store().types
+    vector, point, quaternion = (
+        types["geometry_msgs/msg/Vector3"],
+        types["geometry_msgs/msg/Point"],
+        types["geometry_msgs/msg/Quaternion"],
+    )
+    no_bytes = np.zeros(0, dtype=np.uint8)  # the typestore wants uint8[] fields as numpy arrays
+    markers = [
+        types["visualization_msgs/msg/Marker"](
+            header=_header(marker.stamp, marker.frame_id),
+            ns=marker.ns,
+            id=marker.id,
+            type=marker.type,
+            action=marker.action,
+            pose=types["geometry_msgs/msg/Pose"](
+                position=point(x=marker.position[0], y=marker.position[1], z=marker.position[2]),
+                orientation=quaternion(x=0.0, y=0.0, z=0.0, w=1.0),
+            ),
+            scale=vector(x=marker.scale[0], y=marker.scale[1], z=marker.scale[2]),
+            color=colour(marker.color),
+            lifetime=types["builtin_interfaces/msg/Duration"](sec=0, nanosec=0),
+            frame_locked=marker.frame_locked,
+            points=[point(x=x, y=y, z=z) for x, y, z in marker.points.unpacked()],
+            colors=[],
+            texture_resource="",
+            texture=types["sensor_msgs/msg/CompressedImage"](header=_header(Stamp(0, 0), ""), format="", data=no_bytes),
+            uv_coordinates=[],
+            text=marker.text,
+            mesh_resource="",
+            mesh_file=types["visualization_msgs/msg/MeshFile"](filename="", data=no_bytes),
+            mesh_use_embedded_materials=False,
+        )
+        for marker in array.markers
+    ]
+    return types["visualization_msgs/msg/MarkerArray"](markers=markers)
 
 
 def log(time: Stamp, level: int, message: str) -> Any:
     """An ``rcl_interfaces/msg/Log`` record from the simulator (``/rosout``)."""
     return _type("rcl_interfaces/msg/Log")(
-        stamp=time, level=level, name="fleetsim", msg=message, file="", function="", line=0
+        stamp=_time(time), level=level, name="fleetsim", msg=message, file="", function="", line=0
     )

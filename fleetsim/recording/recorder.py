@@ -34,7 +34,6 @@ leaves a half-written file where a reviewer looks.
 from __future__ import annotations
 
 import contextlib
-import math
 import os
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
@@ -45,14 +44,12 @@ from xml.sax.saxutils import quoteattr
 from mcap.writer import CompressionType, Writer
 
 from fleetsim import __version__
-from fleetsim.enums import Traverse
-from fleetsim.layout.segment import Segment
-from fleetsim.planning.protocol import FleetPlan
 from fleetsim.planning.reservations import CollisionAlert
 from fleetsim.recording import messages as m
+from fleetsim.recording.cdr import pack_clock
 from fleetsim.recording.colours import vehicle_colours
 from fleetsim.recording.replay import Frame, replay
-from fleetsim.recording.rviz import framed_view
+from fleetsim.recording.scene import Scene, frame_name
 from fleetsim.scenario import Scenario
 
 __all__ = [
@@ -60,7 +57,6 @@ __all__ = [
     "QOS_VOLATILE",
     "TOPICS",
     "Recording",
-    "alert_label",
     "fleet_urdf",
     "partial_path",
     "record_mcap",
@@ -98,15 +94,6 @@ TOPICS: dict[str, tuple[str, bool]] = {
     "/rosout": ("rcl_interfaces/msg/Log", False),
 }
 
-_MAP_GREY = (0.55, 0.58, 0.65, 1.0)
-_ORANGE = (1.0, 0.55, 0.0, 1.0)
-_WHITE = (1.0, 1.0, 1.0, 1.0)
-_WAITS = (0.17, 0.24, 0.31, 1.0)
-_CYCLE_RED = (0.82, 0.0, 0.11, 1.0)
-_ROOT_RED = (0.82, 0.0, 0.11, 0.45)
-_PURPLE = (0.56, 0.27, 0.68, 0.8)
-_MAGENTA = (0.9, 0.0, 0.5, 1.0)
-_FIXED_WIDTH, _PLANNED_WIDTH, _MAP_WIDTH, _ALERT_WIDTH = 0.18, 0.06, 0.05, 0.35
 _INFO, _WARN, _ERROR = 20, 30, 40
 
 
@@ -120,10 +107,6 @@ class Recording:
     size: int  # bytes
 
 
-def _frame_name(vehicle_id: int) -> str:
-    return f"vehicle_{vehicle_id}"
-
-
 def fleet_urdf(scenario: Scenario) -> str:
     """One robot for the whole fleet: root link ``fleet``, one floating-jointed link per vehicle."""
     colours = vehicle_colours(scenario)
@@ -134,7 +117,7 @@ def fleet_urdf(scenario: Scenario) -> str:
     ]
     for vehicle in sorted(scenario.vehicles, key=lambda v: v.id):
         kind = vehicle.type
-        name = _frame_name(vehicle.id)
+        name = frame_name(vehicle.id)
         rgba = " ".join(f"{c:.3f}" for c in colours[vehicle.id])
         bumper = min(kind.width, kind.length) / 4.0
         parts += [
@@ -180,199 +163,6 @@ class _Bag:
         self.count += 1
 
 
-class _Scene:
-    """Marker content of one scenario: geometry computed once, plans sent for the vehicles they changed."""
-
-    def __init__(self, scenario: Scenario) -> None:
-        self.scenario = scenario
-        self.colours = vehicle_colours(scenario)
-        self.ids = tuple(sorted(v.id for v in scenario.vehicles))
-        self.transforms = m.FleetTransforms("map", [_frame_name(vehicle_id) for vehicle_id in self.ids])
-        view = framed_view(scenario)
-        self.letter = view.letter
-        self.top_left = (view.min_x, view.max_y + 2.0 * self.letter)
-        self._points: dict[tuple[int, float], list[Any]] = {}
-        self._shown: dict[int, FleetPlan] = {}  # the plan each vehicle's markers show
-        self._sent: dict[tuple[str, int], tuple[tuple[int, Traverse], ...]] = {}  # (namespace, vehicle) -> legs drawn
-        self._paths: dict[tuple[int, Traverse, float], list[Any]] = {}
-
-    def points(self, segments: Iterable[int], z: float) -> list[Any]:
-        """LINE_LIST points of ``segments`` at height ``z`` (each segment's made once)."""
-        pairs: list[Any] = []
-        for segment in segments:
-            cached = self._points.get((segment, z))
-            if cached is None:
-                cached = self._points[(segment, z)] = m.points(self.scenario.layout.segments[segment].waypoints, z)
-            pairs += cached
-        return pairs
-
-    def path(self, legs: Iterable[tuple[int, Traverse]], z: float) -> list[Any]:
-        """LINE_STRIP points along consecutive legs in driving order (each joint once)."""
-        path: list[Any] = []
-        for segment, traverse in legs:
-            cached = self._paths.get((segment, traverse, z))
-            if cached is None:
-                waypoints = self.scenario.layout.segments[segment].waypoints
-                ordered = waypoints if traverse is Traverse.FORWARD else waypoints[::-1]
-                cached = self._paths[(segment, traverse, z)] = m.path_points(ordered, z)
-            path += cached[1:] if path else cached
-        return path
-
-    def map_markers(self, time: m.Stamp) -> Any:
-        pairs = self.points(sorted(self.scenario.layout.segments), 0.0)
-        return m.marker_array([m.line_list(time, "segments", 0, pairs, _MAP_WIDTH, _MAP_GREY)])
-
-    def labels(self, time: m.Stamp) -> Any:
-        markers = []
-        for vehicle in sorted(self.scenario.vehicles, key=lambda v: v.id):
-            at = (0.0, 0.0, vehicle.type.height + 0.4)
-            size = max(0.25, 0.6 * vehicle.type.width)
-            markers.append(
-                m.text_marker(
-                    time, _frame_name(vehicle.id), "labels", vehicle.id, str(vehicle.id), at, size, _WHITE, True
-                )
-            )
-        return m.marker_array(markers)
-
-    def plans(self, time: m.Stamp, plans: Mapping[int, FleetPlan]) -> Any | None:
-        """Markers for the plans that changed since the last call (``None``: none did).
-
-        Each vehicle has two markers, its fixed legs and its planned legs; only a marker whose segments
-        changed is sent again (passing a leg changes the fixed ones only), an emptied one is deleted.
-        """
-        markers = [] if self._shown else [m.delete_all(time, "")]
-        for vehicle_id in self.ids:
-            plan = plans[vehicle_id]
-            if self._shown.get(vehicle_id) is plan:
-                continue
-            self._shown[vehicle_id] = plan
-            for namespace, fixed, width in (("fixed", True, _FIXED_WIDTH), ("planned", False, _PLANNED_WIDTH)):
-                legs = tuple((leg.segment, leg.traverse) for leg in plan.legs if leg.fixed is fixed)
-                key = (namespace, vehicle_id)
-                if self._sent.get(key, ()) == legs:
-                    continue
-                self._sent[key] = legs
-                if legs:
-                    path = self.path(legs, 0.02)
-                    markers.append(m.line_strip(time, namespace, vehicle_id, path, width, self.colours[vehicle_id]))
-                else:
-                    markers.append(m.delete(time, namespace, vehicle_id))
-        return m.marker_array(markers) if markers else None
-
-    def alerts(self, time: m.Stamp, alerts: Sequence[CollisionAlert]) -> Any:
-        """The alert segments in orange and a short label each (``segment 7: 1 ⟂ 2``) beside its middle.
-
-        Labels are placed one by one, each at the first spot near its segment's middle where it does not
-        overlap a label placed before it (the full thesis text goes to ``/rosout``).
-        """
-        markers = [m.delete_all(time, "")]
-        placed: list[tuple[float, float, float, float]] = []
-        for number, alert in enumerate(alerts):
-            markers.append(
-                m.line_list(time, "alert_segments", number, self.points([alert.segment], 0.05), _ALERT_WIDTH, _ORANGE)
-            )
-            text = alert_label(alert)
-            x, y = self._free_spot(self.scenario.layout.segments[alert.segment], text, placed)
-            markers.append(m.text_marker(time, "map", "alert_text", number, text, (x, y, 1.0), self.letter, _ORANGE))
-        return m.marker_array(markers)
-
-    def _free_spot(
-        self, segment: Segment, text: str, placed: list[tuple[float, float, float, float]]
-    ) -> tuple[float, float]:
-        """A spot beside ``segment``'s middle where ``text`` overlaps no box in ``placed`` (which it joins)."""
-        mx, my, heading = segment.pose_at(segment.length / 2, Traverse.FORWARD)
-        half_w, half_h = 0.3 * self.letter * len(text), 0.6 * self.letter
-        nx, ny = -math.sin(heading), math.cos(heading)  # left of the segment
-        step = 1.4 * self.letter
-        spots = [(mx + side * k * step * nx, my + side * k * step * ny) for k in range(1, 12) for side in (1, -1)]
-        box = (0.0, 0.0, 0.0, 0.0)
-        for x, y in spots:
-            box = (x - half_w, y - half_h, x + half_w, y + half_h)
-            if not any(box[0] < b[2] and b[0] < box[2] and box[1] < b[3] and b[1] < box[3] for b in placed):
-                break
-        placed.append(box)
-        return (box[0] + box[2]) / 2, (box[1] + box[3]) / 2
-
-    def stuck(self, time: m.Stamp, poses: Mapping[int, Any], stuck: Mapping[str, Any]) -> Any:
-        """Who waits for whom at the end of a stuck run (the failure's details, as in result.json)."""
-        markers = [m.delete_all(time, "")]
-        contested = sorted(
-            {int(s) for f in stuck.get("vehicles", ()) for s in f.get("contested", ())}
-            & set(self.scenario.layout.segments)
-        )
-        if contested:
-            markers.append(m.line_list(time, "contested", 0, self.points(contested, 0.04), 0.4, _PURPLE))
-        in_cycle = {(int(c[i]), int(c[(i + 1) % len(c)])) for c in stuck.get("cycles", ()) for i in range(len(c))}
-        numbers: dict[str, int] = {}
-        for finding in stuck.get("vehicles", ()):
-            source = int(finding["vehicle"])
-            relations = [(int(b), True) for b in finding.get("blocked_by", ())] + [
-                (int(b), False) for b in finding.get("planned_near", ())
-            ]
-            for target, waits in relations:
-                if source not in poses or target not in poses:
-                    continue
-                cycle = (source, target) in in_cycle
-                namespace = ("wait_for_cycle" if cycle else "wait_for") if waits else "planned_near"
-                numbers[namespace] = numbers.get(namespace, -1) + 1
-                a, b = poses[source], poses[target]
-                start, end = (a.x, a.y, 0.6), (b.x, b.y, 0.6)
-                colour = _CYCLE_RED if cycle else _WAITS
-                markers.append(
-                    m.arrow(time, namespace, numbers[namespace], start, end, 0.12 if waits else 0.05, colour)
-                )
-        radius = {v.id: v.type.swept_radius for v in self.scenario.vehicles}
-        roots = sorted({int(v) for root in stuck.get("roots", ()) for v in root.get("vehicles", ())} & set(poses))
-        for number, vid in enumerate(roots):
-            markers.append(
-                m.disc(time, "root_cause", number, (poses[vid].x, poses[vid].y, 0.02), 2 * radius[vid] + 0.5, _ROOT_RED)
-            )
-        x, y = self.top_left
-        headline = str(stuck.get("headline", ""))
-        if headline:
-            markers.append(
-                m.text_marker(
-                    time, "map", "stuck_text", 0, headline, (x, y + 1.5 * self.letter, 0.0), self.letter, _CYCLE_RED
-                )
-            )
-        return m.marker_array(markers)
-
-    def disturbed(self, time: m.Stamp, disturbed: Mapping[int, str]) -> Any:
-        """A magenta outline round each disturbed vehicle and STOP/SLOW above it, locked to its frame."""
-        markers = [m.delete_all(time, "")]
-        types = {v.id: v.type for v in self.scenario.vehicles}
-        for vid, kind in disturbed.items():
-            half_length, half_width = 0.5 * types[vid].length + 0.25, 0.5 * types[vid].width + 0.25
-            corners = [
-                (half_length, half_width),
-                (-half_length, half_width),
-                (-half_length, -half_width),
-                (half_length, -half_width),
-            ]
-            outline = m.path_points([*corners, corners[0]], 0.05)
-            markers.append(m.line_strip(time, "disturbed", vid, outline, 0.08, _MAGENTA, frame=_frame_name(vid)))
-            at = (0.0, 0.0, types[vid].height + 0.9)
-            markers.append(
-                m.text_marker(time, _frame_name(vid), "disturbed_label", vid, kind.upper(), at, 0.4, _MAGENTA, True)
-            )
-        return m.marker_array(markers)
-
-    def sim_time(self, time: m.Stamp, seconds: float) -> Any:
-        x, y = self.top_left
-        return m.marker_array(
-            [m.text_marker(time, "map", "sim_time", 0, f"t = {seconds:.2f} s", (x, y, 0.0), self.letter, _WHITE)]
-        )
-
-
-def alert_label(alert: CollisionAlert) -> str:
-    """``segment 7: 1 ⟂ 2``: the segment, its primary holders, then the others (the short form)."""
-    primary = ",".join(map(str, alert.primary))
-    secondary = ",".join(map(str, alert.secondary))
-    return (
-        f"segment {alert.segment}: {primary} \u27c2 {secondary}" if secondary else f"segment {alert.segment}: {primary}"
-    )
-
-
 def _log_lines(event: Sequence[Any]) -> tuple[int, str] | None:
     kind = event[0]
     if kind == "complete":
@@ -413,7 +203,7 @@ def _write_frames(
     transform, the sim time. Steps in between write the clock and what changed (plans, alerts, log
     lines) and nothing else, so a change is shown when it happened whatever the rate.
     """
-    scene = _Scene(scenario)
+    scene = Scene(scenario)
     full = 0
     shown_alerts: tuple[CollisionAlert, ...] | None = None
     for frame, last in _with_last(frames):
@@ -433,10 +223,10 @@ def _write_frames(
     return full
 
 
-def _write_frame(bag: _Bag, scene: _Scene, frame: Frame, *, first: bool, tick: bool, alerts_changed: bool) -> None:
+def _write_frame(bag: _Bag, scene: Scene, frame: Frame, *, first: bool, tick: bool, alerts_changed: bool) -> None:
     time_ns = round(frame.time * 1e9)
     time = m.stamp(time_ns)
-    bag.write("/clock", time_ns, m.clock(time))
+    bag.write_bytes("/clock", time_ns, pack_clock(time))
     if first:
         bag.write("/robot_description", time_ns, m.string(fleet_urdf(scene.scenario)))
         bag.write("/tf_static", time_ns, m.tf_message([m.transform(time, "map", "fleet", 0.0, 0.0, 0.0)]))
@@ -447,7 +237,7 @@ def _write_frame(bag: _Bag, scene: _Scene, frame: Frame, *, first: bool, tick: b
         planar = [poses[vehicle_id][3:6] for vehicle_id in scene.ids]  # Pose fields 3-5: (x, y, heading)
         bag.write_bytes("/tf", time_ns, scene.transforms.serialise(time_ns, planar))
     if first or frame.plans_changed:
-        plans = scene.plans(time, frame.plans)
+        plans = scene.plans(time, frame.plans, scene.ids if first else frame.replanned)
         if plans is not None:
             bag.write("/fleetsim/plans", time_ns, plans)
     if first or alerts_changed:

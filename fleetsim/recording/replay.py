@@ -59,10 +59,15 @@ class Frame:
     alerts: tuple[CollisionAlert, ...]  # in force over these plans
     events: tuple[tuple[Any, ...], ...]
     moved: tuple[int, ...]  # vehicles whose pose changed in this step
-    plans_changed: bool  # a plan was accepted or a vehicle passed a leg in this step
+    replanned: tuple[int, ...]  # vehicles whose plan was accepted or passed a leg in this step, in id order
     # Vehicles a disturbance stops or slows in this step, by id: "stop" or "slow" (the trace's
     # "disturb"/"resume" events; a disturbance that begins at t and ends at t' marks the frames in (t, t']).
     disturbed: Mapping[int, str] = field(default_factory=lambda: MappingProxyType({}))
+
+    @property
+    def plans_changed(self) -> bool:
+        """A plan was accepted or a vehicle passed a leg in this step."""
+        return bool(self.replanned)
 
 
 _new = tuple.__new__
@@ -124,6 +129,7 @@ def replay(scenario: Scenario, lines: Iterable[str]) -> Iterator[Frame]:
     header = _header(next(iterator, ""), scenario)
     dt = header["time_step_us"] / 1e6
     layout = scenario.layout
+    segments = layout.segments
     poses = {}
     for vehicle in sorted(scenario.vehicles, key=lambda v: v.id):
         state = initial_state(vehicle, layout)
@@ -140,7 +146,7 @@ def replay(scenario: Scenario, lines: Iterable[str]) -> Iterator[Frame]:
         except (json.JSONDecodeError, ValueError, TypeError):
             msg = f"trace line {number}={line[:80]!r} is not a step record [step, vehicles, plans, events]"
             raise TraceError(msg) from None
-        changed = trimmed = False
+        replanned = set()
         for record in accepted:
             plan = _plan(record)
             unknown = [leg.segment for leg in plan.legs if leg.segment not in layout.segments]
@@ -149,25 +155,30 @@ def replay(scenario: Scenario, lines: Iterable[str]) -> Iterator[Frame]:
                 msg = f"trace line {number} names {what}, which scenario {scenario.name!r} does not have"
                 raise TraceError(msg)
             plans[plan.vehicle_id] = plan
+            replanned.add(plan.vehicle_id)
         moved = []
         for record in vehicles:
             vehicle_id = record[0]
-            if vehicle_id not in poses or record[1] not in layout.segments:
+            if vehicle_id not in poses or record[1] not in segments:
                 msg = f"trace line {number} places vehicle {vehicle_id} on segment {record[1]}, which scenario {scenario.name!r} does not have"
                 raise TraceError(msg)
             poses[vehicle_id] = pose = _pose(record)
             moved.append(vehicle_id)
-            passed = _passed(plans[vehicle_id], pose)
-            if passed is not plans[vehicle_id]:
+            plan = plans[vehicle_id]
+            # Most vehicles are on their plan's first leg, which leaves the plan as it is.
+            first = plan.legs[0] if plan.legs else None
+            if first is not None and (first.segment, first.traverse, first.progress) == pose[:3]:
+                continue
+            passed = _passed(plan, pose)
+            if passed is not plan:
                 plans[vehicle_id] = passed
-                trimmed = True
+                replanned.add(vehicle_id)
         # An alert in force was reported (an "alert" event) when it appeared, so before the first report
         # there is nothing to compute; and legs driven past reserve nothing more, so dropping them can
         # end an alert but never raise one.
         reported = reported or any(event[0] == "alert" for event in events)
-        if reported and (accepted or (trimmed and alerts)):
+        if reported and (accepted or (replanned and alerts)):
             alerts = index.alerts(plans)
-        changed = bool(accepted) or trimmed
         if any(event[0] in ("disturb", "resume") for event in events):
             shown = _disturbed(disturbed, events)
         yield Frame(
@@ -178,7 +189,7 @@ def replay(scenario: Scenario, lines: Iterable[str]) -> Iterator[Frame]:
             alerts=alerts,
             events=tuple(tuple(event) for event in events),
             moved=tuple(moved),
-            plans_changed=changed,
+            replanned=tuple(sorted(replanned)),
             disturbed=shown,
         )
 

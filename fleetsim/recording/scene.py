@@ -1,0 +1,234 @@
+"""What a recording's markers show: the map, labels, plans, alerts, sim time, disturbances, who waits for whom.
+
+:class:`Scene` makes the marker arrays of one scenario's recording (SPEC §11), computing its geometry once:
+segment points are packed once per segment, each vehicle's plan markers are sent again only when their
+legs change. What is written when, and to which topic, is :mod:`fleetsim.recording.recorder`'s.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping, Sequence
+from typing import Any
+
+from fleetsim.enums import Traverse
+from fleetsim.layout.segment import Segment
+from fleetsim.planning.protocol import FleetPlan
+from fleetsim.planning.reservations import CollisionAlert
+from fleetsim.recording import messages as m
+from fleetsim.recording.colours import vehicle_colours
+from fleetsim.recording.rviz import framed_view
+from fleetsim.scenario import Scenario
+
+__all__ = ["Scene", "alert_label", "frame_name"]
+
+_MAP_GREY = (0.55, 0.58, 0.65, 1.0)
+_ORANGE = (1.0, 0.55, 0.0, 1.0)
+_WHITE = (1.0, 1.0, 1.0, 1.0)
+_WAITS = (0.17, 0.24, 0.31, 1.0)
+_CYCLE_RED = (0.82, 0.0, 0.11, 1.0)
+_ROOT_RED = (0.82, 0.0, 0.11, 0.45)
+_PURPLE = (0.56, 0.27, 0.68, 0.8)
+_MAGENTA = (0.9, 0.0, 0.5, 1.0)
+_FIXED_WIDTH, _PLANNED_WIDTH, _MAP_WIDTH, _ALERT_WIDTH = 0.18, 0.06, 0.05, 0.35
+
+
+def frame_name(vehicle_id: int) -> str:
+    """The TF frame (and URDF link) of a vehicle: ``vehicle_<id>``."""
+    return f"vehicle_{vehicle_id}"
+
+
+class Scene:
+    """Marker content of one scenario: geometry computed once, plans sent for the vehicles they changed."""
+
+    def __init__(self, scenario: Scenario) -> None:
+        self.scenario = scenario
+        self.colours = vehicle_colours(scenario)
+        self.ids = tuple(sorted(v.id for v in scenario.vehicles))
+        self.transforms = m.FleetTransforms("map", [frame_name(vehicle_id) for vehicle_id in self.ids])
+        view = framed_view(scenario)
+        self.letter = view.letter
+        self.top_left = (view.min_x, view.max_y + 2.0 * self.letter)
+        self._points: dict[tuple[int, float], m.Points] = {}
+        self._shown: dict[int, FleetPlan] = {}  # the plan each vehicle's markers show
+        self._sent: dict[tuple[str, int], tuple[tuple[int, Traverse], ...]] = {}  # (namespace, vehicle) -> legs drawn
+        # (segment, traverse, z) -> the leg's points in driving order, and the same without the first
+        self._paths: dict[tuple[int, Traverse, float], tuple[m.Points, m.Points]] = {}
+
+    def points(self, segments: Iterable[int], z: float) -> m.Points:
+        """LINE_LIST points of ``segments`` at height ``z`` (each segment's packed once)."""
+        parts: list[m.Points] = []
+        for segment in segments:
+            cached = self._points.get((segment, z))
+            if cached is None:
+                cached = self._points[(segment, z)] = m.points(self.scenario.layout.segments[segment].waypoints, z)
+            parts.append(cached)
+        return m.Points.joined(parts)
+
+    def path(self, legs: Iterable[tuple[int, Traverse]], z: float) -> m.Points:
+        """LINE_STRIP points along consecutive legs in driving order (each joint once)."""
+        parts: list[m.Points] = []
+        for segment, traverse in legs:
+            cached = self._paths.get((segment, traverse, z))
+            if cached is None:
+                waypoints = self.scenario.layout.segments[segment].waypoints
+                ordered = m.path_points(waypoints if traverse is Traverse.FORWARD else waypoints[::-1], z)
+                cached = self._paths[(segment, traverse, z)] = (ordered, ordered.rest())
+            parts.append(cached[1] if parts else cached[0])
+        return m.Points.joined(parts)
+
+    def map_markers(self, time: m.Stamp) -> m.MarkerArray:
+        pairs = self.points(sorted(self.scenario.layout.segments), 0.0)
+        return m.marker_array([m.line_list(time, "segments", 0, pairs, _MAP_WIDTH, _MAP_GREY)])
+
+    def labels(self, time: m.Stamp) -> m.MarkerArray:
+        markers = []
+        for vehicle in sorted(self.scenario.vehicles, key=lambda v: v.id):
+            at = (0.0, 0.0, vehicle.type.height + 0.4)
+            size = max(0.25, 0.6 * vehicle.type.width)
+            markers.append(
+                m.text_marker(
+                    time, frame_name(vehicle.id), "labels", vehicle.id, str(vehicle.id), at, size, _WHITE, True
+                )
+            )
+        return m.marker_array(markers)
+
+    def plans(self, time: m.Stamp, plans: Mapping[int, FleetPlan], replanned: Iterable[int]) -> m.MarkerArray | None:
+        """Markers for the plans that changed since the last call (``None``: none did).
+
+        ``replanned``: the vehicles whose plans may have changed since the last call, in id order (every
+        vehicle at the first call). Each vehicle has two markers, its fixed legs and its planned legs;
+        only a marker whose segments changed is sent again (passing a leg changes the fixed ones only),
+        an emptied one is deleted.
+        """
+        markers = [] if self._shown else [m.delete_all(time, "")]
+        for vehicle_id in replanned:
+            plan = plans[vehicle_id]
+            if self._shown.get(vehicle_id) is plan:
+                continue
+            self._shown[vehicle_id] = plan
+            for namespace, fixed, width in (("fixed", True, _FIXED_WIDTH), ("planned", False, _PLANNED_WIDTH)):
+                legs = tuple((leg.segment, leg.traverse) for leg in plan.legs if leg.fixed is fixed)
+                key = (namespace, vehicle_id)
+                if self._sent.get(key, ()) == legs:
+                    continue
+                self._sent[key] = legs
+                if legs:
+                    path = self.path(legs, 0.02)
+                    markers.append(m.line_strip(time, namespace, vehicle_id, path, width, self.colours[vehicle_id]))
+                else:
+                    markers.append(m.delete(time, namespace, vehicle_id))
+        return m.marker_array(markers) if markers else None
+
+    def alerts(self, time: m.Stamp, alerts: Sequence[CollisionAlert]) -> m.MarkerArray:
+        """The alert segments in orange and a short label each (``segment 7: 1 ⟂ 2``) beside its middle.
+
+        Labels are placed one by one, each at the first spot near its segment's middle where it does not
+        overlap a label placed before it (the full thesis text goes to ``/rosout``).
+        """
+        markers = [m.delete_all(time, "")]
+        placed: list[tuple[float, float, float, float]] = []
+        for number, alert in enumerate(alerts):
+            markers.append(
+                m.line_list(time, "alert_segments", number, self.points([alert.segment], 0.05), _ALERT_WIDTH, _ORANGE)
+            )
+            text = alert_label(alert)
+            x, y = self._free_spot(self.scenario.layout.segments[alert.segment], text, placed)
+            markers.append(m.text_marker(time, "map", "alert_text", number, text, (x, y, 1.0), self.letter, _ORANGE))
+        return m.marker_array(markers)
+
+    def _free_spot(
+        self, segment: Segment, text: str, placed: list[tuple[float, float, float, float]]
+    ) -> tuple[float, float]:
+        """A spot beside ``segment``'s middle where ``text`` overlaps no box in ``placed`` (which it joins)."""
+        mx, my, heading = segment.pose_at(segment.length / 2, Traverse.FORWARD)
+        half_w, half_h = 0.3 * self.letter * len(text), 0.6 * self.letter
+        nx, ny = -math.sin(heading), math.cos(heading)  # left of the segment
+        step = 1.4 * self.letter
+        spots = [(mx + side * k * step * nx, my + side * k * step * ny) for k in range(1, 12) for side in (1, -1)]
+        box = (0.0, 0.0, 0.0, 0.0)
+        for x, y in spots:
+            box = (x - half_w, y - half_h, x + half_w, y + half_h)
+            if not any(box[0] < b[2] and b[0] < box[2] and box[1] < b[3] and b[1] < box[3] for b in placed):
+                break
+        placed.append(box)
+        return (box[0] + box[2]) / 2, (box[1] + box[3]) / 2
+
+    def stuck(self, time: m.Stamp, poses: Mapping[int, Any], stuck: Mapping[str, Any]) -> m.MarkerArray:
+        """Who waits for whom at the end of a stuck run (the failure's details, as in result.json)."""
+        markers = [m.delete_all(time, "")]
+        contested = sorted(
+            {int(s) for f in stuck.get("vehicles", ()) for s in f.get("contested", ())}
+            & set(self.scenario.layout.segments)
+        )
+        if contested:
+            markers.append(m.line_list(time, "contested", 0, self.points(contested, 0.04), 0.4, _PURPLE))
+        in_cycle = {(int(c[i]), int(c[(i + 1) % len(c)])) for c in stuck.get("cycles", ()) for i in range(len(c))}
+        numbers: dict[str, int] = {}
+        for finding in stuck.get("vehicles", ()):
+            source = int(finding["vehicle"])
+            relations = [(int(b), True) for b in finding.get("blocked_by", ())] + [
+                (int(b), False) for b in finding.get("planned_near", ())
+            ]
+            for target, waits in relations:
+                if source not in poses or target not in poses:
+                    continue
+                cycle = (source, target) in in_cycle
+                namespace = ("wait_for_cycle" if cycle else "wait_for") if waits else "planned_near"
+                numbers[namespace] = numbers.get(namespace, -1) + 1
+                a, b = poses[source], poses[target]
+                start, end = (a.x, a.y, 0.6), (b.x, b.y, 0.6)
+                colour = _CYCLE_RED if cycle else _WAITS
+                markers.append(
+                    m.arrow(time, namespace, numbers[namespace], start, end, 0.12 if waits else 0.05, colour)
+                )
+        radius = {v.id: v.type.swept_radius for v in self.scenario.vehicles}
+        roots = sorted({int(v) for root in stuck.get("roots", ()) for v in root.get("vehicles", ())} & set(poses))
+        for number, vid in enumerate(roots):
+            markers.append(
+                m.disc(time, "root_cause", number, (poses[vid].x, poses[vid].y, 0.02), 2 * radius[vid] + 0.5, _ROOT_RED)
+            )
+        x, y = self.top_left
+        headline = str(stuck.get("headline", ""))
+        if headline:
+            markers.append(
+                m.text_marker(
+                    time, "map", "stuck_text", 0, headline, (x, y + 1.5 * self.letter, 0.0), self.letter, _CYCLE_RED
+                )
+            )
+        return m.marker_array(markers)
+
+    def disturbed(self, time: m.Stamp, disturbed: Mapping[int, str]) -> m.MarkerArray:
+        """A magenta outline round each disturbed vehicle and STOP/SLOW above it, locked to its frame."""
+        markers = [m.delete_all(time, "")]
+        types = {v.id: v.type for v in self.scenario.vehicles}
+        for vid, kind in disturbed.items():
+            half_length, half_width = 0.5 * types[vid].length + 0.25, 0.5 * types[vid].width + 0.25
+            corners = [
+                (half_length, half_width),
+                (-half_length, half_width),
+                (-half_length, -half_width),
+                (half_length, -half_width),
+            ]
+            outline = m.path_points([*corners, corners[0]], 0.05)
+            markers.append(m.line_strip(time, "disturbed", vid, outline, 0.08, _MAGENTA, frame=frame_name(vid)))
+            at = (0.0, 0.0, types[vid].height + 0.9)
+            markers.append(
+                m.text_marker(time, frame_name(vid), "disturbed_label", vid, kind.upper(), at, 0.4, _MAGENTA, True)
+            )
+        return m.marker_array(markers)
+
+    def sim_time(self, time: m.Stamp, seconds: float) -> m.MarkerArray:
+        x, y = self.top_left
+        return m.marker_array(
+            [m.text_marker(time, "map", "sim_time", 0, f"t = {seconds:.2f} s", (x, y, 0.0), self.letter, _WHITE)]
+        )
+
+
+def alert_label(alert: CollisionAlert) -> str:
+    """``segment 7: 1 ⟂ 2``: the segment, its primary holders, then the others (the short form)."""
+    primary = ",".join(map(str, alert.primary))
+    secondary = ",".join(map(str, alert.secondary))
+    return (
+        f"segment {alert.segment}: {primary} \u27c2 {secondary}" if secondary else f"segment {alert.segment}: {primary}"
+    )
