@@ -133,7 +133,7 @@ class Layout:
         With ``vehicle_length`` (metres), dangling ends that close to another segment's end are
         reported as ``gap`` too.
         """
-        return lint_layout(self, vehicle_length)
+        return lint_layout(tuple(self.segments.values()), self.graph, self.connection_tolerance, vehicle_length)
 
 
 def _check_setting(name: str, value: float, *, upper: float | None = None) -> float:

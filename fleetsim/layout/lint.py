@@ -25,7 +25,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Literal, TypeAlias
+from typing import Literal, TypeAlias
 
 import networkx as nx
 
@@ -39,9 +39,6 @@ from fleetsim.layout.connections import (
     traverse_rank,
 )
 from fleetsim.layout.segment import Segment
-
-if TYPE_CHECKING:
-    from fleetsim.layout.layout import Layout
 
 __all__ = ["LintFinding", "Severity", "lint_layout"]
 
@@ -174,13 +171,13 @@ def _main_component(graph: StateGraph) -> list[State] | None:
     return min(components, key=key)
 
 
-def _unreachable(layout: Layout) -> Iterator[LintFinding]:
-    main = _main_component(layout.graph)
+def _unreachable(segments: Sequence[Segment], graph: StateGraph) -> Iterator[LintFinding]:
+    main = _main_component(graph)
     if main is None:
         return
-    reached = {sid for sid, _ in nx.descendants(layout.graph, main[0])} | {sid for sid, _ in main}
+    reached = {sid for sid, _ in nx.descendants(graph, main[0])} | {sid for sid, _ in main}
     anchor = main[0][0]
-    for sid in layout.segments:
+    for sid in (segment.id for segment in segments):
         if sid not in reached:
             msg = (
                 f"segment {sid} cannot be reached from the main part of the map "
@@ -193,13 +190,14 @@ def _finding_key(f: LintFinding) -> tuple[bool, str, tuple[int, ...], str]:
     return (f.severity != "error", f.code, f.segments, f.message)
 
 
-def lint_layout(layout: Layout, vehicle_length: float | None = None) -> tuple[LintFinding, ...]:
-    """Every finding for ``layout``, errors first, then by code, segments and message.
+def lint_layout(
+    segments: Sequence[Segment], graph: StateGraph, tolerance: float, vehicle_length: float | None = None
+) -> tuple[LintFinding, ...]:
+    """Every finding for a layout's ``segments`` (by id) and connection ``graph``, whose ends meet within
+    ``tolerance`` metres: errors first, then by code, segments and message.
 
     ``vehicle_length`` (metres) enables the ``gap`` check: dangling ends that far from another end.
     """
-    segments = tuple(layout.segments.values())
-    tolerance = layout.connection_tolerance
     near = touching_endpoints(segments, _NEAR_MISS_FACTOR * tolerance)
     touches = [t for t in near if t.gap <= tolerance]
     dangling = dangling_ends(segments, touches)
@@ -209,6 +207,6 @@ def lint_layout(layout: Layout, vehicle_length: float | None = None) -> tuple[Li
         *_near_misses(near, tolerance),
         *_no_connections(touches),
         *_zero_length(segments, tolerance),
-        *_unreachable(layout),
+        *_unreachable(segments, graph),
     ]
     return tuple(sorted(findings, key=_finding_key))
