@@ -15,6 +15,7 @@ import pytest
 
 from fleetsim.errors import FleetsimError
 from fleetsim.load.suite import ScenarioSpec, Suite, load_suite
+from pytest_fleetsim._key import STATE_KEY
 
 __all__ = ["ScenarioFailed", "ScenarioItem", "SuiteFile"]
 
@@ -51,9 +52,7 @@ def fleetsim_scenario(fleetsim_planner: object, request: pytest.FixtureRequest) 
     """Simulate this scenario with the planner from the ``fleetsim_planner`` fixture and judge it."""
     item = request.node
     assert isinstance(item, ScenarioItem)
-    from pytest_fleetsim._state import state_of  # the state module imports the whole harness
-
-    state_of(item.config).run_item(item, fleetsim_planner)
+    item.config.stash[STATE_KEY].run_item(item, fleetsim_planner)
 
 
 class ScenarioItem(pytest.Function):

@@ -50,20 +50,15 @@ from fleetsim.sim.planner_spec import PlannerFactory, PlannerSpecError, load_pla
 from fleetsim.sim.report import failure_report, format_table, summary_cells
 from fleetsim.sim.result import RunResult
 from pytest_fleetsim._items import ScenarioFailed, ScenarioItem
-from pytest_fleetsim._key import STATE_KEY
 from pytest_fleetsim._planner import planner_source
 
-__all__ = ["NO_PLANNER", "FleetsimState", "state_of"]
+__all__ = ["NO_PLANNER", "FleetsimState"]
 
 NO_PLANNER = (
     "no planner to test: run pytest with --planner module:Planner (a class or zero-argument factory), set "
     "fleetsim_planner in the [pytest] ini section, or override the fleetsim_planner fixture in conftest.py"
 )
 RecordMode = Literal["failed", "all", "none"]
-
-
-def state_of(config: pytest.Config) -> FleetsimState:
-    return config.stash[STATE_KEY]
 
 
 @dataclass
@@ -150,10 +145,11 @@ class FleetsimState:
 
     # -- one scenario -------------------------------------------------------------------------------
 
-    def run_item(self, item: ScenarioItem, fixture_value: object) -> None:
+    def run_item(self, item: pytest.Function, fixture_value: object) -> None:
         """Run the item's scenario; raise :class:`ScenarioFailed` with the whole story if it failed.
 
         A stop signal while it runs ends it early (``interrupted``) and sets :attr:`stopped_by`."""
+        assert isinstance(item, ScenarioItem)
         with StopSignals() as stop:
             try:
                 self._run_item(item, fixture_value, stop)

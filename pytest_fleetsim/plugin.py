@@ -13,14 +13,10 @@ from collections.abc import Generator
 from fnmatch import fnmatch
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import pytest
 
-from pytest_fleetsim._key import STATE_KEY
-
-if TYPE_CHECKING:
-    from pytest_fleetsim._state import FleetsimState
+from pytest_fleetsim._key import STATE_KEY, SessionState
 
 DEFAULT_SUITE_PATTERN = "*.fleetsim.yaml"
 
@@ -101,18 +97,19 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     parser.addini("fleetsim_planner_timeout", "wall-clock limit per planner call in seconds (0 = none)", default="10")
 
 
-def _active(config: pytest.Config) -> FleetsimState | None:
+def _active(config: pytest.Config) -> SessionState | None:
     return config.stash.get(STATE_KEY, None)
 
 
-def _activate(config: pytest.Config) -> FleetsimState:
+def _activate(config: pytest.Config) -> SessionState:
     """The session's state, made (and its options checked) on first use."""
     state = _active(config)
     if state is None:
         from pytest_fleetsim._state import FleetsimState
 
-        state = config.stash[STATE_KEY] = FleetsimState.configure(config)
-        config.pluginmanager.register(state, "fleetsim-state")  # it receives every test report from now on
+        made = FleetsimState.configure(config)
+        config.pluginmanager.register(made, "fleetsim-state")  # it receives every test report from now on
+        state = config.stash[STATE_KEY] = made
     return state
 
 
