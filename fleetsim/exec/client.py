@@ -19,7 +19,7 @@ from __future__ import annotations
 import os
 import sys
 import traceback
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from types import MappingProxyType
 from typing import IO, Any
 
@@ -147,7 +147,7 @@ class _Session:
             items = call(self.tasks.get(request["task"]["id"]) or _task(request["task"]), self.fleet, self.layout)
         except RouteError as error:
             return {"id": request["id"], "route_error": error.message}
-        if not items:
+        if not items or _handed_back(items, self.fleet):
             return {"id": request["id"], "plans": [], "route_errors": []}
         plans = []
         for item in items:
@@ -159,6 +159,14 @@ class _Session:
             {"vehicle_id": item.vehicle_id, "message": item.message} for item in items if isinstance(item, RouteError)
         ]
         return {"id": request["id"], "plans": plans, "route_errors": errors}
+
+
+def _handed_back(items: Sequence[FleetPlan | RouteError], fleet: FleetSnapshot) -> bool:
+    """The response is one plan, the plan in force: fleetsim changes nothing for it, as for no plan."""
+    if not isinstance(items, (list, tuple)) or len(items) != 1:
+        return False
+    item = items[0]
+    return isinstance(item, FleetPlan) and item == fleet.plans.get(item.vehicle_id)
 
 
 def _view(entries: dict[int, Any], changed: list[Any], before: Mapping[int, Any] | None) -> Mapping[int, Any]:

@@ -36,7 +36,7 @@ import jsonschema
 import jsonschema_rs
 
 from fleetsim.errors import PlannerProcessError
-from fleetsim.exec.protocol import decode_response, dumps, encode_fleet, encode_init, encode_task, loads
+from fleetsim.exec.protocol import FleetEncoder, decode_response, dumps, encode_init, encode_task, loads
 from fleetsim.layout.layout import Layout
 from fleetsim.planning.protocol import Response
 from fleetsim.planning.snapshot import FleetSnapshot
@@ -50,7 +50,8 @@ _GRACE = 1.0  # seconds a process gets to exit after stdin closes, and again aft
 # A request: its type, id, vehicle, task and (when the fleet changed) ',"fleet":' and the update.
 _REQUEST = b'{"type":"%b","id":%d,"vehicle":%d,"task":%b%b}\n'
 _METHODS = {"plan_routes": b"plan_routes", "fix_legs": b"fix_legs"}
-_NOTHING_TO_CHANGE = b'{"id":%d,"plans":[],"route_errors":[]}'  # the commonest answer, compactly spelt
+_NOTHING_TO_CHANGE = b'{"id":%d,"plans":[],"route_errors":[]}'
+_PLAN_HANDED_BACK = b'{"id":%d,"plans":[%b],"route_errors":[]}'
 
 
 @dataclass(frozen=True, slots=True)
@@ -116,6 +117,7 @@ class SubprocessPlanner:
         self._stderr: IO[bytes] | None = None
         self._buffer = b""
         self._fleet: FleetSnapshot | None = None  # the fleet the process last saw
+        self._encoder = FleetEncoder()
         self._tasks: dict[int, tuple[Task, bytes]] = {}  # task id -> the task and its JSON
         self._asking: tuple[int, str, int] | None = None  # the request being answered (None: the init message)
         self._finalizer: weakref.finalize[..., SubprocessPlanner] | None = None
@@ -183,6 +185,7 @@ class SubprocessPlanner:
         if problem is not None:
             raise self._fail(f'answered the init message with {_short(answer)}, not {{"type": "ready"}} ({problem})')
         self._fleet = None
+        self._encoder = FleetEncoder()
 
     def _call(self, method: str, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
         if self._process is None:
@@ -196,12 +199,18 @@ class SubprocessPlanner:
         # it changed since the last request (and then only what changed).
         update = b""
         if fleet is not self._fleet:
-            update = b',"fleet":' + dumps(encode_fleet(fleet, self._fleet))
+            update = b',"fleet":' + self._encoder.encode(fleet, self._fleet)
             self._fleet = fleet
         self._send(_REQUEST % (_METHODS[method], number, task.vehicle_id, self._encoded_task(task), update))
         line = self._read_line(self.timeout)
+        # The two commonest answers, as fleetsim's own clients spell them, need no decoding or checking:
+        # nothing to change, and the vehicle's plan handed back unchanged (it is the plan in force, as the
+        # process last saw it).
         if line == _NOTHING_TO_CHANGE % number:
-            return []  # the commonest answer, as fleetsim's own clients spell it: nothing to decode or check
+            return []
+        sent = self._encoder.plans.get(task.vehicle_id)
+        if sent is not None and line == _PLAN_HANDED_BACK % (number, sent[1]):
+            return [sent[0]]
         answer = self._decode(line)
         if _nothing_to_change(answer, number):
             return []  # the same, spelt otherwise

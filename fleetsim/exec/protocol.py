@@ -61,6 +61,7 @@ from fleetsim.scenario import Task, VehicleType
 __all__ = [
     "PROTOCOL",
     "PROTOCOL_FAMILY",
+    "FleetEncoder",
     "decode_disturbed",
     "decode_plan",
     "decode_progress",
@@ -190,21 +191,32 @@ def _state(state: VehicleState) -> dict[str, Any]:
     return encoded
 
 
-def encode_fleet(fleet: FleetSnapshot, previous: FleetSnapshot | None = None) -> dict[str, Any]:
-    """The snapshot, or with ``previous`` (the fleet the planner last saw) only what differs from it:
-    the vehicles whose state, the plans and the queues that changed (``time`` and ``routed`` always)."""
+def _changes(fleet: FleetSnapshot, previous: FleetSnapshot | None) -> tuple[list[int], list[int], list[int]]:
+    """The ids of the vehicles whose state, plan and queue ``fleet`` holds anew since ``previous``
+    (every vehicle's when there is no ``previous``), each list sorted."""
 
     def changed(mapping: Mapping[int, Any], before: Mapping[int, Any] | None) -> list[int]:
         if before is None:
             return sorted(mapping)
+        if mapping is before:
+            return []  # snapshots share a mapping until something in it changes
         # Unchanged states and plans are the same objects from one snapshot to the next.
-        return sorted(
-            vid for vid, value in mapping.items() if before.get(vid) is not value and before.get(vid) != value
-        )
+        old = before.get
+        return sorted(vid for vid, value in mapping.items() if old(vid) is not value and old(vid) != value)
 
-    vehicles = changed(fleet.vehicles, None if previous is None else previous.vehicles)
-    plans = changed(fleet.plans, None if previous is None else previous.plans)
-    queues = changed(fleet.tasks, None if previous is None else previous.tasks)
+    if previous is None:
+        return changed(fleet.vehicles, None), changed(fleet.plans, None), changed(fleet.tasks, None)
+    return (
+        changed(fleet.vehicles, previous.vehicles),
+        changed(fleet.plans, previous.plans),
+        changed(fleet.tasks, previous.tasks),
+    )
+
+
+def encode_fleet(fleet: FleetSnapshot, previous: FleetSnapshot | None = None) -> dict[str, Any]:
+    """The snapshot, or with ``previous`` (the fleet the planner last saw) only what differs from it:
+    the vehicles whose state, the plans and the queues that changed (``time`` and ``routed`` always)."""
+    vehicles, plans, queues = _changes(fleet, previous)
     return {
         "time": fleet.time,
         "vehicles": [_state(fleet.vehicles[vid]) for vid in vehicles],
@@ -212,6 +224,30 @@ def encode_fleet(fleet: FleetSnapshot, previous: FleetSnapshot | None = None) ->
         "tasks": [[vid, [task.id for task in fleet.tasks[vid]]] for vid in queues],
         "routed": sorted(fleet.routed),
     }
+
+
+class FleetEncoder:
+    """:func:`encode_fleet` as JSON, for the requests of one run: the same document, written as bytes
+    with each plan encoded on its own and kept, so that an answer handing a plan back unchanged can be
+    recognised by its bytes."""
+
+    def __init__(self) -> None:
+        self.plans: dict[int, tuple[FleetPlan, bytes]] = {}  # vehicle -> its plan as last sent, and its JSON
+
+    def encode(self, fleet: FleetSnapshot, previous: FleetSnapshot | None = None) -> bytes:
+        vehicles, plans, queues = _changes(fleet, previous)
+        encoded = []
+        for vid in plans:
+            plan = fleet.plans[vid]
+            self.plans[vid] = (plan, dumps(encode_plan(plan)))
+            encoded.append(self.plans[vid][1])
+        return b'{"time":%b,"vehicles":%b,"plans":[%b],"tasks":%b,"routed":%b}' % (
+            dumps(fleet.time),
+            dumps([_state(fleet.vehicles[vid]) for vid in vehicles]),
+            b",".join(encoded),
+            dumps([[vid, [task.id for task in fleet.tasks[vid]]] for vid in queues]),
+            dumps(sorted(fleet.routed)),
+        )
 
 
 def decode_plan(data: Mapping[str, Any]) -> FleetPlan:
