@@ -108,12 +108,13 @@ class _Session:
         """The fleet after ``data`` (complete the first time, then the entries that changed)."""
         previous, types = self.fleet, self.types
         traverse, progress, disturbed = decode_traverse, decode_progress, decode_disturbed
+        state = VehicleState._make  # from a tuple: half the cost of the call with eleven arguments
         for v in data["vehicles"]:
             word = v.get("disturbed")
-            self.vehicles[v["id"]] = VehicleState(
+            self.vehicles[v["id"]] = state((
                 v["id"], v["segment"], traverse[v["traverse"]], progress[v["progress"]], v["distance"], v["speed"],
                 v["x"], v["y"], v["heading"], types[v["type"]], None if word is None else disturbed[word],
-            )  # fmt: skip
+            ))  # fmt: skip
         for encoded in data["plans"]:
             mine = self.answered.get(encoded["vehicle_id"])
             plan = mine[0] if mine is not None and mine[1] == encoded else decode_plan(encoded)
@@ -183,7 +184,7 @@ def serve(planner: Planner, stdin: IO[str] | None = None, stdout: IO[str] | None
     send = _writer(stdout)
     session: _Session | None = None
     for line in source:
-        if not line.strip():
+        if line.isspace():
             continue
         try:
             message = loads(line)

@@ -43,6 +43,13 @@ Blank lines are ignored on both sides. Numbers are plain JSON (never NaN or infi
 traverse ``forward|backward``, progress ``forward|reverse``, joint ``same|opposite|turn_in_place``,
 shape ``straight|curve|s_curve|path``, direction ``both|forward|backward``, turn capability
 ``curve|in_place``, conflict model ``swept|bbox``.
+
+fleetsim writes compact JSON (no spaces) and reads any spelling, but the two commonest answers it
+recognises by their bytes, without decoding or checking them: ``{"id":N,"plans":[],"route_errors":[]}``
+and the same with one plan, the asked vehicle's plan in force handed back exactly as fleetsim last sent
+it (its keys in fleetsim's order: what ``JSON.stringify`` or ``json.dumps(..., separators=(",", ":"))``
+give for a plan kept as it was parsed). Both change nothing; a client that answers them so saves fleetsim
+a few microseconds per call.
 """
 
 from __future__ import annotations
