@@ -202,6 +202,7 @@ function handle(line) {
 function serve() {
   const chunk = Buffer.alloc(1 << 16);
   const text = new StringDecoder("utf8"); // a character split between two reads is kept for the next
+  const pause = new Int32Array(new SharedArrayBuffer(4));
   let pending = "";
   for (;;) {
     let count;
@@ -224,8 +225,9 @@ function serve() {
       if (line.trim() !== "") handle(line); // blank lines carry no message
     }
   }
+  pending += text.end();
+  if (pending.trim() !== "") handle(pending); // a last line without its newline
   process.exit(0);
 }
 
-const pause = new Int32Array(new SharedArrayBuffer(4));
 serve();
