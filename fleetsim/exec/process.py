@@ -238,11 +238,14 @@ class SubprocessPlanner:
     def _send(self, message: bytes) -> None:
         """Write one message: a line, newline included."""
         assert self._process is not None and self._process.stdin is not None
-        line = memoryview(message)
         try:
             descriptor = self._process.stdin.fileno()
-            while line:  # straight to the pipe: no buffer to fill and flush on every call
-                line = line[os.write(descriptor, line) :]
+            # Straight to the pipe, no buffer to fill and flush; a long message may take several writes.
+            written = os.write(descriptor, message)
+            if written < len(message):
+                rest = memoryview(message)[written:]
+                while rest:
+                    rest = rest[os.write(descriptor, rest) :]
         except (BrokenPipeError, ConnectionResetError, ValueError):
             raise self._fail(f"{self._ended()} before reading {self._request()}") from None
 
