@@ -216,8 +216,10 @@ def _writer(stdout: IO[str] | None) -> Callable[[bytes], None]:
     descriptor = sys.stdout.fileno()
 
     def write(line: bytes) -> None:
-        view = memoryview(line)
-        while view:
-            view = view[os.write(descriptor, view) :]
+        written = os.write(descriptor, line)
+        if written < len(line):  # a long answer may take several writes
+            rest = memoryview(line)[written:]
+            while rest:
+                rest = rest[os.write(descriptor, rest) :]
 
     return write

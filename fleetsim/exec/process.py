@@ -116,6 +116,7 @@ class SubprocessPlanner:
         self._process: subprocess.Popen[bytes] | None = None
         self._stderr: IO[bytes] | None = None
         self._buffer = b""
+        self._pipes = (-1, -1)  # the process's stdin and stdout, while it runs
         self._fleet: FleetSnapshot | None = None  # the fleet the process last saw
         self._encoder = FleetEncoder()
         self._tasks: dict[int, tuple[Task, bytes]] = {}  # task id -> the task and its JSON
@@ -177,6 +178,8 @@ class SubprocessPlanner:
         except OSError as error:
             raise self._fail(f"cannot start: {error.strerror or error}") from None
         self._process = process
+        assert process.stdin is not None and process.stdout is not None
+        self._pipes = (process.stdin.fileno(), process.stdout.fileno())  # looked up once, used every call
         self._finalizer = weakref.finalize(self, _kill_group, process)
         self._asking = None
         self._send(dumps(encode_init(layout, fleet)) + b"\n")
@@ -237,16 +240,15 @@ class SubprocessPlanner:
 
     def _send(self, message: bytes) -> None:
         """Write one message: a line, newline included."""
-        assert self._process is not None and self._process.stdin is not None
+        descriptor = self._pipes[0]
         try:
-            descriptor = self._process.stdin.fileno()
             # Straight to the pipe, no buffer to fill and flush; a long message may take several writes.
             written = os.write(descriptor, message)
             if written < len(message):
                 rest = memoryview(message)[written:]
                 while rest:
                     rest = rest[os.write(descriptor, rest) :]
-        except (BrokenPipeError, ConnectionResetError, ValueError):
+        except (BrokenPipeError, ConnectionResetError):
             raise self._fail(f"{self._ended()} before reading {self._request()}") from None
 
     def _receive(self, timeout: float | None) -> Any:
@@ -261,10 +263,8 @@ class SubprocessPlanner:
             ) from None
 
     def _read_line(self, timeout: float | None) -> bytes:
-        process = self._process
-        assert process is not None and process.stdout is not None
         deadline = None if timeout is None else time.monotonic() + timeout
-        descriptor = process.stdout.fileno()
+        descriptor = self._pipes[1]
         while b"\n" not in self._buffer:
             left = None if deadline is None else deadline - time.monotonic()
             if left is not None and left <= 0:
