@@ -16,15 +16,24 @@ stderr with its traceback and ends the process with status 1 (the run then fails
 
 from __future__ import annotations
 
-import json
+import os
 import sys
 import traceback
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping, Sequence
 from types import MappingProxyType
 from typing import IO, Any
 
-from fleetsim.enums import ConflictModel, Direction, Disturbed, Progress, Shape, Traverse, TurnCapability
-from fleetsim.exec.protocol import PROTOCOL_FAMILY, decode_plan, encode_plan
+from fleetsim.enums import ConflictModel, Direction, Shape, TurnCapability
+from fleetsim.exec.protocol import (
+    PROTOCOL_FAMILY,
+    decode_disturbed,
+    decode_plan,
+    decode_progress,
+    decode_traverse,
+    dumps,
+    encode_plan,
+    loads,
+)
 from fleetsim.layout.layout import Layout, build_layout
 from fleetsim.layout.segment import Segment
 from fleetsim.planning.protocol import FleetPlan, Planner, RouteError
@@ -65,7 +74,7 @@ def _layout(data: Mapping[str, Any]) -> Layout:
 
 def _task(data: Mapping[str, Any]) -> Task:
     progress = data["goal_progress"]
-    return Task(data["id"], data["vehicle_id"], data["goal_segment"], Progress(progress) if progress else None)
+    return Task(data["id"], data["vehicle_id"], data["goal_segment"], decode_progress[progress] if progress else None)
 
 
 class _Session:
@@ -90,23 +99,34 @@ class _Session:
         self.vehicles: dict[int, VehicleState] = {}
         self.plans: dict[int, FleetPlan] = {}
         self.queues: dict[int, tuple[Task, ...]] = {}
+        # The plans of the last answer, by vehicle, with their JSON: one that comes back in a fleet update
+        # (fleetsim accepted it) becomes the planner's own object again, as in process, where a planner
+        # that keeps state by plan identity (FleetIndex) then recounts nothing.
+        self.answered: dict[int, tuple[FleetPlan, dict[str, Any]]] = {}
 
     def snapshot(self, data: Mapping[str, Any]) -> FleetSnapshot:
         """The fleet after ``data`` (complete the first time, then the entries that changed)."""
+        previous, types = self.fleet, self.types
+        traverse, progress, disturbed = decode_traverse, decode_progress, decode_disturbed
+        state = VehicleState._make  # from a tuple: half the cost of the call with eleven arguments
         for v in data["vehicles"]:
-            self.vehicles[v["id"]] = VehicleState(
-                v["id"], v["segment"], Traverse(v["traverse"]), Progress(v["progress"]), v["distance"], v["speed"],
-                v["x"], v["y"], v["heading"], self.types[v["type"]], _disturbed(v.get("disturbed")),
-            )  # fmt: skip
-        for plan in map(decode_plan, data["plans"]):
+            word = v.get("disturbed")
+            self.vehicles[v["id"]] = state((
+                v["id"], v["segment"], traverse[v["traverse"]], progress[v["progress"]], v["distance"], v["speed"],
+                v["x"], v["y"], v["heading"], types[v["type"]], None if word is None else disturbed[word],
+            ))  # fmt: skip
+        for encoded in data["plans"]:
+            mine = self.answered.get(encoded["vehicle_id"])
+            plan = mine[0] if mine is not None and mine[1] == encoded else decode_plan(encoded)
             self.plans[plan.vehicle_id] = plan  # an unchanged plan stays the same object, as in process
         for vehicle_id, ids in data["tasks"]:
             self.queues[vehicle_id] = tuple(self.tasks[task_id] for task_id in ids)
+        # A mapping with nothing changed is the previous snapshot's, as fleetsim's own snapshots share theirs.
         return FleetSnapshot(
             time=data["time"],
-            vehicles=MappingProxyType(dict(self.vehicles)),
-            plans=MappingProxyType(dict(self.plans)),
-            tasks=MappingProxyType(dict(self.queues)),
+            vehicles=_view(self.vehicles, data["vehicles"], None if previous is None else previous.vehicles),
+            plans=_view(self.plans, data["plans"], None if previous is None else previous.plans),
+            tasks=_view(self.queues, data["tasks"], None if previous is None else previous.tasks),
             routed=frozenset(data["routed"]),
         )
 
@@ -117,35 +137,57 @@ class _Session:
             msg = f"request {request.get('id')!r} has no fleet and none came before"
             raise ProtocolError(msg)
         method = request["type"]
-        if method not in ("plan_routes", "fix_legs"):
+        if method == "fix_legs":
+            call = planner.fix_legs
+        elif method == "plan_routes":
+            call = planner.plan_routes
+        else:
             msg = f"request type={method!r} must be plan_routes or fix_legs"
             raise ProtocolError(msg)
-        call = planner.plan_routes if method == "plan_routes" else planner.fix_legs
         try:
             items = call(self.tasks.get(request["task"]["id"]) or _task(request["task"]), self.fleet, self.layout)
         except RouteError as error:
             return {"id": request["id"], "route_error": error.message}
-        plans = [encode_plan(item) for item in items if isinstance(item, FleetPlan)]
+        if not items or _handed_back(items, self.fleet):
+            return {"id": request["id"], "plans": [], "route_errors": []}
+        plans = []
+        for item in items:
+            if isinstance(item, FleetPlan):
+                encoded = encode_plan(item)
+                self.answered[item.vehicle_id] = (item, encoded)
+                plans.append(encoded)
         errors = [
             {"vehicle_id": item.vehicle_id, "message": item.message} for item in items if isinstance(item, RouteError)
         ]
         return {"id": request["id"], "plans": plans, "route_errors": errors}
 
 
+def _handed_back(items: Sequence[FleetPlan | RouteError], fleet: FleetSnapshot) -> bool:
+    """The response is one plan, the plan in force: fleetsim changes nothing for it, as for no plan."""
+    if not isinstance(items, (list, tuple)) or len(items) != 1:
+        return False
+    item = items[0]
+    return isinstance(item, FleetPlan) and item == fleet.plans.get(item.vehicle_id)
+
+
+def _view(entries: dict[int, Any], changed: list[Any], before: Mapping[int, Any] | None) -> Mapping[int, Any]:
+    """A read-only copy of ``entries``, or ``before`` itself when no entry ``changed``."""
+    return before if before is not None and not changed else MappingProxyType(dict(entries))
+
+
 def serve(planner: Planner, stdin: IO[str] | None = None, stdout: IO[str] | None = None) -> int:
     """Answer fleetsim's messages on ``stdin`` (default: the process's) until it closes; the exit status.
 
-    The process's own streams are read and written as bytes (JSON is UTF-8): a call then costs no text
-    decoding and encoding layer on either side of the pipe."""
+    The process's own streams are read as bytes (JSON is UTF-8) and answers written straight to its
+    stdout's file descriptor: a call then costs no text layer and no buffer to fill and flush."""
     source: IO[Any] = stdin if stdin is not None else sys.stdin.buffer
-    sink: IO[Any] = stdout if stdout is not None else sys.stdout.buffer
-    binary = stdout is None
+    send = _writer(stdout)
     session: _Session | None = None
     for line in source:
-        if not line.strip():
+        if line.isspace():
             continue
         try:
-            message = json.loads(line)
+            message = loads(line)
             if session is None:
                 session = _Session(message)
                 answer: dict[str, Any] = {"type": "ready"}
@@ -157,11 +199,27 @@ def serve(planner: Planner, stdin: IO[str] | None = None, stdout: IO[str] | None
         except Exception:  # the planner's own error: its traceback goes to fleetsim's report via stderr
             traceback.print_exc(file=sys.stderr)
             return 1
-        text = json.dumps(answer, separators=(",", ":")) + "\n"
-        sink.write(text.encode("utf-8") if binary else text)
-        sink.flush()
+        send(dumps(answer) + b"\n")
     return 0
 
 
-def _disturbed(word: str | None) -> Disturbed | None:
-    return None if word is None else Disturbed(word)
+def _writer(stdout: IO[str] | None) -> Callable[[bytes], None]:
+    """How an answer's line is written: to ``stdout`` as text, or else to the process's stdout as bytes."""
+    if stdout is not None:
+
+        def write_text(line: bytes) -> None:
+            stdout.write(line.decode("utf-8"))
+            stdout.flush()
+
+        return write_text
+    sys.stdout.flush()  # anything printed before the first answer goes first
+    descriptor = sys.stdout.fileno()
+
+    def write(line: bytes) -> None:
+        written = os.write(descriptor, line)
+        if written < len(line):  # a long answer may take several writes
+            rest = memoryview(line)[written:]
+            while rest:
+                rest = rest[os.write(descriptor, rest) :]
+
+    return write

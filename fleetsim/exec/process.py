@@ -36,7 +36,7 @@ import jsonschema
 import jsonschema_rs
 
 from fleetsim.errors import PlannerProcessError
-from fleetsim.exec.protocol import decode_response, encode_fleet, encode_init, encode_task
+from fleetsim.exec.protocol import FleetEncoder, decode_response, dumps, encode_init, encode_task, loads
 from fleetsim.layout.layout import Layout
 from fleetsim.planning.protocol import Response
 from fleetsim.planning.snapshot import FleetSnapshot
@@ -47,6 +47,11 @@ __all__ = ["SCHEMAS", "PlannerProcessError", "SubprocessPlanner", "load_schema"]
 SCHEMAS = Path(__file__).resolve().parents[1] / "schemas"
 _STDERR_TAIL = 4000  # characters of stderr shown with an error
 _GRACE = 1.0  # seconds a process gets to exit after stdin closes, and again after SIGTERM
+# A request: its type, id, vehicle, task and (when the fleet changed) ',"fleet":' and the update.
+_REQUEST = b'{"type":"%b","id":%d,"vehicle":%d,"task":%b%b}\n'
+_METHODS = {"plan_routes": b"plan_routes", "fix_legs": b"fix_legs"}
+_NOTHING_TO_CHANGE = b'{"id":%d,"plans":[],"route_errors":[]}'
+_PLAN_HANDED_BACK = b'{"id":%d,"plans":[%b],"route_errors":[]}'
 
 
 @dataclass(frozen=True, slots=True)
@@ -111,7 +116,11 @@ class SubprocessPlanner:
         self._process: subprocess.Popen[bytes] | None = None
         self._stderr: IO[bytes] | None = None
         self._buffer = b""
+        self._pipes = (-1, -1)  # the process's stdin and stdout, while it runs
         self._fleet: FleetSnapshot | None = None  # the fleet the process last saw
+        self._encoder = FleetEncoder()
+        self._tasks: dict[int, tuple[Task, bytes]] = {}  # task id -> the task and its JSON
+        self._asking: tuple[int, str, int] | None = None  # the request being answered (None: the init message)
         self._finalizer: weakref.finalize[..., SubprocessPlanner] | None = None
 
     def __repr__(self) -> str:
@@ -169,13 +178,17 @@ class SubprocessPlanner:
         except OSError as error:
             raise self._fail(f"cannot start: {error.strerror or error}") from None
         self._process = process
+        assert process.stdin is not None and process.stdout is not None
+        self._pipes = (process.stdin.fileno(), process.stdout.fileno())  # looked up once, used every call
         self._finalizer = weakref.finalize(self, _kill_group, process)
-        self._send(encode_init(layout, fleet), "the init message")
-        answer = self._receive(self.startup_timeout, "the init message")
+        self._asking = None
+        self._send(dumps(encode_init(layout, fleet)) + b"\n")
+        answer = self._receive(self.startup_timeout)
         problem = _violation(load_schema("ready"), answer)
         if problem is not None:
             raise self._fail(f'answered the init message with {_short(answer)}, not {{"type": "ready"}} ({problem})')
         self._fleet = None
+        self._encoder = FleetEncoder()
 
     def _call(self, method: str, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
         if self._process is None:
@@ -184,56 +197,84 @@ class SubprocessPlanner:
             self._start(layout, fleet)
         self.requests += 1
         number = self.requests
-        request: dict[str, Any] = {"type": method, "id": number, "vehicle": task.vehicle_id, "task": encode_task(task)}
+        self._asking = (number, method, task.vehicle_id)
+        # The request is put together from bytes: its task is encoded once per run, its fleet only when
+        # it changed since the last request (and then only what changed).
+        update = b""
         if fleet is not self._fleet:
-            request["fleet"] = encode_fleet(fleet, self._fleet)
+            update = b',"fleet":' + self._encoder.encode(fleet, self._fleet)
             self._fleet = fleet
-        what = f"request {number} ({method} for vehicle {task.vehicle_id})"
-        self._send(request, what)
-        answer = self._receive(self.timeout, what)
+        self._send(_REQUEST % (_METHODS[method], number, task.vehicle_id, self._encoded_task(task), update))
+        line = self._read_line(self.timeout)
+        # The two commonest answers, as fleetsim's own clients spell them, need no decoding or checking:
+        # nothing to change, and the vehicle's plan handed back unchanged (it is the plan in force, as the
+        # process last saw it).
+        if line == _NOTHING_TO_CHANGE % number:
+            return []
+        sent = self._encoder.plans.get(task.vehicle_id)
+        if sent is not None and line == _PLAN_HANDED_BACK % (number, sent[1]):
+            return [sent[0]]
+        answer = self._decode(line)
         if _nothing_to_change(answer, number):
-            return []  # the commonest answer, valid on its face: the schema check is left out
+            return []  # the same, spelt otherwise
         problem = _violation(load_schema("response"), answer)
         if problem is not None:
-            raise self._fail(f"answered {what} with an invalid response: {problem}")
+            raise self._fail(f"answered {self._request()} with an invalid response: {problem}")
         if answer["id"] != number:
-            raise self._fail(f"answered {what} with the answer to request {answer['id']!r}")
+            raise self._fail(f"answered {self._request()} with the answer to request {answer['id']!r}")
         return decode_response(answer)
 
-    def _send(self, message: dict[str, Any], what: str) -> None:
-        assert self._process is not None and self._process.stdin is not None
-        line = memoryview(json.dumps(message, separators=(",", ":"), allow_nan=False).encode("utf-8") + b"\n")
-        try:
-            descriptor = self._process.stdin.fileno()
-            while line:  # straight to the pipe: no buffer to fill and flush on every call
-                line = line[os.write(descriptor, line) :]
-        except (BrokenPipeError, ConnectionResetError, ValueError):
-            raise self._fail(f"{self._ended()} before reading {what}") from None
+    def _encoded_task(self, task: Task) -> bytes:
+        """The task's JSON, encoded at its first request (a task is asked about again and again)."""
+        known = self._tasks.get(task.id)
+        if known is None or known[0] is not task:
+            known = self._tasks[task.id] = (task, dumps(encode_task(task)))
+        return known[1]
 
-    def _receive(self, timeout: float | None, what: str) -> Any:
-        line = self._read_line(timeout, what)
+    def _request(self) -> str:
+        """The message being answered, in words (for error messages)."""
+        if self._asking is None:
+            return "the init message"
+        number, method, vehicle = self._asking
+        return f"request {number} ({method} for vehicle {vehicle})"
+
+    def _send(self, message: bytes) -> None:
+        """Write one message: a line, newline included."""
+        descriptor = self._pipes[0]
         try:
-            return json.loads(line)
-        except (json.JSONDecodeError, UnicodeDecodeError) as error:
+            # Straight to the pipe, no buffer to fill and flush; a long message may take several writes.
+            written = os.write(descriptor, message)
+            if written < len(message):
+                rest = memoryview(message)[written:]
+                while rest:
+                    rest = rest[os.write(descriptor, rest) :]
+        except (BrokenPipeError, ConnectionResetError):
+            raise self._fail(f"{self._ended()} before reading {self._request()}") from None
+
+    def _receive(self, timeout: float | None) -> Any:
+        return self._decode(self._read_line(timeout))
+
+    def _decode(self, line: bytes) -> Any:
+        try:
+            return loads(line)
+        except ValueError as error:  # orjson's JSONDecodeError, invalid UTF-8 included
             raise self._fail(
-                f"answered {what} with invalid JSON ({getattr(error, 'msg', error)}): {_clip(line)}"
+                f"answered {self._request()} with invalid JSON ({getattr(error, 'msg', error)}): {_clip(line)}"
             ) from None
 
-    def _read_line(self, timeout: float | None, what: str) -> bytes:
-        process = self._process
-        assert process is not None and process.stdout is not None
+    def _read_line(self, timeout: float | None) -> bytes:
         deadline = None if timeout is None else time.monotonic() + timeout
-        descriptor = process.stdout.fileno()
+        descriptor = self._pipes[1]
         while b"\n" not in self._buffer:
             left = None if deadline is None else deadline - time.monotonic()
             if left is not None and left <= 0:
-                raise self._fail(f"did not answer {what} within the per-call timeout of {timeout:g} s")
+                raise self._fail(f"did not answer {self._request()} within the per-call timeout of {timeout:g} s")
             ready, _, _ = select.select([descriptor], [], [], left)
             if not ready:
                 continue
             chunk = os.read(descriptor, 1 << 16)
             if not chunk:
-                raise self._fail(f"{self._ended()} before answering {what}")
+                raise self._fail(f"{self._ended()} before answering {self._request()}")
             self._buffer += chunk
         line, _, self._buffer = self._buffer.partition(b"\n")
         return line

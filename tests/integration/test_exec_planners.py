@@ -12,7 +12,8 @@ import pytest
 
 from fleetsim import load_scenario, load_suite
 from fleetsim.cli import main
-from fleetsim.exec import SubprocessPlanner
+from fleetsim.exec import SubprocessPlanner, process
+from fleetsim.exec.protocol import decode_response
 from fleetsim.planners import BFSPlanner, ReservingPlanner
 from fleetsim.scenario import Scenario
 from fleetsim.sim.loop import run_scenario
@@ -204,6 +205,57 @@ def _first_snapshot(scenario: Scenario) -> object:
     from fleetsim.planning.controller import FleetController
 
     return FleetController(scenario).snapshot(0.0)
+
+
+# -- answers recognised by their bytes --------------------------------------------------------------
+
+# A planner process that hands every vehicle asked about its plan in force back, written compactly (as
+# fleetsim's clients write) or with the json module's default spaces.
+HAND_BACK = """
+import json, sys
+separators = (",", ":") if sys.argv[1] == "compact" else (", ", ": ")
+plans = {}
+for line in sys.stdin:
+    message = json.loads(line)
+    if message["type"] == "init":
+        print(json.dumps({"type": "ready"}), flush=True)
+        continue
+    for plan in message.get("fleet", {}).get("plans", []):
+        plans[plan["vehicle_id"]] = plan
+    answer = {"id": message["id"], "plans": [plans[message["vehicle"]]], "route_errors": []}
+    print(json.dumps(answer, separators=separators), flush=True)
+"""
+
+
+class HandBack:
+    """In process, what HAND_BACK does."""
+
+    def plan_routes(self, task, fleet, layout):  # type: ignore[no-untyped-def]
+        return [fleet.plans[task.vehicle_id]]
+
+    fix_legs = plan_routes
+
+
+@pytest.mark.parametrize(("spelling", "decoded"), [("compact", False), ("spaced", True)])
+def test_a_plan_handed_back_unchanged_changes_nothing_however_it_is_spelt(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, spelling: str, decoded: bool
+) -> None:
+    script = tmp_path / "hand_back.py"
+    script.write_text(textwrap.dedent(HAND_BACK), encoding="utf-8")
+    decodes: list[object] = []
+
+    def counted(answer: dict[str, object]) -> object:
+        decodes.append(answer)
+        return decode_response(answer)
+
+    monkeypatch.setattr(process, "decode_response", counted)
+    scenario = example("crossing")
+    served = run_scenario(scenario, SubprocessPlanner([sys.executable, str(script), spelling]))
+    direct = run_scenario(scenario, HandBack())
+    assert (served.status, served.ended, served.trace_hash) == (direct.status, direct.ended, direct.trace_hash)
+    assert served.metrics.planner_calls == direct.metrics.planner_calls > 1
+    # Compact: recognised as the plan in force by its bytes; spelt otherwise: decoded and checked.
+    assert bool(decodes) is decoded
 
 
 # -- the Node.js example ------------------------------------------------------------------------------

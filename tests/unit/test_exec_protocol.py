@@ -7,11 +7,22 @@ from pathlib import Path
 
 import jsonschema
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from fleetsim import load_scenario, load_suite
 from fleetsim.enums import Disturbed
 from fleetsim.exec.client import ProtocolError, _Session
-from fleetsim.exec.protocol import decode_response, encode_fleet, encode_init, encode_task
+from fleetsim.exec.protocol import (
+    FleetEncoder,
+    decode_response,
+    dumps,
+    encode_fleet,
+    encode_init,
+    encode_plan,
+    encode_task,
+    loads,
+)
 from fleetsim.planners import ReservingPlanner
 from fleetsim.planning.controller import FleetController
 from fleetsim.planning.protocol import FleetPlan, RouteError
@@ -131,3 +142,54 @@ def test_the_disturbed_field_travels_only_while_set_and_protocol_1_0_clients_are
     _Session({**init, "protocol": "fleetsim-planner/1"})  # the same major version
     with pytest.raises(ProtocolError):
         _Session({**init, "protocol": "fleetsim-planner/2.0"})
+
+
+@given(st.floats(allow_nan=False, allow_infinity=False))
+def test_floats_travel_exactly_whoever_writes_them(value: float) -> None:
+    # fleetsim writes with orjson; other clients write what their JSON library gives (Python's json
+    # module: repr). Either way the same float arrives, so served planners decide as in process.
+    assert loads(dumps(value)) == value and loads(json.dumps(value)) == value
+    assert json.loads(dumps(value)) == value
+
+
+def test_the_fleet_encoder_writes_the_same_document_and_keeps_each_plans_json() -> None:
+    scenario = crossing()
+    controller = FleetController(scenario)
+    first = controller.snapshot(0.0)
+    encoder = FleetEncoder()
+    assert loads(encoder.encode(first)) == encode_fleet(first)
+    assert {vid: (plan, dumps(encode_plan(plan))) for vid, plan in first.plans.items()} == encoder.plans
+    controller.set_state(controller.states[1]._replace(x=-4.5))
+    plan = first.plans[2]
+    controller.set_plan(type(plan)(2, plan.legs + plan.legs[-1:]))
+    second = controller.snapshot(0.1)
+    assert loads(encoder.encode(second, first)) == encode_fleet(second, first)
+    assert encoder.plans[2] == (second.plans[2], dumps(encode_plan(second.plans[2])))
+    nothing = loads(encoder.encode(second, second))
+    assert (nothing["vehicles"], nothing["plans"], nothing["tasks"]) == ([], [], [])
+
+
+class _HandBack:
+    """Answers every call with the vehicle's plan in force, or with one more leg on it (``grow``)."""
+
+    def __init__(self, grow: bool = False) -> None:
+        self.grow = grow
+
+    def plan_routes(self, task, fleet, layout):  # type: ignore[no-untyped-def]
+        plan = fleet.plans[task.vehicle_id]
+        return [type(plan)(plan.vehicle_id, plan.legs + plan.legs[-1:]) if self.grow else plan]
+
+    fix_legs = plan_routes
+
+
+def test_the_python_client_answers_a_plan_handed_back_unchanged_as_nothing_to_change() -> None:
+    scenario = crossing()
+    fleet = FleetController(scenario).snapshot(0.0)
+    session = _Session(loads(dumps(encode_init(scenario.layout, fleet))))
+    task = scenario.tasks[0]
+    request = {"type": "fix_legs", "id": 7, "vehicle": task.vehicle_id, "task": encode_task(task)}
+    unchanged = session.answer(_HandBack(), loads(dumps({**request, "fleet": encode_fleet(fleet)})))
+    assert unchanged == {"id": 7, "plans": [], "route_errors": []}
+    grown = session.answer(_HandBack(grow=True), request)
+    [plan] = decode_response(grown)
+    assert isinstance(plan, FleetPlan) and len(plan.legs) == len(fleet.plans[task.vehicle_id].legs) + 1

@@ -20,7 +20,8 @@
 // A message we cannot understand is a protocol violation: we say why on stderr and exit with status 1.
 "use strict";
 
-const readline = require("readline");
+const fs = require("fs");
+const { StringDecoder } = require("string_decoder");
 
 const PROTOCOL = "fleetsim-planner/1"; // the major version; minor versions (1.1, ...) only add optional fields
 const FIX_HORIZON = 3; // fix_legs commits (at most) the first three legs of a plan, like BFSPlanner
@@ -36,7 +37,8 @@ function fail(message) {
 }
 
 function send(message) {
-  process.stdout.write(JSON.stringify(message) + "\n");
+  const line = Buffer.from(JSON.stringify(message) + "\n");
+  for (let done = 0; done < line.length; ) done += fs.writeSync(1, line, done);
 }
 
 const isObject = (value) => typeof value === "object" && value !== null && !Array.isArray(value);
@@ -194,8 +196,38 @@ function handle(line) {
   send({ id: message.id, ...answer });
 }
 
-const input = readline.createInterface({ input: process.stdin, crlfDelay: Infinity, terminal: false });
-input.on("line", (line) => {
-  if (line.trim() !== "") handle(line); // blank lines carry no message
-});
-input.on("close", () => process.exit(0)); // stdin closed: the run is over
+// fleetsim waits for each answer before it sends the next message, so there is nothing for an event loop
+// to interleave: the messages are read with blocking reads of stdin and answered with blocking writes to
+// stdout, which costs a few microseconds less per call than readline's events and stream writes.
+function serve() {
+  const chunk = Buffer.alloc(1 << 16);
+  const text = new StringDecoder("utf8"); // a character split between two reads is kept for the next
+  const pause = new Int32Array(new SharedArrayBuffer(4));
+  let pending = "";
+  for (;;) {
+    let count;
+    try {
+      count = fs.readSync(0, chunk, 0, chunk.length, null);
+    } catch (error) {
+      if (error.code === "EAGAIN") {
+        Atomics.wait(pause, 0, 0, 1); // stdin is non-blocking (not fleetsim's pipe): wait a millisecond
+        continue;
+      }
+      if (error.code === "EOF") break;
+      throw error;
+    }
+    if (count === 0) break; // stdin closed: the run is over
+    pending += text.write(chunk.subarray(0, count));
+    let end;
+    while ((end = pending.indexOf("\n")) >= 0) {
+      const line = pending.slice(0, end);
+      pending = pending.slice(end + 1);
+      if (line.trim() !== "") handle(line); // blank lines carry no message
+    }
+  }
+  pending += text.end();
+  if (pending.trim() !== "") handle(pending); // a last line without its newline
+  process.exit(0);
+}
+
+serve();
