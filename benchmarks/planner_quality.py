@@ -51,7 +51,8 @@ from fleetsim.load.scenario import load_scenario_dir
 from fleetsim.load.tiled_writer import write_map
 from fleetsim.planners import BFSPlanner, ReservingPlanner
 from fleetsim.planners.routing import legs_along, mark_goal_on_fixed, shortest_route, straight_line_estimate
-from fleetsim.planning.protocol import FleetPlan, Planner, Response, RouteError
+from fleetsim.planning.plans import FleetPlan, Response, RouteError
+from fleetsim.planning.protocol import Planner
 from fleetsim.planning.snapshot import FleetSnapshot
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Scenario, ScenarioSettings, Task, VehicleType
 from fleetsim.sim.loop import run_scenario

@@ -36,7 +36,8 @@ from fleetsim.exec.protocol import (
 )
 from fleetsim.layout.layout import Layout, build_layout
 from fleetsim.layout.segment import Segment
-from fleetsim.planning.protocol import FleetPlan, Planner, RouteError
+from fleetsim.planning.plans import FleetPlan, RouteError
+from fleetsim.planning.protocol import Planner
 from fleetsim.planning.snapshot import FleetSnapshot, VehicleState
 from fleetsim.scenario import Task, VehicleType
 

@@ -38,7 +38,7 @@ import jsonschema_rs
 from fleetsim.errors import PlannerProcessError
 from fleetsim.exec.protocol import FleetEncoder, decode_response, dumps, encode_init, encode_task, loads
 from fleetsim.layout.layout import Layout
-from fleetsim.planning.protocol import Response
+from fleetsim.planning.plans import Response
 from fleetsim.planning.snapshot import FleetSnapshot
 from fleetsim.scenario import Task
 

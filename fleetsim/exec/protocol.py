@@ -61,7 +61,7 @@ import orjson
 
 from fleetsim.enums import Disturbed, Progress, Traverse
 from fleetsim.layout.layout import Layout
-from fleetsim.planning.protocol import FleetLeg, FleetPlan, RouteError
+from fleetsim.planning.plans import FleetLeg, FleetPlan, RouteError
 from fleetsim.planning.snapshot import FleetSnapshot, VehicleState
 from fleetsim.scenario import Task, VehicleType
 

@@ -23,7 +23,7 @@ from fleetsim.enums import Disturbed, Progress, Traverse
 from fleetsim.layout.layout import Layout
 from fleetsim.layout.segment import Segment
 from fleetsim.motion.slowdown import Profile, plan_profile
-from fleetsim.planning.protocol import FleetLeg, FleetPlan
+from fleetsim.planning.plans import FleetLeg, FleetPlan
 from fleetsim.planning.snapshot import VehicleState
 from fleetsim.scenario import Vehicle
 

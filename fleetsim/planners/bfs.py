@@ -6,7 +6,7 @@ from dataclasses import replace
 
 from fleetsim.layout.layout import Layout
 from fleetsim.planners.routing import breadth_first_route, legs_along, mark_goal_on_fixed
-from fleetsim.planning.protocol import FleetPlan, Response, RouteError
+from fleetsim.planning.plans import FleetPlan, Response, RouteError
 from fleetsim.planning.snapshot import FleetSnapshot
 from fleetsim.scenario import Task
 

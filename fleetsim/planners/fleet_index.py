@@ -14,7 +14,7 @@ from collections.abc import Iterable, Mapping, Sequence
 
 from fleetsim.enums import Traverse
 from fleetsim.layout.layout import Layout
-from fleetsim.planning.protocol import FleetPlan
+from fleetsim.planning.plans import FleetPlan
 
 __all__ = ["FleetIndex"]
 

@@ -43,7 +43,7 @@ from fleetsim.planners.choreography import Dance, choreograph
 from fleetsim.planners.fleet_index import FleetIndex
 from fleetsim.planners.making_way import WayOut, ways_out
 from fleetsim.planners.routing import legs_along, mark_goal_on_fixed, shortest_route, straight_line_estimate
-from fleetsim.planning.protocol import FleetLeg, FleetPlan, Response, RouteError
+from fleetsim.planning.plans import FleetLeg, FleetPlan, Response, RouteError
 from fleetsim.planning.snapshot import FleetSnapshot
 from fleetsim.scenario import Task
 

@@ -17,7 +17,7 @@ from dataclasses import replace
 from fleetsim.enums import JointKind, Progress, Traverse, TurnCapability
 from fleetsim.layout.layout import Layout
 from fleetsim.layout.reachability import State, next_states, next_steps, state_key
-from fleetsim.planning.protocol import FleetLeg
+from fleetsim.planning.plans import FleetLeg
 from fleetsim.scenario import Task
 
 __all__ = [

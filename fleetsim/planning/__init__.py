@@ -2,7 +2,8 @@
 
 from fleetsim.planning.checks import CheckContext, Rejection, RejectionCode, check_plan, check_plans
 from fleetsim.planning.controller import CallOutcome, FleetController, validate_response
-from fleetsim.planning.protocol import FleetLeg, FleetPlan, Planner, Response, ResponseItem, RouteError
+from fleetsim.planning.plans import FleetLeg, FleetPlan, Response, ResponseItem, RouteError
+from fleetsim.planning.protocol import Planner
 from fleetsim.planning.reservations import CollisionAlert, ConflictTable, find_alerts
 from fleetsim.planning.snapshot import FleetSnapshot, VehicleState
 from fleetsim.planning.tasks import TaskBook

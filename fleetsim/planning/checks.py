@@ -15,7 +15,7 @@ from itertools import pairwise
 
 from fleetsim.enums import JointKind, TurnCapability
 from fleetsim.layout.layout import Layout
-from fleetsim.planning.protocol import FleetLeg, FleetPlan
+from fleetsim.planning.plans import FleetLeg, FleetPlan
 from fleetsim.scenario import Task, VehicleType
 
 __all__ = [

@@ -14,7 +14,8 @@ from typing import Literal
 from fleetsim.errors import PlannerError
 from fleetsim.layout.layout import Layout
 from fleetsim.planning.checks import CheckContext, Rejection, check_plans
-from fleetsim.planning.protocol import FleetPlan, Planner, RouteError
+from fleetsim.planning.plans import FleetPlan, RouteError
+from fleetsim.planning.protocol import Planner
 from fleetsim.planning.reservations import CollisionAlert, ConflictTable, ReservationIndex
 from fleetsim.planning.snapshot import FleetSnapshot, VehicleState, initial_plan, initial_state, read_only
 from fleetsim.planning.tasks import TaskBook

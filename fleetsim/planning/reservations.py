@@ -20,7 +20,7 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 
 from fleetsim.layout.layout import Layout
-from fleetsim.planning.protocol import FleetPlan
+from fleetsim.planning.plans import FleetPlan
 
 __all__ = ["CollisionAlert", "ConflictTable", "ReservationIndex", "find_alerts", "fixed_segments"]
 

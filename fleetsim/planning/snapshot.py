@@ -14,7 +14,7 @@ from typing import NamedTuple, TypeVar
 
 from fleetsim.enums import Disturbed, Progress, Traverse
 from fleetsim.layout.layout import Layout
-from fleetsim.planning.protocol import FleetLeg, FleetPlan
+from fleetsim.planning.plans import FleetLeg, FleetPlan
 from fleetsim.scenario import Task, Vehicle, VehicleType
 
 __all__ = ["FleetSnapshot", "VehicleState", "initial_plan", "initial_state", "read_only"]

@@ -12,7 +12,7 @@ from collections import deque
 from collections.abc import Callable, Iterable, Mapping
 from types import MappingProxyType
 
-from fleetsim.planning.protocol import FleetPlan
+from fleetsim.planning.plans import FleetPlan
 from fleetsim.scenario import Task
 
 __all__ = ["TaskBook"]

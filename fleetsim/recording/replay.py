@@ -19,7 +19,7 @@ from typing import Any, NamedTuple
 
 from fleetsim.enums import Progress, Traverse
 from fleetsim.errors import FleetsimError
-from fleetsim.planning.protocol import FleetLeg, FleetPlan
+from fleetsim.planning.plans import FleetLeg, FleetPlan
 from fleetsim.planning.reservations import CollisionAlert, ConflictTable, ReservationIndex
 from fleetsim.planning.snapshot import initial_plan, initial_state
 from fleetsim.scenario import Scenario

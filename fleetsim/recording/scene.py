@@ -13,7 +13,7 @@ from typing import Any
 
 from fleetsim.enums import Traverse
 from fleetsim.layout.segment import Segment
-from fleetsim.planning.protocol import FleetPlan
+from fleetsim.planning.plans import FleetPlan
 from fleetsim.planning.reservations import CollisionAlert
 from fleetsim.recording import messages as m
 from fleetsim.recording.colours import vehicle_colours

@@ -27,7 +27,7 @@ from typing import Any, Literal
 import networkx as nx
 
 from fleetsim.layout.layout import Layout
-from fleetsim.planning.protocol import FleetLeg, FleetPlan
+from fleetsim.planning.plans import FleetLeg, FleetPlan
 from fleetsim.planning.snapshot import VehicleState
 from fleetsim.scenario import Task
 

@@ -20,7 +20,7 @@ from collections.abc import Callable
 from types import FrameType
 
 from fleetsim.errors import FleetsimError, PlannerProcessError
-from fleetsim.planning.protocol import RouteError
+from fleetsim.planning.plans import RouteError
 from fleetsim.sim.interrupt import PlannerInterrupted
 
 __all__ = ["PlannerFault", "PlannerGuard"]

@@ -15,7 +15,7 @@ from types import MappingProxyType
 from typing import Any, Literal
 
 from fleetsim.planning.checks import Rejection
-from fleetsim.planning.protocol import FleetPlan
+from fleetsim.planning.plans import FleetPlan
 from fleetsim.planning.reservations import CollisionAlert
 from fleetsim.scenario import Expectations, Task
 from fleetsim.sim.diagnosis import Diagnosis

@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import IO, Any
 
 from fleetsim.enums import Progress, Traverse
-from fleetsim.planning.protocol import FleetPlan
+from fleetsim.planning.plans import FleetPlan
 from fleetsim.planning.snapshot import VehicleState
 
 __all__ = [

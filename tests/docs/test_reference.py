@@ -23,9 +23,9 @@ from tests.docs.examples import REPO
 # Every type a planner receives, returns or reads from, by the path its reference entry names.
 PLANNER_FACING = (
     "fleetsim.planning.protocol.Planner",
-    "fleetsim.planning.protocol.FleetPlan",
-    "fleetsim.planning.protocol.FleetLeg",
-    "fleetsim.planning.protocol.RouteError",
+    "fleetsim.planning.plans.FleetPlan",
+    "fleetsim.planning.plans.FleetLeg",
+    "fleetsim.planning.plans.RouteError",
     "fleetsim.scenario.Task",
     "fleetsim.planning.snapshot.FleetSnapshot",
     "fleetsim.planning.snapshot.VehicleState",
@@ -164,7 +164,7 @@ def test_every_attribute_the_shipped_planners_read_is_documented(package: griffe
         checked[path] = sorted(names)
         assert undocumented(cls, names) == [], f"{path}: the shipped planners read these"
     # The intersection is what the planners actually use; spot-check it so a broken parse cannot pass.
-    assert {"fixed_legs", "legs", "vehicle_id"} <= set(checked["fleetsim.planning.protocol.FleetPlan"])
+    assert {"fixed_legs", "legs", "vehicle_id"} <= set(checked["fleetsim.planning.plans.FleetPlan"])
     assert {"successors", "conflicts", "segments"} <= set(checked["fleetsim.layout.layout.Layout"])
     assert {"goal_segment", "goal_progress", "id"} <= set(checked["fleetsim.scenario.Task"])
     assert {"plans", "vehicles", "tasks", "time"} <= set(checked["fleetsim.planning.snapshot.FleetSnapshot"])
@@ -174,7 +174,7 @@ def test_every_attribute_the_shipped_planners_read_is_documented(package: griffe
 
 
 def test_removing_an_attributes_entry_makes_it_undocumented(package: griffe.Module) -> None:
-    leg = find(package, "fleetsim.planning.protocol.FleetLeg")
+    leg = find(package, "fleetsim.planning.plans.FleetLeg")
     assert leg.docstring is not None
     original = leg.docstring
     assert undocumented(leg, ["fixed", "goal_for_task"]) == []

@@ -19,9 +19,9 @@ PLANNER_FACING = {
     "fleetsim.planning.snapshot.FleetSnapshot": ("time", "vehicles", "plans", "tasks"),
     "fleetsim.planning.snapshot.VehicleState": ("segment", "traverse", "progress", "distance", "speed", "type"),
     "fleetsim.scenario.VehicleType": ("turn_capability", "max_speed", "acceleration", "length"),
-    "fleetsim.planning.protocol.FleetPlan": ("vehicle_id", "legs"),
-    "fleetsim.planning.protocol.FleetLeg": ("segment", "traverse", "progress", "fixed", "goal_for_task"),
-    "fleetsim.planning.protocol.RouteError": ("vehicle_id", "message"),
+    "fleetsim.planning.plans.FleetPlan": ("vehicle_id", "legs"),
+    "fleetsim.planning.plans.FleetLeg": ("segment", "traverse", "progress", "fixed", "goal_for_task"),
+    "fleetsim.planning.plans.RouteError": ("vehicle_id", "message"),
 }
 
 

@@ -21,7 +21,7 @@ from fleetsim import load_scenario, load_suite
 from fleetsim.enums import Traverse
 from fleetsim.layout import Layout
 from fleetsim.planners import BFSPlanner
-from fleetsim.planning.protocol import FleetLeg, FleetPlan, Response, RouteError
+from fleetsim.planning.plans import FleetLeg, FleetPlan, Response, RouteError
 from fleetsim.planning.snapshot import FleetSnapshot
 from fleetsim.recording.artifacts import write_run_artifacts
 from fleetsim.recording.rviz import framed_view

@@ -27,7 +27,7 @@ from fleetsim import load_scenario, load_suite
 from fleetsim.exec.protocol import decode_response, encode_fleet, encode_init, encode_task
 from fleetsim.layout.layout import Layout
 from fleetsim.planners import BFSPlanner
-from fleetsim.planning.protocol import FleetPlan, ResponseItem, RouteError
+from fleetsim.planning.plans import FleetPlan, ResponseItem, RouteError
 from fleetsim.planning.snapshot import FleetSnapshot
 from fleetsim.scenario import Task, VehicleType
 from fleetsim.sim.loop import run_scenario

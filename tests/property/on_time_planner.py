@@ -8,7 +8,7 @@ from dataclasses import replace
 
 from fleetsim.layout.layout import Layout
 from fleetsim.planners import BFSPlanner
-from fleetsim.planning.protocol import FleetPlan, Response
+from fleetsim.planning.plans import FleetPlan, Response
 from fleetsim.planning.snapshot import FleetSnapshot
 from fleetsim.scenario import Task
 

@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 from fleetsim.enums import Progress, Traverse
 from fleetsim.layout import build_layout
 from fleetsim.planners.fleet_index import FleetIndex
-from fleetsim.planning.protocol import FleetLeg, FleetPlan
+from fleetsim.planning.plans import FleetLeg, FleetPlan
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE
 from fleetsim.strategies.geometry import grid
 

@@ -9,7 +9,7 @@ import pytest
 from fleetsim.enums import Direction, Progress, Shape, Traverse, TurnCapability
 from fleetsim.layout import Segment, build_layout
 from fleetsim.planning.checks import CheckContext, Rejection, RejectionCode, check_plan, check_plans
-from fleetsim.planning.protocol import FleetLeg, FleetPlan
+from fleetsim.planning.plans import FleetLeg, FleetPlan
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Task
 
 F, B = Traverse.FORWARD, Traverse.BACKWARD

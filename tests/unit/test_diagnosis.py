@@ -14,7 +14,7 @@ from scenario_factory import make_scenario
 from fleetsim.enums import Direction, Shape
 from fleetsim.layout import Layout, Segment
 from fleetsim.planners import BFSPlanner, GreedyPlanner, ReservingPlanner
-from fleetsim.planning.protocol import FleetPlan, Response, RouteError
+from fleetsim.planning.plans import FleetPlan, Response, RouteError
 from fleetsim.planning.snapshot import FleetSnapshot
 from fleetsim.recording.artifacts import write_run_artifacts
 from fleetsim.recording.picture import failure_picture

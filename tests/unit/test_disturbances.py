@@ -15,7 +15,8 @@ from scenario_factory import make_scenario
 from fleetsim.enums import Direction, Disturbed, Shape
 from fleetsim.layout import Segment
 from fleetsim.planners import BFSPlanner, ReservingPlanner
-from fleetsim.planning.protocol import FleetPlan, Planner
+from fleetsim.planning.plans import FleetPlan
+from fleetsim.planning.protocol import Planner
 from fleetsim.planning.snapshot import FleetSnapshot
 from fleetsim.scenario import Disturbance, RandomDisturbances, Scenario, Task
 from fleetsim.sim.disturbances import draw_stops

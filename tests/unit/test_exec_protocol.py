@@ -25,7 +25,7 @@ from fleetsim.exec.protocol import (
 )
 from fleetsim.planners import ReservingPlanner
 from fleetsim.planning.controller import FleetController
-from fleetsim.planning.protocol import FleetPlan, RouteError
+from fleetsim.planning.plans import FleetPlan, RouteError
 
 ROOT = Path(__file__).resolve().parents[2]
 NAMES = ("init", "ready", "request", "response")

@@ -14,7 +14,7 @@ from fleetsim import load_scenario, load_suite
 from fleetsim.enums import Direction, Shape
 from fleetsim.layout import Segment
 from fleetsim.planners import BFSPlanner, ReservingPlanner
-from fleetsim.planning.protocol import FleetLeg, FleetPlan
+from fleetsim.planning.plans import FleetLeg, FleetPlan
 from fleetsim.scenario import Expectations, Scenario
 from fleetsim.sim.loop import run_scenario
 from fleetsim.sim.trace import TRACE_FORMAT, first_divergence

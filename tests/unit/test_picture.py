@@ -11,7 +11,7 @@ import pytest
 
 from fleetsim import load_scenario, load_suite
 from fleetsim.planners import BFSPlanner, ReservingPlanner
-from fleetsim.planning.protocol import FleetLeg, FleetPlan
+from fleetsim.planning.plans import FleetLeg, FleetPlan
 from fleetsim.recording.colours import palette_colour, svg_colour, vehicle_colours
 from fleetsim.recording.picture import failure_caption, failure_picture, failure_step, render_frame_svg
 from fleetsim.recording.replay import Frame, frame_at

@@ -10,7 +10,7 @@ import pytest
 
 from fleetsim import load_scenario, load_suite
 from fleetsim.planners import BFSPlanner, ReservingPlanner
-from fleetsim.planning.protocol import FleetPlan
+from fleetsim.planning.plans import FleetPlan
 from fleetsim.planning.reservations import ConflictTable, find_alerts
 from fleetsim.recording.replay import TraceError, frame_at, replay
 from fleetsim.scenario import Scenario

@@ -10,7 +10,7 @@ from pathlib import Path
 from fleetsim import load_scenario, load_suite
 from fleetsim.gating.verify import run_checked
 from fleetsim.planners import BFSPlanner, ReservingPlanner
-from fleetsim.planning.protocol import FleetPlan
+from fleetsim.planning.plans import FleetPlan
 from fleetsim.recording.artifacts import artifact_folder, write_run_artifacts
 from fleetsim.scenario import Scenario
 from fleetsim.sim.report import broken_expectation, failure_report
