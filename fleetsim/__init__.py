@@ -25,6 +25,7 @@ if TYPE_CHECKING:
         SuiteError,
         UnreachableTaskError,
     )
+    from fleetsim.exec.spec import load_planner_factory
     from fleetsim.layout import Connection, Layout, LintFinding, Segment, build_layout
     from fleetsim.load import (
         ScenarioSpec,
@@ -58,7 +59,7 @@ if TYPE_CHECKING:
         VehicleType,
     )
     from fleetsim.sim import Divergence, Failure, RunResult, first_divergence, run_scenario
-    from fleetsim.sim.planner_spec import PlannerSpecError, load_planner_factory
+    from fleetsim.sim.planner_spec import PlannerSpecError
 
 __version__ = "0.1.0"
 
@@ -169,7 +170,7 @@ _HOMES: dict[str, str] = {
     "discover_suites": "fleetsim.load",
     "first_divergence": "fleetsim.sim",
     "load_map": "fleetsim.load",
-    "load_planner_factory": "fleetsim.sim.planner_spec",
+    "load_planner_factory": "fleetsim.exec.spec",
     "load_scenario": "fleetsim.load",
     "load_scenario_dir": "fleetsim.load",
     "load_suite": "fleetsim.load",

@@ -21,6 +21,7 @@ from typing import Any, Literal
 import pytest
 
 from fleetsim.errors import FleetsimError, LoadError
+from fleetsim.exec.spec import load_planner_factory
 from fleetsim.gating.baseline import (
     Comparison,
     ScenarioMetrics,
@@ -46,7 +47,7 @@ from fleetsim.load.suite import load_suite
 from fleetsim.recording.artifacts import artifact_folder, discard_run_folder, start_run_folder, write_run_artifacts
 from fleetsim.scenario import Scenario
 from fleetsim.sim.interrupt import StopSignals
-from fleetsim.sim.planner_spec import PlannerFactory, PlannerSpecError, load_planner_factory
+from fleetsim.sim.planner_spec import PlannerFactory, PlannerSpecError
 from fleetsim.sim.report import failure_report, format_table, summary_cells
 from fleetsim.sim.result import RunResult
 from pytest_fleetsim._items import ScenarioFailed, ScenarioItem

@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any, Literal, TextIO
 
 from fleetsim.errors import FleetsimError, LoadError
+from fleetsim.exec.spec import load_planner_factory
 from fleetsim.gating.generated import (
     DEFAULT_ARTIFACTS,
     Hunt,
@@ -39,7 +40,7 @@ from fleetsim.load.suite import SUITE_SUFFIX, ScenarioSpec, Suite, discover_suit
 from fleetsim.recording.artifacts import artifact_folder, start_run_folder, write_run_artifacts
 from fleetsim.sim.interrupt import StopSignals, signal_name
 from fleetsim.sim.loop import RunProgress, run_scenario
-from fleetsim.sim.planner_spec import PlannerFactory, PlannerSpecError, load_planner_factory
+from fleetsim.sim.planner_spec import PlannerFactory, PlannerSpecError
 from fleetsim.sim.report import failure_lines, format_table, summary_cells
 from fleetsim.sim.result import Ending, Failure, Metrics, RunResult
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 
 from fleetsim.exec.client import serve
-from fleetsim.sim.planner_spec import PlannerSpecError, load_planner_factory
+from fleetsim.sim.planner_spec import PlannerSpecError, import_planner_factory
 
 
 def main(argv: list[str]) -> int:
@@ -15,7 +15,7 @@ def main(argv: list[str]) -> int:
         )
         return 2
     try:
-        planner = load_planner_factory(argv[0])()
+        planner = import_planner_factory(argv[0])()
     except PlannerSpecError as error:
         print(f"fleetsim.exec: {error}", file=sys.stderr)
         if error.details:

@@ -1,20 +1,18 @@
 """Planner specs (SPEC §14): ``module:attr`` names a planner class or zero-argument factory.
 
-:func:`load_planner_factory` imports the module once and returns a :class:`PlannerFactory` that makes a
-fresh planner for every run. The current working directory is importable, so ``--planner
+``import_planner_factory`` imports the module once and returns a ``PlannerFactory`` that makes a fresh
+planner for every run (``exec:COMMAND`` specs, planners in other processes, are read by
+``fleetsim.exec.spec``, which builds on this module). The current working directory is importable, so ``--planner
 my_planner:MyPlanner`` works from a user's project folder. Every mistake is one
-:class:`PlannerSpecError` saying what is wrong and how to fix it; the user's own import-time or
+``PlannerSpecError`` saying what is wrong and how to fix it; the user's own import-time or
 construction errors are shown as their message and location, not as a harness traceback.
 """
 
 from __future__ import annotations
 
-import functools
 import importlib
 import inspect
 import os
-import shlex
-import shutil
 import sys
 import traceback
 from collections.abc import Callable
@@ -23,14 +21,12 @@ from types import ModuleType
 from typing import cast
 
 from fleetsim.errors import FleetsimError
-from fleetsim.exec.process import SubprocessPlanner
 from fleetsim.load.scenario_files import did_you_mean
 from fleetsim.planning.protocol import Planner
 
-__all__ = ["PlannerFactory", "PlannerSpecError", "load_planner_factory"]
+__all__ = ["METHODS", "PlannerFactory", "PlannerSpecError", "import_planner_factory"]
 
 EXAMPLE = "fleetsim.planners:ReservingPlanner"
-EXEC_PREFIX = "exec:"
 METHODS = ("plan_routes", "fix_legs")
 _SHOWN_NAMES = 8  # public names listed when an attribute is missing
 
@@ -71,38 +67,17 @@ class PlannerFactory:
         return cast(Planner, planner)
 
 
-def load_planner_factory(spec: str, *, call_timeout: float | None = 10.0) -> PlannerFactory:
-    """The factory that ``spec`` names: ``module:attr`` (a planner class or zero-argument factory; attr
-    possibly dotted), or ``exec:COMMAND``, a planner process per run speaking the JSON-lines protocol
-    (whose per-call timeout is ``call_timeout`` seconds).
+def import_planner_factory(spec: str) -> PlannerFactory:
+    """The factory that a ``module:attr`` spec names: a planner class or zero-argument factory (attr
+    possibly dotted), from a module imported once; the current working directory is importable.
 
-    The factory makes a fresh planner for every run; the current working directory is importable.
     Every mistake in ``spec`` is a [`PlannerSpecError`][fleetsim.sim.planner_spec.PlannerSpecError].
     """
-    if isinstance(spec, str) and spec.startswith(EXEC_PREFIX):
-        return _exec_factory(spec, call_timeout)
     module_name, attr_path = _split(spec)
     module = _import(spec, module_name)
     target = _resolve(spec, module, attr_path)
     _check_target(spec, target)
     return PlannerFactory(spec, cast(Callable[[], object], target))
-
-
-def _exec_factory(spec: str, call_timeout: float | None) -> PlannerFactory:
-    try:
-        command = shlex.split(spec[len(EXEC_PREFIX) :])
-    except ValueError as error:
-        msg = f"planner spec {spec!r}: the command cannot be split into words ({error})"
-        raise PlannerSpecError(msg, spec) from None
-    if not command:
-        msg = f"planner spec {spec!r} names no command; write exec:COMMAND, e.g. 'exec:node planner.js'"
-        raise PlannerSpecError(msg, spec)
-    program = command[0]
-    if shutil.which(program) is None:
-        where = "is not a file" if os.sep in program else "is not on PATH"
-        msg = f"planner spec {spec!r}: the program {program!r} {where}"
-        raise PlannerSpecError(msg, spec)
-    return PlannerFactory(spec, functools.partial(SubprocessPlanner, command, timeout=call_timeout))
 
 
 # -- parsing --------------------------------------------------------------------------------------

@@ -11,10 +11,11 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+from fleetsim.exec.spec import load_planner_factory
 from fleetsim.gating.baseline import ScenarioMetrics
 from fleetsim.recording.artifacts import artifact_folder, discard_run_folder, start_run_folder, write_run_artifacts
 from fleetsim.sim.loop import run_scenario
-from fleetsim.sim.planner_spec import PlannerSpecError, load_planner_factory
+from fleetsim.sim.planner_spec import PlannerSpecError
 from fleetsim.sim.result import RunResult
 from fleetsim.sweep.items import RunItem
 from fleetsim.sweep.payload import scenario_from_payload

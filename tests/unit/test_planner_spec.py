@@ -12,8 +12,9 @@ import pytest
 
 from fleetsim.errors import FleetsimError
 from fleetsim.exec import SubprocessPlanner
+from fleetsim.exec.spec import load_planner_factory
 from fleetsim.planners import BFSPlanner, ReservingPlanner
-from fleetsim.sim.planner_spec import PlannerFactory, PlannerSpecError, load_planner_factory
+from fleetsim.sim.planner_spec import PlannerFactory, PlannerSpecError
 
 WriteModule = Callable[[str, str], Path]
 

@@ -1,0 +1,48 @@
+"""A planner spec of either form (SPEC §14): ``module:attr``, a planner imported into this process
+(``fleetsim.sim.planner_spec``), or ``exec:COMMAND``, a planner process per run speaking the JSON-lines
+protocol. The command line, the pytest plugin and sweeps read ``--planner`` through this module.
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+import shlex
+import shutil
+
+from fleetsim.exec.process import SubprocessPlanner
+from fleetsim.sim.planner_spec import PlannerFactory, PlannerSpecError, import_planner_factory
+
+__all__ = ["EXEC_PREFIX", "load_planner_factory"]
+
+EXEC_PREFIX = "exec:"
+
+
+def load_planner_factory(spec: str, *, call_timeout: float | None = 10.0) -> PlannerFactory:
+    """The factory that ``spec`` names: ``module:attr`` (a planner class or zero-argument factory; attr
+    possibly dotted), or ``exec:COMMAND``, a planner process per run speaking the JSON-lines protocol
+    (whose per-call timeout is ``call_timeout`` seconds).
+
+    The factory makes a fresh planner for every run; the current working directory is importable.
+    Every mistake in ``spec`` is a [`PlannerSpecError`][fleetsim.sim.planner_spec.PlannerSpecError].
+    """
+    if isinstance(spec, str) and spec.startswith(EXEC_PREFIX):
+        return _exec_factory(spec, call_timeout)
+    return import_planner_factory(spec)
+
+
+def _exec_factory(spec: str, call_timeout: float | None) -> PlannerFactory:
+    try:
+        command = shlex.split(spec[len(EXEC_PREFIX) :])
+    except ValueError as error:
+        msg = f"planner spec {spec!r}: the command cannot be split into words ({error})"
+        raise PlannerSpecError(msg, spec) from None
+    if not command:
+        msg = f"planner spec {spec!r} names no command; write exec:COMMAND, e.g. 'exec:node planner.js'"
+        raise PlannerSpecError(msg, spec)
+    program = command[0]
+    if shutil.which(program) is None:
+        where = "is not a file" if os.sep in program else "is not on PATH"
+        msg = f"planner spec {spec!r}: the program {program!r} {where}"
+        raise PlannerSpecError(msg, spec)
+    return PlannerFactory(spec, functools.partial(SubprocessPlanner, command, timeout=call_timeout))
