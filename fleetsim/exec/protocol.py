@@ -83,7 +83,7 @@ __all__ = [
     "loads",
 ]
 
-PROTOCOL = "fleetsim-planner/1.1"
+PROTOCOL = "fleetsim-planner/1.2"
 PROTOCOL_FAMILY = "fleetsim-planner/1"  # what a client checks: the same major version
 
 # Both sides of every planner call encode and decode a message, so JSON is orjson's (compiled): a call's
