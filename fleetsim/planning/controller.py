@@ -185,9 +185,12 @@ class FleetController:
         return self._calls(planner, time, self.tasks.heads().items())
 
     def _calls(self, planner: Planner, time: float, heads: Iterable[tuple[int, Task]]) -> Iterator[CallOutcome]:
-        if getattr(planner, "rounds", False) is False:
-            return self._one_by_one(planner, time, heads)
-        return self._rounds(cast("RoundPlanner", planner), time, list(heads))
+        # Rounds only for a RoundPlanner that does or may answer them (an attribute of another kind that
+        # happens to be called ``rounds`` leaves a planner called one call at a time).
+        rounds = getattr(planner, "rounds", False)
+        if (rounds is True or rounds is None) and callable(getattr(planner, "plan_round", None)):
+            return self._rounds(cast("RoundPlanner", planner), time, list(heads))
+        return self._one_by_one(planner, time, heads)
 
     def _one_by_one(self, planner: Planner, time: float, heads: Iterable[tuple[int, Task]]) -> Iterator[CallOutcome]:
         # One planning round makes a call per busy vehicle, 10^4 a simulated minute in a large fleet, so

@@ -314,6 +314,13 @@ def test_a_planner_asked_in_rounds_makes_the_same_run_as_one_call_at_a_time(name
     assert len(rounds.asked) < direct.metrics.planner_calls, "some rounds answered several calls"
 
 
+def test_a_planner_with_an_unrelated_rounds_attribute_is_called_one_call_at_a_time() -> None:
+    scenario = crossing()
+    planner = ReservingPlanner()
+    planner.rounds = 3  # type: ignore[attr-defined]  # say, how many rounds it has seen
+    assert run_scenario(scenario, planner).trace_hash == run_scenario(scenario, ReservingPlanner()).trace_hash
+
+
 def test_the_guard_counts_a_rounds_calls_and_holds_each_to_the_per_call_timeout() -> None:
     scenario = crossing()
     fleet = FleetController(scenario).snapshot(0.0)
