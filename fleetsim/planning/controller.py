@@ -31,6 +31,11 @@ __all__ = ["CallOutcome", "FleetController", "validate_response"]
 Method = Literal["plan_routes", "fix_legs"]
 # How a planner method is called: (method name, bound method, vehicle id, task, snapshot, layout).
 Invoke = Callable[[str, Callable[..., object], int, Task, FleetSnapshot, Layout], object]
+# At most this many calls in one round message. A round may take the per-call timeout once per call, so
+# this bounds how long a hung planner goes unnoticed (8 x the per-call timeout); the round trip a round
+# saves is already small per call at 8 (a pipe round trip is 4-12 us).
+ROUND_CALLS = 8
+
 # How a round is asked: (the planner's plan_round, the calls, snapshot, layout) -> the answers' responses.
 InvokeRound = Callable[
     [Callable[..., Sequence[tuple[object, float | None]]], Sequence[RoundCall], FleetSnapshot, Layout], Sequence[object]
@@ -219,8 +224,9 @@ class FleetController:
             yield self._apply(vehicle_id, method, task, items, time)
 
     def _rounds(self, planner: RoundPlanner, time: float, heads: list[tuple[int, Task]]) -> Iterator[CallOutcome]:
-        """The calls of ``heads`` asked in rounds: each round holds every call left, made as it would be
-        now (a change can route another vehicle's task, turning its plan_routes into fix_legs)."""
+        """The calls of ``heads`` asked in rounds: each round holds the next ``ROUND_CALLS`` calls left, made
+        as they would be now (a change can route another vehicle's task, turning its plan_routes into
+        fix_legs)."""
         is_routed, invoke_round, layout, plans = self.tasks.is_routed, self._invoke_round, self.layout, self._plans
         done = 0
         while done < len(heads):
@@ -229,7 +235,7 @@ class FleetController:
                 return
             calls: list[RoundCall] = [
                 ("fix_legs" if is_routed(task.id) else "plan_routes", vehicle_id, task)
-                for vehicle_id, task in heads[done:]
+                for vehicle_id, task in heads[done : done + ROUND_CALLS]
             ]
             snapshot = self._snapshot
             if snapshot is None or snapshot.time != time:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib.util
 import json
 from pathlib import Path
 
@@ -24,9 +25,11 @@ from fleetsim.exec.protocol import (
     loads,
 )
 from fleetsim.exec.rounds import RoundAnswerError, read_round_answer
+from fleetsim.load.scenario import load_scenario_dir
 from fleetsim.planners import ReservingPlanner
-from fleetsim.planning.controller import FleetController
+from fleetsim.planning.controller import ROUND_CALLS, FleetController
 from fleetsim.planning.plans import FleetPlan, RouteError
+from fleetsim.scenario import ScenarioSettings
 from fleetsim.sim.guard import PlannerFault, PlannerGuard
 from fleetsim.sim.loop import run_scenario
 
@@ -341,3 +344,16 @@ def test_the_guard_counts_a_rounds_calls_and_holds_each_to_the_per_call_timeout(
         match=r"a round of 2 planner calls \(the first fix_legs\(\) for vehicle 1\) raised ValueError: bad",
     ):
         guard.round(failing, calls, fleet, scenario.layout)
+
+
+def test_a_round_holds_at_most_round_calls_calls_so_a_hang_is_noticed_in_bounded_time(tmp_path: Path) -> None:
+    spec = importlib.util.spec_from_file_location("warehouse", ROOT / "benchmarks" / "warehouse.py")
+    assert spec is not None and spec.loader is not None
+    warehouse = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(warehouse)
+    folder = warehouse.write_fleet_scenario(tmp_path / "fleet", 20, seed=1)
+    scenario = load_scenario_dir(folder, settings=ScenarioSettings(time_limit=3.0, stop_on=()))
+    rounds = _InProcessRounds(ReservingPlanner())
+    asked = run_scenario(scenario, rounds)  # type: ignore[arg-type]
+    assert max(rounds.asked) == ROUND_CALLS < 20  # 20 busy vehicles: the first rounds are cut at the cap
+    assert asked.trace_hash == run_scenario(scenario, ReservingPlanner()).trace_hash
