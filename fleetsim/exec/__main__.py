@@ -1,4 +1,5 @@
-"""``python -m fleetsim.exec module:attr``: serve an in-process planner over the JSON-lines protocol."""
+"""``python -m fleetsim.exec [--no-rounds] module:attr``: serve an in-process planner over the JSON-lines
+protocol (``--no-rounds``: one request per call, never a planning round in one message)."""
 
 from __future__ import annotations
 
@@ -9,9 +10,12 @@ from fleetsim.sim.planner_spec import PlannerSpecError, import_planner_factory
 
 
 def main(argv: list[str]) -> int:
+    rounds = "--no-rounds" not in argv  # answer one request per call, as a protocol 1.1 client
+    argv = [arg for arg in argv if arg != "--no-rounds"]
     if len(argv) != 1 or argv[0].startswith("exec:"):
         print(
-            "usage: python -m fleetsim.exec module:attr   (a planner class or zero-argument factory)", file=sys.stderr
+            "usage: python -m fleetsim.exec [--no-rounds] module:attr   (a planner class or zero-argument factory)",
+            file=sys.stderr,
         )
         return 2
     try:
@@ -21,7 +25,7 @@ def main(argv: list[str]) -> int:
         if error.details:
             print(error.details, file=sys.stderr)
         return 2
-    return serve(planner)
+    return serve(planner, rounds=rounds)
 
 
 if __name__ == "__main__":

@@ -12,12 +12,17 @@ this way makes the same decisions, and the run the same trace hash, as in proces
 A planner that raises a ``RouteError`` answers with a route error; any other exception is printed to
 stderr with its traceback and ends the process with status 1 (the run then fails with a
 ``planner-error`` showing that stderr).
+
+The client answers planning rounds in one message (protocol 1.2, ``fleetsim/exec/rounds.py``) when
+fleetsim speaks 1.2 or later, unless served with ``rounds=False`` (``python -m fleetsim.exec
+--no-rounds``): then it answers one request per call, as a 1.1 client.
 """
 
 from __future__ import annotations
 
 import os
 import sys
+import time
 import traceback
 from collections.abc import Callable, Mapping, Sequence
 from types import MappingProxyType
@@ -83,9 +88,12 @@ class _Session:
 
     def __init__(self, init: Mapping[str, Any]) -> None:
         protocol = str(init.get("protocol"))
-        if init.get("type") != "init" or protocol.partition(".")[0] != PROTOCOL_FAMILY:
+        family, _, minor = protocol.partition(".")
+        if init.get("type") != "init" or family != PROTOCOL_FAMILY:
             msg = f"expected the init message of {PROTOCOL_FAMILY}.x, got type={init.get('type')!r} protocol={init.get('protocol')!r}"
             raise ProtocolError(msg)
+        # Rounds came with 1.2: an earlier fleetsim would refuse a ready answer that asks for them.
+        self.speaks_rounds = minor.isdigit() and int(minor) >= 2
         self.layout = _layout(init["layout"])
         scenario = init["scenario"]
         self.types = {
@@ -162,6 +170,23 @@ class _Session:
         ]
         return {"id": request["id"], "plans": plans, "route_errors": errors}
 
+    def answer_round(self, planner: Planner, message: Mapping[str, Any]) -> dict[str, Any]:
+        """The round's calls answered in order, up to the first answer that changes something, each with its
+        duration."""
+        if "fleet" in message:
+            self.fleet = self.snapshot(message["fleet"])
+        answers: list[dict[str, Any]] = []
+        durations: list[float] = []
+        clock, answer = time.perf_counter, self.answer
+        for call in message["calls"]:
+            started = clock()
+            reply = answer(planner, call)
+            durations.append(clock() - started)
+            answers.append(reply)
+            if "route_error" in reply or reply["plans"] or reply["route_errors"]:
+                break  # it changes something: the calls after it must see the fleet as changed
+        return {"answers": answers, "durations": durations}
+
 
 def _handed_back(items: Sequence[FleetPlan | RouteError], fleet: FleetSnapshot) -> bool:
     """The response is one plan, the plan in force: fleetsim changes nothing for it, as for no plan."""
@@ -176,8 +201,9 @@ def _view(entries: dict[int, Any], changed: list[Any], before: Mapping[int, Any]
     return before if before is not None and not changed else MappingProxyType(dict(entries))
 
 
-def serve(planner: Planner, stdin: IO[str] | None = None, stdout: IO[str] | None = None) -> int:
+def serve(planner: Planner, stdin: IO[str] | None = None, stdout: IO[str] | None = None, *, rounds: bool = True) -> int:
     """Answer fleetsim's messages on ``stdin`` (default: the process's) until it closes; the exit status.
+    With ``rounds`` (and fleetsim 1.2 or later) a planning round comes in one message.
 
     The process's own streams are read as bytes (JSON is UTF-8) and answers written straight to its
     stdout's file descriptor: a call then costs no text layer and no buffer to fill and flush."""
@@ -192,6 +218,10 @@ def serve(planner: Planner, stdin: IO[str] | None = None, stdout: IO[str] | None
             if session is None:
                 session = _Session(message)
                 answer: dict[str, Any] = {"type": "ready"}
+                if rounds and session.speaks_rounds:
+                    answer["rounds"] = True
+            elif message.get("type") == "round":
+                answer = session.answer_round(planner, message)
             else:
                 answer = session.answer(planner, message)
         except ProtocolError as error:

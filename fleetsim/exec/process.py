@@ -3,12 +3,14 @@
 :class:`SubprocessPlanner` is an ordinary planner to the simulation. Its first call starts the process
 (so a process that cannot start fails the run like any planner error, not the harness), sends the init
 message and waits for ``ready``; each call then sends one request and reads one answer, which must be
-valid JSON matching ``schemas/planner-response.schema.json``. Everything the process writes to stderr
+valid JSON matching ``schemas/planner-response.schema.json``. A process whose ``ready`` says ``"rounds":
+true`` is asked a planning round's calls in one message instead (:meth:`SubprocessPlanner.plan_round`,
+``fleetsim/exec/rounds.py``). Everything the process writes to stderr
 goes to a temporary file whose tail is shown when something goes wrong.
 
 Faults — the process cannot start, exits early or crashes, does not answer within the per-call timeout,
-answers with invalid JSON, an answer that violates the schema (the field and value are named) or an
-answer to another request — raise :class:`PlannerProcessError`, which fails the run with a
+answers with invalid JSON, an answer that violates the schema (the field and value are named), an
+answer to another request or a round answered past its first change — raise :class:`PlannerProcessError`, which fails the run with a
 ``planner-error`` carrying the stderr tail. :meth:`SubprocessPlanner.close` (called when the run ends,
 and by a finaliser if it never is) closes stdin, waits briefly, then terminates and kills the process
 group, so no planner process outlives its run.
@@ -27,24 +29,20 @@ import tempfile
 import time
 import weakref
 from collections.abc import Sequence
-from dataclasses import dataclass
-from functools import cache
-from pathlib import Path
 from typing import IO, Any
-
-import jsonschema
-import jsonschema_rs
 
 from fleetsim.errors import PlannerProcessError
 from fleetsim.exec.protocol import FleetEncoder, decode_response, dumps, encode_init, encode_task, loads
+from fleetsim.exec.rounds import CALL, ROUND, RoundAnswerError, describe_round, nothing_to_change, read_round_answer
+from fleetsim.exec.schemas import SCHEMAS, load_schema, violation
 from fleetsim.layout.layout import Layout
-from fleetsim.planning.plans import Response
+from fleetsim.planning.plans import Response, RouteError
+from fleetsim.planning.protocol import RoundCall
 from fleetsim.planning.snapshot import FleetSnapshot
 from fleetsim.scenario import Task
 
 __all__ = ["SCHEMAS", "PlannerProcessError", "SubprocessPlanner", "load_schema"]
 
-SCHEMAS = Path(__file__).resolve().parents[1] / "schemas"
 _STDERR_TAIL = 4000  # characters of stderr shown with an error
 _GRACE = 1.0  # seconds a process gets to exit after stdin closes, and again after SIGTERM
 # A request: its type, id, vehicle, task and (when the fleet changed) ',"fleet":' and the update.
@@ -52,35 +50,6 @@ _REQUEST = b'{"type":"%b","id":%d,"vehicle":%d,"task":%b%b}\n'
 _METHODS = {"plan_routes": b"plan_routes", "fix_legs": b"fix_legs"}
 _NOTHING_TO_CHANGE = b'{"id":%d,"plans":[],"route_errors":[]}'
 _PLAN_HANDED_BACK = b'{"id":%d,"plans":[%b],"route_errors":[]}'
-
-
-@dataclass(frozen=True, slots=True)
-class _Schema:
-    """A message schema twice compiled: ``fast`` (jsonschema-rs, in Rust) decides whether an answer is
-    valid in microseconds; ``precise`` (jsonschema) explains a violation, naming the field and value."""
-
-    fast: Any
-    precise: jsonschema.protocols.Validator
-
-
-@cache
-def load_schema(name: str) -> _Schema:
-    """The validators of ``schemas/planner-<name>.schema.json``."""
-    schema = json.loads((SCHEMAS / f"planner-{name}.schema.json").read_text(encoding="utf-8"))
-    validator_class = jsonschema.validators.validator_for(schema)
-    validator_class.check_schema(schema)
-    return _Schema(jsonschema_rs.validator_for(schema), validator_class(schema))
-
-
-def _violation(schema: _Schema, document: Any) -> str | None:
-    """``None`` for a valid document, else the first violation: where, and the offending value."""
-    if schema.fast.is_valid(document):
-        return None
-    error = jsonschema.exceptions.best_match(schema.precise.iter_errors(document))
-    if error is None:
-        return None
-    where = "".join(f"[{part!r}]" if isinstance(part, int) else f".{part}" for part in error.absolute_path)
-    return f"{where.lstrip('.') or 'the answer'}: {error.message}"
 
 
 def _kill_group(process: subprocess.Popen[bytes]) -> None:
@@ -113,6 +82,7 @@ class SubprocessPlanner:
         self.startup_timeout = startup_timeout
         self.cwd = cwd
         self.requests = 0
+        self.rounds: bool | None = None  # the process answers rounds (None: not started yet)
         self._process: subprocess.Popen[bytes] | None = None
         self._stderr: IO[bytes] | None = None
         self._buffer = b""
@@ -121,6 +91,7 @@ class SubprocessPlanner:
         self._encoder = FleetEncoder()
         self._tasks: dict[int, tuple[Task, bytes]] = {}  # task id -> the task and its JSON
         self._asking: tuple[int, str, int] | None = None  # the request being answered (None: the init message)
+        self._round: tuple[int, Sequence[RoundCall]] | None = None  # the round being answered: first id, calls
         self._finalizer: weakref.finalize[..., SubprocessPlanner] | None = None
 
     def __repr__(self) -> str:
@@ -133,6 +104,39 @@ class SubprocessPlanner:
 
     def fix_legs(self, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
         return self._call("fix_legs", task, fleet, layout)
+
+    def plan_round(
+        self, calls: Sequence[RoundCall], fleet: FleetSnapshot, layout: Layout
+    ) -> list[tuple[Response | RouteError, float | None]]:
+        """The answers to the first of ``calls`` (a planning round's calls left), with each call's duration
+        by the process's clock: all of them when none changes anything, else up to the first that does.
+        A process that does not answer rounds is asked the first call alone."""
+        if self._process is None:
+            if self.requests:
+                raise self._fail("was closed")
+            self._start(layout, fleet)
+        if not self.rounds:
+            method, _vehicle, task = calls[0]
+            try:
+                return [(self._call(method, task, fleet, layout), None)]
+            except RouteError as error:
+                return [(error, None)]
+        first = self.requests + 1
+        self._asking, self._round = None, (first, calls)
+        encoded = self._encoded_task
+        requests = b",".join([
+            CALL % (_METHODS[method], first + index, vehicle, encoded(task))
+            for index, (method, vehicle, task) in enumerate(calls)
+        ])  # fmt: skip
+        self._send(ROUND % (requests, self._update(fleet)))
+        # Each call may take the per-call timeout: the round, as many times as it has calls.
+        answer = self._decode(self._read_line(None if self.timeout is None else self.timeout * len(calls)))
+        try:
+            answers = read_round_answer(answer, first, calls, fleet)
+        except RoundAnswerError as error:
+            raise self._fail(f"answered {self._request()} with {error}") from None
+        self.requests += len(answers)
+        return list(answers)
 
     def diagnostics(self) -> str:
         """The tail of what the process wrote to stderr (shown with any planner error)."""
@@ -181,12 +185,13 @@ class SubprocessPlanner:
         assert process.stdin is not None and process.stdout is not None
         self._pipes = (process.stdin.fileno(), process.stdout.fileno())  # looked up once, used every call
         self._finalizer = weakref.finalize(self, _kill_group, process)
-        self._asking = None
+        self._asking = self._round = None
         self._send(dumps(encode_init(layout, fleet)) + b"\n")
         answer = self._receive(self.startup_timeout)
-        problem = _violation(load_schema("ready"), answer)
+        problem = violation(load_schema("ready"), answer)
         if problem is not None:
             raise self._fail(f'answered the init message with {_short(answer)}, not {{"type": "ready"}} ({problem})')
+        self.rounds = answer.get("rounds") is True
         self._fleet = None
         self._encoder = FleetEncoder()
 
@@ -197,13 +202,10 @@ class SubprocessPlanner:
             self._start(layout, fleet)
         self.requests += 1
         number = self.requests
-        self._asking = (number, method, task.vehicle_id)
+        self._asking, self._round = (number, method, task.vehicle_id), None
         # The request is put together from bytes: its task is encoded once per run, its fleet only when
         # it changed since the last request (and then only what changed).
-        update = b""
-        if fleet is not self._fleet:
-            update = b',"fleet":' + self._encoder.encode(fleet, self._fleet)
-            self._fleet = fleet
+        update = self._update(fleet)
         self._send(_REQUEST % (_METHODS[method], number, task.vehicle_id, self._encoded_task(task), update))
         line = self._read_line(self.timeout)
         # The two commonest answers, as fleetsim's own clients spell them, need no decoding or checking:
@@ -215,14 +217,22 @@ class SubprocessPlanner:
         if sent is not None and line == _PLAN_HANDED_BACK % (number, sent[1]):
             return [sent[0]]
         answer = self._decode(line)
-        if _nothing_to_change(answer, number):
+        if nothing_to_change(answer, number):
             return []  # the same, spelt otherwise
-        problem = _violation(load_schema("response"), answer)
+        problem = violation(load_schema("response"), answer)
         if problem is not None:
             raise self._fail(f"answered {self._request()} with an invalid response: {problem}")
         if answer["id"] != number:
             raise self._fail(f"answered {self._request()} with the answer to request {answer['id']!r}")
         return decode_response(answer)
+
+    def _update(self, fleet: FleetSnapshot) -> bytes:
+        """``,"fleet":`` and what changed since the fleet the process last saw, or nothing if it is the same."""
+        if fleet is self._fleet:
+            return b""
+        update = b',"fleet":' + self._encoder.encode(fleet, self._fleet)
+        self._fleet = fleet
+        return update
 
     def _encoded_task(self, task: Task) -> bytes:
         """The task's JSON, encoded at its first request (a task is asked about again and again)."""
@@ -233,6 +243,8 @@ class SubprocessPlanner:
 
     def _request(self) -> str:
         """The message being answered, in words (for error messages)."""
+        if self._round is not None:
+            return describe_round(*self._round)
         if self._asking is None:
             return "the init message"
         number, method, vehicle = self._asking
@@ -268,7 +280,7 @@ class SubprocessPlanner:
         while b"\n" not in self._buffer:
             left = None if deadline is None else deadline - time.monotonic()
             if left is not None and left <= 0:
-                raise self._fail(f"did not answer {self._request()} within the per-call timeout of {timeout:g} s")
+                raise self._fail(f"did not answer {self._request()} within {self._limit_words(timeout)}")
             ready, _, _ = select.select([descriptor], [], [], left)
             if not ready:
                 continue
@@ -278,6 +290,11 @@ class SubprocessPlanner:
             self._buffer += chunk
         line, _, self._buffer = self._buffer.partition(b"\n")
         return line
+
+    def _limit_words(self, timeout: float | None) -> str:
+        if self._round is not None and len(self._round[1]) > 1 and self.timeout is not None:
+            return f"{len(self._round[1])} x the per-call timeout of {self.timeout:g} s"
+        return f"the per-call timeout of {timeout:g} s"
 
     def _ended(self) -> str:
         assert self._process is not None
@@ -290,18 +307,6 @@ class SubprocessPlanner:
             with contextlib.suppress(ValueError):
                 return f"was killed by {signal.Signals(-code).name}"
         return f"exited with status {code}"
-
-
-def _nothing_to_change(answer: Any, number: int) -> bool:
-    """Exactly ``{"id": number, "plans": [], "route_errors": []}``."""
-    return (
-        type(answer) is dict
-        and len(answer) == 3
-        and answer.get("id") == number
-        and type(answer["id"]) is int
-        and answer.get("plans") == []
-        and answer.get("route_errors") == []
-    )
 
 
 def _clip(line: bytes, limit: int = 200) -> str:

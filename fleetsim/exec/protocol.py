@@ -7,9 +7,10 @@ is kept for error reports). Enum values are the words of the suite files (``forw
 are in ``schemas/planner-*.schema.json``.
 
 Versions: ``fleetsim-planner/MAJOR.MINOR`` (``fleetsim-planner/1`` is 1.0). A minor version only adds
-optional fields, so a client checks the major part; 1.1 added ``disturbed``.
+optional fields, so a client checks the major part; 1.1 added ``disturbed``; 1.2 planning rounds in one
+message, which a client opts into (``fleetsim/exec/rounds.py``).
 
-1. ``{"type": "init", "protocol": "fleetsim-planner/1.1", "layout": {...}, "scenario": {...}}``
+1. ``{"type": "init", "protocol": "fleetsim-planner/1.2", "layout": {...}, "scenario": {...}}``
    - ``layout`` (the same document as ``fleetsim inspect --json`` gives, without lint):
      ``segments`` (``id, shape, direction, length, waypoints`` in metres), ``connections``
      (``from: [segment, traverse], to: [segment, traverse], joint``; the successors of a state are its
@@ -20,7 +21,8 @@ optional fields, so a client checks the major part; 1.1 added ``disturbed``.
      turn_capability, turn_rate``), ``vehicles`` (``id, type``) and ``tasks`` (``id, vehicle_id,
      goal_segment, goal_progress``).
 
-   Answer: ``{"type": "ready"}``.
+   Answer: ``{"type": "ready"}``, or (to a 1.2 init or later) ``{"type": "ready", "rounds": true}`` to be
+   sent each planning round's calls in one ``round`` message instead of one request per call.
 2. ``{"type": "plan_routes" | "fix_legs", "id": N, "vehicle": V, "task": TASK, "fleet": FLEET}``, one
    per planner call, ``id`` counting from 1. ``fleet`` is the snapshot: ``time``, ``vehicles`` (each
    ``id, segment, traverse, progress, distance, speed, x, y, heading, type``, and ``disturbed``:
@@ -83,7 +85,7 @@ __all__ = [
     "loads",
 ]
 
-PROTOCOL = "fleetsim-planner/1.1"
+PROTOCOL = "fleetsim-planner/1.2"
 PROTOCOL_FAMILY = "fleetsim-planner/1"  # what a client checks: the same major version
 
 # Both sides of every planner call encode and decode a message, so JSON is orjson's (compiled): a call's

@@ -1,20 +1,25 @@
 """The planner protocol (SPEC §6): the two methods a planner has, what each receives and may return.
 
 A planner is any object with ``plan_routes(task, fleet, layout)`` and ``fix_legs(task, fleet, layout)``;
-what they return is in ``fleetsim.planning.plans``.
+what they return is in ``fleetsim.planning.plans``. A planner may also answer a planning round's calls
+in one go (:class:`RoundPlanner`: a planner process whose client speaks protocol 1.2's rounds).
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 if TYPE_CHECKING:
     from fleetsim.layout.layout import Layout
-    from fleetsim.planning.plans import Response
+    from fleetsim.planning.plans import Response, RouteError
     from fleetsim.planning.snapshot import FleetSnapshot
     from fleetsim.scenario import Task
 
-__all__ = ["Planner"]
+__all__ = ["Planner", "RoundCall", "RoundPlanner"]
+
+# A call of a planning round: (method name, vehicle id, task).
+RoundCall = tuple[str, int, "Task"]
 
 
 @runtime_checkable
@@ -70,4 +75,24 @@ class Planner(Protocol):
         Raises:
             RouteError: The request cannot be answered at all: nothing of it is applied.
         """
+        ...
+
+
+class RoundPlanner(Planner, Protocol):
+    """A planner that can answer the calls of a planning round in one go (the harness's side of a planner
+    process speaking protocol 1.2's rounds); the run and its trace are the same as with one call at a time.
+
+    ``rounds`` says whether it does: ``None`` until it knows (a planner process knows once started),
+    ``False`` for one call at a time, which the harness then makes through ``plan_routes`` and ``fix_legs``.
+    """
+
+    rounds: bool | None
+
+    def plan_round(
+        self, calls: Sequence[RoundCall], fleet: FleetSnapshot, layout: Layout
+    ) -> Sequence[tuple[Response | RouteError, float | None]]:
+        """The answers to the first of ``calls`` (at least one), made in order against ``fleet``: each call's
+        response (a ``RouteError`` object: the whole request raised it) with the call's own duration in
+        seconds (``None``: unknown). Every answer but the last changes nothing; the harness applies them,
+        then asks again about the calls left."""
         ...

@@ -7,6 +7,10 @@ interrupts pure-Python loops and sleeps; it is only available in the main thread
 elsewhere calls run without a timeout. A call that returns after its time is a fault too, even if the
 planner caught the timer's exception; a planner that catches it and never returns cannot be stopped
 in-process (run such a planner as a subprocess).
+
+A planner that answers a planning round's calls in one go (:meth:`PlannerGuard.round`, a planner
+process speaking protocol 1.2) is given the per-call timeout once per call of the round, and each call's
+own duration, as the planner reports it, is held to the per-call timeout as if it had been made alone.
 """
 
 from __future__ import annotations
@@ -16,7 +20,7 @@ import signal
 import threading
 import time
 import traceback
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from types import FrameType
 
 from fleetsim.errors import FleetsimError, PlannerProcessError
@@ -67,6 +71,7 @@ class PlannerGuard:
     def __init__(self, timeout: float | None = 10.0) -> None:
         self.timeout = timeout
         self._limit = timeout if timeout is not None else math.inf  # what a call's time is compared with
+        self._tick_limit = self._limit  # what the tick compares the call in progress with (a round: more)
         self.calls = 0
         self.wall_time = 0.0
         self._armed = False
@@ -87,7 +92,7 @@ class PlannerGuard:
 
     def _tick(self, signum: int, frame: FrameType | None) -> None:
         started = self._call_started
-        if started is not None and self.timeout is not None and time.perf_counter() - started > self.timeout:
+        if started is not None and self.timeout is not None and time.perf_counter() - started > self._tick_limit:
             self._call_started = None
             raise _Overrun
 
@@ -141,8 +146,60 @@ class PlannerGuard:
             raise self._overrun(method, vehicle_id, call)  # it caught the timer's exception and returned late
         return response
 
-    def _overrun(self, method: str, vehicle_id: int, call: Callable[..., object]) -> PlannerFault:
-        msg = f"{method}() for vehicle {vehicle_id} did not return within the per-call timeout of {self.timeout:g} s"
+    def round(
+        self,
+        call_round: Callable[..., Sequence[tuple[object, float | None]]],
+        calls: Sequence[tuple[str, int, object]],
+        fleet: object,
+        layout: object,
+    ) -> list[object]:
+        """``call_round(calls, fleet, layout)``: the answers to the first calls of a planning round (each
+        call ``(method, vehicle id, task)``), timed and guarded like that many calls. The round may take the
+        per-call timeout once per call; each answer comes with its call's own duration (``None``: unknown),
+        which must be within the per-call timeout. Counted as one call per answer."""
+        count = len(calls)
+        method, vehicle_id, _task = calls[0]
+        where = f"{method}() for vehicle {vehicle_id}" if count == 1 else _round_words(method, vehicle_id, count)
+        self._tick_limit = self._limit * count
+        start = self._call_started = _clock()
+        try:
+            answers = call_round(calls, fleet, layout)
+        except PlannerInterrupted:
+            self._account(start)
+            raise
+        except _Overrun:
+            self._account(start)
+            raise self._round_overrun(method, vehicle_id, count, call_round) from None
+        except PlannerProcessError as exc:
+            self._account(start)
+            raise PlannerFault(f"{where}: {exc}", vehicle_id=vehicle_id, details=exc.details) from None
+        except Exception as exc:
+            self._account(start)
+            msg = f"{where} raised {type(exc).__name__}: {exc}"
+            raise PlannerFault(msg, vehicle_id=vehicle_id, details=_planner_traceback(exc)) from None
+        finally:
+            self._tick_limit = self._limit
+        elapsed = _clock() - start
+        self._call_started = None
+        self.calls += len(answers)
+        self.wall_time += elapsed
+        limit = self._limit
+        for (call_method, call_vehicle, _), (_, seconds) in zip(calls, answers, strict=False):
+            if seconds is not None and seconds > limit:  # this call alone took longer than a call may
+                raise self._overrun(call_method, call_vehicle, call_round)
+        if elapsed > limit * count:
+            raise self._round_overrun(method, vehicle_id, count, call_round)
+        return [response for response, _ in answers]
+
+    def _round_overrun(self, method: str, vehicle_id: int, count: int, call: Callable[..., object]) -> PlannerFault:
+        if count == 1:
+            return self._overrun(method, vehicle_id, call)
+        what = f"{_round_words(method, vehicle_id, count)} did not return within {count} x the per-call timeout"
+        return self._overrun(method, vehicle_id, call, what)
+
+    def _overrun(self, method: str, vehicle_id: int, call: Callable[..., object], what: str = "") -> PlannerFault:
+        what = what or f"{method}() for vehicle {vehicle_id} did not return within the per-call timeout"
+        msg = f"{what} of {self.timeout:g} s"
         # A planner may say more about itself (a planner process: the tail of its stderr).
         diagnostics = getattr(getattr(call, "__self__", None), "diagnostics", None)
         details = diagnostics() if callable(diagnostics) else ""
@@ -152,3 +209,8 @@ class PlannerGuard:
         self._call_started = None
         self.calls += 1
         self.wall_time += _clock() - start
+
+
+def _round_words(method: str, vehicle_id: int, count: int) -> str:
+    """A planning round's calls, in words (for error messages)."""
+    return f"a round of {count} planner calls (the first {method}() for vehicle {vehicle_id})"

@@ -60,7 +60,7 @@ class _Run:
         self.planner = planner
         self.guard = guard
         self.settings = scenario.settings
-        self.controller = FleetController(scenario, invoke=guard)
+        self.controller = FleetController(scenario, invoke=guard, invoke_round=guard.round)
         headings = HeadingTable(scenario.layout)
         states = self.controller.states
         self.drivers = {

@@ -31,10 +31,16 @@ def example(name: str) -> Scenario:
 
 @pytest.mark.parametrize("name", NAMES)
 @pytest.mark.parametrize("planner", [ReservingPlanner, BFSPlanner])
-def test_a_python_planner_served_over_the_protocol_gives_the_in_process_run(name: str, planner: type) -> None:
+@pytest.mark.parametrize("rounds", [True, False], ids=["rounds", "one-call-at-a-time"])
+def test_a_python_planner_served_over_the_protocol_gives_the_in_process_run(
+    name: str, planner: type, rounds: bool
+) -> None:
     scenario = example(name)
     direct = run_scenario(scenario, planner())
-    served = run_scenario(scenario, SubprocessPlanner([*SERVE, f"fleetsim.planners:{planner.__name__}"]))
+    options = [] if rounds else ["--no-rounds"]
+    process = SubprocessPlanner([*SERVE, *options, f"fleetsim.planners:{planner.__name__}"])
+    served = run_scenario(scenario, process)
+    assert process.rounds is rounds
     assert (served.status, served.ended, served.trace_hash) == (direct.status, direct.ended, direct.trace_hash)
     assert served.metrics.planner_calls == direct.metrics.planner_calls
 
@@ -48,37 +54,55 @@ def test_fleetsim_run_takes_an_exec_planner(capsys: pytest.CaptureFixture[str]) 
 
 # -- faults ---------------------------------------------------------------------------------------
 
-# A minimal planner process that changes nothing, with one fault chosen by its first argument.
+# A minimal planner process that changes nothing, with one fault chosen by its first argument, at the
+# request numbered by its second; a third, "rounds", makes it answer planning rounds (protocol 1.2).
 FAULTY = """
 import json, os, sys, time
 fault, at = sys.argv[1], int(sys.argv[2]) if len(sys.argv) > 2 else 1
+rounds = sys.argv[3:] == ["rounds"]
 print("faulty planner starting", file=sys.stderr, flush=True)
 if fault == "no-start":
     print("cannot load my model file", file=sys.stderr)
     sys.exit(2)
+plans = {}
 for line in sys.stdin:
     message = json.loads(line)
     if message["type"] == "init":
-        print(json.dumps({"type": "ready"}), flush=True)
+        print(json.dumps({"type": "ready", "rounds": True} if rounds else {"type": "ready"}), flush=True)
         continue
-    n = message["id"]
-    answer = {"id": n, "plans": [], "route_errors": []}
-    if n == at:
-        print(f"planner: going wrong on request {n}", file=sys.stderr, flush=True)
-        if fault == "crash":
-            raise RuntimeError("segfault-ish")
-        if fault == "exit":
-            sys.exit(0)
-        if fault == "hang":
-            time.sleep(600)
-        if fault == "json":
-            print("{not json", flush=True)
-            continue
-        if fault == "schema":
-            answer["plans"] = [{"vehicle_id": message["vehicle"], "legs": [{"segment": "seven", "traverse": "forward", "progress": "forward", "fixed": True}]}]
-        if fault == "id":
-            answer["id"] = n + 41
-    print(json.dumps(answer), flush=True)
+    for plan in message.get("fleet", {}).get("plans", []):
+        plans[plan["vehicle_id"]] = plan
+    calls = message["calls"] if message["type"] == "round" else [message]
+    answers, durations, garbled = [], [], False
+    for call in calls:
+        n = call["id"]
+        answer = {"id": n, "plans": [], "route_errors": []}
+        durations.append(0.001)
+        if n == at:
+            print(f"planner: going wrong on request {n}", file=sys.stderr, flush=True)
+            if fault == "crash":
+                raise RuntimeError("segfault-ish")
+            if fault == "exit":
+                sys.exit(0)
+            if fault == "hang":
+                time.sleep(600)
+            garbled = fault == "json"
+            if fault == "schema":
+                answer["plans"] = [{"vehicle_id": call["vehicle"], "legs": [{"segment": "seven", "traverse": "forward", "progress": "forward", "fixed": True}]}]
+            if fault == "id":
+                answer["id"] = n + 41
+            if fault == "slow":
+                durations[-1] = 99.0  # by its own clock, this call took longer than a call may
+            if fault == "change-and-go-on":  # a real change, then more answers computed on the old fleet
+                plan = plans[call["vehicle"]]
+                answer["plans"] = [{**plan, "legs": plan["legs"] + plan["legs"][-1:]}]
+        answers.append(answer)
+    if garbled:
+        print("{not json", flush=True)
+    elif message["type"] == "round":
+        print(json.dumps({"answers": answers, "durations": durations}), flush=True)
+    else:
+        print(json.dumps(answers[0]), flush=True)
 if fault == "ignore-close":
     print(os.getpid(), file=sys.stderr, flush=True)
     time.sleep(600)  # never exits on its own after stdin closes
@@ -134,6 +158,49 @@ def test_each_fault_fails_the_run_with_a_planner_error_and_the_stderr_tail(
     assert message in failure.message, failure.message
     assert "faulty planner starting" in failure.details.get("traceback", "")
     assert planner._process is None  # closed
+
+
+# The same faults in round mode: crossing's two vehicles are asked in rounds of two calls (requests 1-2,
+# then 3-4, ...); the planner changes nothing, so each round is answered whole.
+ROUND = "in one round (plan_routes for vehicle 1, plan_routes for vehicle 2)"
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (("crash", "3"), f"exited with status 1 before answering requests 3-4 {ROUND}"),
+        (("exit", "2"), f"exited with status 0 before answering requests 1-2 {ROUND}"),
+        (("json", "1"), f"answered requests 1-2 {ROUND} with invalid JSON"),
+        (("schema", "1"), "an invalid answer: answers[0].plans[0].legs[0].segment: 'seven' is not of type 'integer'"),
+        (("id", "2"), f"answered requests 1-2 {ROUND} with the answer to request 43 in place of request 2's"),
+        (("slow", "4"), "plan_routes() for vehicle 2 did not return within the per-call timeout of 10 s"),
+        (("change-and-go-on", "1"), "answers[0] (request 1) changing something before the round's last answer"),
+    ],
+)
+def test_each_fault_in_a_round_fails_the_run_with_a_planner_error_and_the_stderr_tail(
+    faulty: Path, args: tuple[str, ...], message: str
+) -> None:
+    fault, at = args
+    result, planner = _run_faulty(faulty, fault, at, "rounds")
+
+    assert planner.rounds is True
+    assert result.ended == "planner-error"
+    [failure] = [f for f in result.failures if f.kind == "planner-error"]
+    assert message in failure.message, failure.message
+    assert "faulty planner starting" in failure.details.get("traceback", "")
+    assert planner._process is None  # closed
+
+
+def test_a_hanging_planner_in_a_round_is_stopped_at_the_rounds_timeout_and_killed(faulty: Path) -> None:
+    started = time.monotonic()
+    result, _planner = _run_faulty(faulty, "hang", "1", "rounds", timeout=1.0)
+
+    assert time.monotonic() - started < 10.0
+    [failure] = result.failures
+    assert failure.kind == "planner-error"
+    assert "a round of 2 planner calls (the first plan_routes() for vehicle 1)" in failure.message
+    assert "within 2 x the per-call timeout of 1 s" in failure.message  # the guard's or the process's, whichever first
+    assert "planner: going wrong on request 1" in failure.details.get("traceback", "")
 
 
 def test_a_hanging_planner_is_stopped_at_the_call_timeout_and_killed(faulty: Path) -> None:
@@ -264,7 +331,11 @@ NODE_PLANNER = ROOT / "examples" / "planners" / "node" / "bfs_planner.js"
 
 
 @pytest.mark.parametrize("name", NAMES)
-def test_the_node_example_planner_gives_the_bfs_planners_runs(name: str, node: str) -> None:
+@pytest.mark.parametrize("rounds", ["1", "0"], ids=["rounds", "one-call-at-a-time"])
+def test_the_node_example_planner_gives_the_bfs_planners_runs(
+    name: str, node: str, rounds: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("BFS_PLANNER_ROUNDS", rounds)
     scenario = example(name)
     direct = run_scenario(scenario, BFSPlanner())
     served = run_scenario(scenario, SubprocessPlanner([node, str(NODE_PLANNER)]))

@@ -206,7 +206,10 @@ def replay(planner: NodePlanner, calls: Sequence[Call]) -> int:
     check("init", init)
     ready = planner.ask(init)
     check("ready", ready)
-    assert ready == {"type": "ready"}
+    assert ready == {
+        "type": "ready",
+        "rounds": True,
+    }  # a 1.2 init: the example asks for rounds (it answers requests too)
     omitted = 0
     previous: FleetSnapshot | None = None
     for number, made in enumerate(calls, start=1):
@@ -327,7 +330,7 @@ def test_closing_stdin_ends_node_with_status_0(start_node) -> None:
     assert idle.finish() == 0, idle.stderr  # before init: nothing to do
     planner = start_node()
     first = recorded("crossing")[0]
-    assert planner.ask(encode_init(first.layout, first.fleet)) == {"type": "ready"}
+    assert planner.ask(encode_init(first.layout, first.fleet)) == {"type": "ready", "rounds": True}
     assert planner.finish() == 0, planner.stderr
     assert planner.stderr == ""
 
@@ -356,8 +359,50 @@ def test_a_malformed_message_ends_node_with_status_1_and_a_reason(start_node, ca
     planner = start_node()
     if after_init:
         first = recorded("crossing")[0]
-        assert planner.ask(encode_init(first.layout, first.fleet)) == {"type": "ready"}
+        assert planner.ask(encode_init(first.layout, first.fleet)) == {"type": "ready", "rounds": True}
     planner.write_line(line)
     assert planner.read_line() is None, "node answered a malformed message"
     assert planner.process.wait(timeout=ANSWER_TIMEOUT) == 1
     assert "bfs_planner.js: " in planner.stderr
+
+
+def test_node_answers_a_round_up_to_its_first_change_like_bfs_planner(start_node) -> None:
+    """Protocol 1.2: a round's calls answered in order against one fleet, stopping after the first change."""
+    fleet, layout = sweep_fleet("crossing", "agv", committed=True)
+    bfs = BFSPlanner()
+    goal = min(layout.segments)
+    vehicles = sorted(fleet.vehicles)
+    # Every plan is committed, so fix_legs hands it back (nothing to change); plan_routes then changes one.
+    calls = [call(bfs, "fix_legs", Task(2000 + vid, vid, goal), fleet, layout) for vid in vehicles]
+    calls.append(call(bfs, "plan_routes", Task(3000, vehicles[0], max(layout.segments)), fleet, layout))
+    calls.append(call(bfs, "fix_legs", Task(2000 + vehicles[-1], vehicles[-1], goal), fleet, layout))
+    assert all(made.response == (fleet.plans[made.task.vehicle_id],) for made in calls[: len(vehicles)])
+    assert calls[len(vehicles)].response and calls[len(vehicles)].response != (fleet.plans[vehicles[0]],)
+    planner = start_node()
+    assert planner.ask(encode_init(layout, fleet)) == {"type": "ready", "rounds": True}
+    message = {
+        "type": "round",
+        "calls": [
+            {"type": made.method, "id": number, "vehicle": made.task.vehicle_id, "task": encode_task(made.task)}
+            for number, made in enumerate(calls, start=1)
+        ],
+        "fleet": encode_fleet(fleet),
+    }
+    check("request", message)
+    answer = planner.ask(message)
+    check("round-answer", answer)
+    for item in answer["answers"]:
+        check("response", item)
+    assert len(answer["answers"]) == len(answer["durations"]) == len(vehicles) + 1, "it stops after the change"
+    assert answer["answers"][:-1] == [{"id": n, "plans": [], "route_errors": []} for n in range(1, len(vehicles) + 1)]
+    assert comparable(decode_response(answer["answers"][-1])) == comparable(calls[len(vehicles)].response)
+    assert all(seconds >= 0 for seconds in answer["durations"])
+    assert planner.finish() == 0, planner.stderr
+
+
+def test_node_answers_a_protocol_1_1_init_without_rounds(start_node) -> None:
+    first = recorded("crossing")[0]
+    planner = start_node()
+    init = {**encode_init(first.layout, first.fleet), "protocol": "fleetsim-planner/1.1"}
+    assert planner.ask(init) == {"type": "ready"}
+    assert planner.finish() == 0, planner.stderr

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib.util
 import json
 from pathlib import Path
 
@@ -23,12 +24,17 @@ from fleetsim.exec.protocol import (
     encode_task,
     loads,
 )
+from fleetsim.exec.rounds import RoundAnswerError, read_round_answer
+from fleetsim.load.scenario import load_scenario_dir
 from fleetsim.planners import ReservingPlanner
-from fleetsim.planning.controller import FleetController
+from fleetsim.planning.controller import ROUND_CALLS, FleetController
 from fleetsim.planning.plans import FleetPlan, RouteError
+from fleetsim.scenario import ScenarioSettings
+from fleetsim.sim.guard import PlannerFault, PlannerGuard
+from fleetsim.sim.loop import run_scenario
 
 ROOT = Path(__file__).resolve().parents[2]
-NAMES = ("init", "ready", "request", "response")
+NAMES = ("init", "ready", "request", "response", "round-answer")
 
 
 def schema(name: str) -> dict:
@@ -124,7 +130,7 @@ def test_the_disturbed_field_travels_only_while_set_and_protocol_1_0_clients_are
     controller = FleetController(scenario)
     first = controller.snapshot(0.0)
     init = json.loads(json.dumps(encode_init(scenario.layout, first)))
-    assert init["protocol"] == "fleetsim-planner/1.1"
+    assert init["protocol"] == "fleetsim-planner/1.2"
     assert all("disturbed" not in v for v in encode_fleet(first)["vehicles"])  # as in 1.0 when undisturbed
     session = _Session(init)
     session.snapshot(json.loads(json.dumps(encode_fleet(first))))
@@ -193,3 +199,161 @@ def test_the_python_client_answers_a_plan_handed_back_unchanged_as_nothing_to_ch
     grown = session.answer(_HandBack(grow=True), request)
     [plan] = decode_response(grown)
     assert isinstance(plan, FleetPlan) and len(plan.legs) == len(fleet.plans[task.vehicle_id].legs) + 1
+
+
+# -- planning rounds in one message (1.2) ---------------------------------------------------------------
+
+
+def _round_message(calls, fleet=None):  # type: ignore[no-untyped-def]
+    message = {
+        "type": "round",
+        "calls": [
+            {"type": method, "id": number, "vehicle": task.vehicle_id, "task": encode_task(task)}
+            for number, (method, task) in enumerate(calls, start=1)
+        ],
+    }
+    if fleet is not None:
+        message["fleet"] = encode_fleet(fleet)
+    return loads(dumps(message))
+
+
+def test_the_python_client_answers_a_round_up_to_its_first_change_and_asks_for_rounds_from_1_2_on() -> None:
+    scenario = crossing()
+    fleet = FleetController(scenario).snapshot(0.0)
+    init = loads(dumps(encode_init(scenario.layout, fleet)))
+    session = _Session(init)
+    assert session.speaks_rounds
+    assert not _Session({**init, "protocol": "fleetsim-planner/1.1"}).speaks_rounds
+    assert not _Session({**init, "protocol": "fleetsim-planner/1"}).speaks_rounds
+    first, second = scenario.tasks[0], scenario.tasks[1]
+    calls = [("fix_legs", first), ("fix_legs", second), ("fix_legs", first)]
+    message = _round_message(calls, fleet)
+    jsonschema.validate(message, schema("request"))
+    nothing = session.answer_round(_HandBack(), message)  # every plan handed back: nothing to change
+    jsonschema.validate(nothing, schema("round-answer"))
+    assert nothing["answers"] == [{"id": n, "plans": [], "route_errors": []} for n in (1, 2, 3)]
+    assert len(nothing["durations"]) == 3 and all(seconds >= 0 for seconds in nothing["durations"])
+    changed = session.answer_round(_HandBack(grow=True), {"type": "round", "calls": message["calls"]})  # same fleet
+    assert len(changed["answers"]) == len(changed["durations"]) == 1, "it stops after the first change"
+    [plan] = decode_response(changed["answers"][0])
+    assert isinstance(plan, FleetPlan) and plan.vehicle_id == first.vehicle_id
+    with pytest.raises(jsonschema.ValidationError):
+        jsonschema.validate({**message, "calls": []}, schema("request"))
+
+
+def test_a_round_answer_is_checked_against_its_round() -> None:
+    scenario = crossing()
+    fleet = FleetController(scenario).snapshot(0.0)
+    calls = [("fix_legs", task.vehicle_id, task) for task in scenario.tasks[:2]]
+    nothing = [{"id": n, "plans": [], "route_errors": []} for n in (5, 6)]
+    assert read_round_answer({"answers": nothing, "durations": [0.5, 1]}, 5, calls, fleet) == [([], 0.5), ([], 1)]
+    plan = encode_plan(fleet.plans[1])
+    handed_back = [{"id": 5, "plans": [plan], "route_errors": []}, nothing[1]]
+    assert [
+        answer for answer, _ in read_round_answer({"answers": handed_back, "durations": [0.0, 0.0]}, 5, calls, fleet)
+    ] == [[fleet.plans[1]], []]
+    [(error, _)] = read_round_answer(
+        {"answers": [{"id": 5, "route_error": "no way"}], "durations": [0.0]}, 5, calls, fleet
+    )
+    assert error == RouteError(None, "no way")
+    wrong = {
+        "durations[1]: 'late' is not of type 'number'": {"answers": nothing, "durations": [0.0, "late"]},
+        "2 answers and 1 durations": {"answers": nothing, "durations": [0.0]},
+        "3 answers to a round of 2 calls": {"answers": [*nothing, nothing[0]], "durations": [0.0] * 3},
+        "the answer to request 6 in place of request 5's (answers[0])": {
+            "answers": nothing[::-1],
+            "durations": [0.0] * 2,
+        },
+        "answers[0] (request 5) changing something": {
+            "answers": [{"id": 5, "route_error": "no way"}, nothing[1]],
+            "durations": [0.0] * 2,
+        },
+        "[] should be non-empty": {"answers": [], "durations": []},
+        "answers[1].plans[0]": {
+            "answers": [nothing[0], {**nothing[1], "plans": [{"legs": []}]}],
+            "durations": [0.0] * 2,
+        },
+    }
+    for message, answer in wrong.items():
+        with pytest.raises(RoundAnswerError) as raised:
+            read_round_answer(answer, 5, calls, fleet)
+        assert message in str(raised.value), (message, str(raised.value))
+
+
+class _InProcessRounds:
+    """A planner answering rounds in process, as the Python client does: in order, up to the first change."""
+
+    rounds = True
+
+    def __init__(self, planner: ReservingPlanner) -> None:
+        self.planner = planner
+        self.plan_routes, self.fix_legs = planner.plan_routes, planner.fix_legs
+        self.asked: list[int] = []
+
+    def plan_round(self, calls, fleet, layout):  # type: ignore[no-untyped-def]
+        self.asked.append(len(calls))
+        answers = []
+        for method, _vehicle, task in calls:
+            try:
+                response = list(getattr(self.planner, method)(task, fleet, layout))
+            except RouteError as error:
+                answers.append((error, 0.0))
+                break
+            answers.append((response, 0.0))
+            if response and not (len(response) == 1 and response[0] == fleet.plans.get(response[0].vehicle_id)):
+                break
+        return answers
+
+
+@pytest.mark.parametrize("name", ["crossing", "loop-one-way", "mixed-shapes"])
+def test_a_planner_asked_in_rounds_makes_the_same_run_as_one_call_at_a_time(name: str) -> None:
+    suite = load_suite(ROOT / "scenario_suites" / "examples.fleetsim.yaml")
+    scenario = load_scenario(next(spec for spec in suite.scenarios if spec.name == name), suite)
+    direct = run_scenario(scenario, ReservingPlanner())
+    rounds = _InProcessRounds(ReservingPlanner())
+    asked = run_scenario(scenario, rounds)  # type: ignore[arg-type]
+    assert (asked.status, asked.trace_hash) == (direct.status, direct.trace_hash)
+    assert asked.metrics.planner_calls == direct.metrics.planner_calls
+    assert len(rounds.asked) < direct.metrics.planner_calls, "some rounds answered several calls"
+
+
+def test_a_planner_with_an_unrelated_rounds_attribute_is_called_one_call_at_a_time() -> None:
+    scenario = crossing()
+    planner = ReservingPlanner()
+    planner.rounds = 3  # type: ignore[attr-defined]  # say, how many rounds it has seen
+    assert run_scenario(scenario, planner).trace_hash == run_scenario(scenario, ReservingPlanner()).trace_hash
+
+
+def test_the_guard_counts_a_rounds_calls_and_holds_each_to_the_per_call_timeout() -> None:
+    scenario = crossing()
+    fleet = FleetController(scenario).snapshot(0.0)
+    calls = [("fix_legs", task.vehicle_id, task) for task in scenario.tasks[:2]]
+    guard = PlannerGuard(timeout=5.0)
+    assert guard.round(lambda *_: [([], 0.001), ([], 4.0)], calls, fleet, scenario.layout) == [[], []]
+    assert guard.calls == 2
+    with pytest.raises(
+        PlannerFault, match=r"fix_legs\(\) for vehicle 2 did not return within the per-call timeout of 5 s"
+    ):
+        guard.round(lambda *_: [([], 0.001), ([], 5.5)], calls, fleet, scenario.layout)
+
+    def failing(*_: object) -> list[object]:
+        raise ValueError("bad")
+
+    with pytest.raises(
+        PlannerFault,
+        match=r"a round of 2 planner calls \(the first fix_legs\(\) for vehicle 1\) raised ValueError: bad",
+    ):
+        guard.round(failing, calls, fleet, scenario.layout)
+
+
+def test_a_round_holds_at_most_round_calls_calls_so_a_hang_is_noticed_in_bounded_time(tmp_path: Path) -> None:
+    spec = importlib.util.spec_from_file_location("warehouse", ROOT / "benchmarks" / "warehouse.py")
+    assert spec is not None and spec.loader is not None
+    warehouse = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(warehouse)
+    folder = warehouse.write_fleet_scenario(tmp_path / "fleet", 20, seed=1)
+    scenario = load_scenario_dir(folder, settings=ScenarioSettings(time_limit=3.0, stop_on=()))
+    rounds = _InProcessRounds(ReservingPlanner())
+    asked = run_scenario(scenario, rounds)  # type: ignore[arg-type]
+    assert max(rounds.asked) == ROUND_CALLS < 20  # 20 busy vehicles: the first rounds are cut at the cap
+    assert asked.trace_hash == run_scenario(scenario, ReservingPlanner()).trace_hash

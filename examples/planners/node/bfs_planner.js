@@ -16,6 +16,11 @@
 //        or {"id": N, "route_error": "..."} when the whole request cannot be routed.
 //     "fleet" is left out when the fleet has not changed since the previous request: keep the last one.
 //     The first "fleet" is complete; later ones hold only the vehicles, plans and queues that changed.
+//   * protocol 1.2: answering init with {"type": "ready", "rounds": true} asks for a planning round's calls
+//     in one message instead, {"type": "round", "calls": [{"type", "id", "vehicle", "task"}...], "fleet": FLEET}:
+//     we make the calls in order and stop after the first answer that changes something (anything but
+//     nothing or the plan in force handed back), answering {"answers": [ANSWER...], "durations": [SECONDS...]};
+//     fleetsim applies them and sends the calls left, with the fleet as changed, in a new round.
 //   * at the end of the run fleetsim closes stdin: we exit with status 0.
 // A message we cannot understand is a protocol violation: we say why on stderr and exit with status 1.
 "use strict";
@@ -24,12 +29,14 @@ const fs = require("fs");
 const { StringDecoder } = require("string_decoder");
 
 const PROTOCOL = "fleetsim-planner/1"; // the major version; minor versions (1.1, ...) only add optional fields
+const ROUNDS = process.env.BFS_PLANNER_ROUNDS !== "0"; // BFS_PLANNER_ROUNDS=0: one request per call
 const FIX_HORIZON = 3; // fix_legs commits (at most) the first three legs of a plan, like BFSPlanner
 
 // What the init message tells us, and the fleet of the last request that carried one.
 let successors = null; // "segment|traverse" -> [{segment, traverse, joint}], in the order of layout.connections
 const turnCapability = new Map(); // vehicle type name -> "curve" | "in_place"
 let fleet = null;
+let roundsAsked = false; // we answered init with "rounds": true
 
 function fail(message) {
   process.stderr.write(`bfs_planner.js: ${message}\n`);
@@ -48,6 +55,8 @@ const stateKey = (segment, traverse) => `${segment}|${traverse}`;
 
 function init(message) {
   if (typeof message.protocol !== "string" || message.protocol.split(".")[0] !== PROTOCOL) fail(`unsupported protocol ${JSON.stringify(message.protocol)}, expected ${PROTOCOL}`);
+  // Rounds came with 1.2; an earlier fleetsim would refuse a ready answer that asks for them.
+  roundsAsked = ROUNDS && Number(message.protocol.split(".")[1] || 0) >= 2;
   const { layout, scenario } = message;
   if (!isObject(layout) || !Array.isArray(layout.connections)) fail("init: layout.connections missing");
   if (!isObject(scenario) || !Array.isArray(scenario.vehicle_types)) fail("init: scenario.vehicle_types missing");
@@ -170,30 +179,72 @@ function handle(line) {
   if (message.type === "init") {
     if (successors !== null) fail("a second init message");
     init(message);
-    send({ type: "ready" });
+    send(roundsAsked ? { type: "ready", rounds: true } : { type: "ready" });
     return;
   }
-  if (message.type !== "plan_routes" && message.type !== "fix_legs") fail(`unknown message type ${JSON.stringify(message.type)}`);
-  if (successors === null) fail(`a ${message.type} request before the init message`);
-  if (!Number.isInteger(message.id) || message.id < 1) fail(`request without a valid "id": ${line.slice(0, 200)}`);
-  const { task } = message;
-  if (!isObject(task) || !Number.isInteger(task.vehicle_id) || !Number.isInteger(task.goal_segment)) {
-    fail(`request ${message.id}: malformed "task"`);
+  if (successors === null) fail(`a ${message.type} message before the init message`);
+  if (message.type === "round") {
+    if (!roundsAsked || !Array.isArray(message.calls) || message.calls.length === 0) fail(`unexpected or malformed round: ${line.slice(0, 200)}`);
+    updateFleet(message, "round");
+    answerRound(message.calls);
+    return;
   }
+  updateFleet(message, `request ${message.id}`);
+  send(answer(message));
+}
+
+// The first fleet is complete; later ones carry only the vehicles, plans and queues that changed, each
+// replacing the entry of the same vehicle id. A message without "fleet" reuses the last one.
+function updateFleet(message, what) {
   if ("fleet" in message) {
     if (!isObject(message.fleet) || !Array.isArray(message.fleet.plans) || !Array.isArray(message.fleet.vehicles)) {
-      fail(`request ${message.id}: malformed "fleet"`);
+      fail(`${what}: malformed "fleet"`);
     }
-    // The first fleet is complete; later ones carry only the vehicles, plans and queues that changed,
-    // each replacing the entry of the same vehicle id. A request without "fleet" reuses the last one.
-    if (fleet === null) fleet = { vehicles: new Map(), plans: new Map() };
+    if (fleet === null) fleet = { vehicles: new Map(), plans: new Map(), json: new Map() };
     for (const vehicle of message.fleet.vehicles) fleet.vehicles.set(vehicle.id, vehicle);
-    for (const plan of message.fleet.plans) fleet.plans.set(plan.vehicle_id, plan);
+    for (const plan of message.fleet.plans) {
+      fleet.plans.set(plan.vehicle_id, plan);
+      fleet.json.delete(plan.vehicle_id); // its JSON, computed when first compared with an answer
+    }
   } else if (fleet === null) {
-    fail(`request ${message.id} has no "fleet" and no earlier request had one`);
+    fail(`${what} has no "fleet" and no earlier message had one`);
   }
-  const answer = message.type === "plan_routes" ? planRoutes(task) : fixLegs(task);
-  send({ id: message.id, ...answer });
+}
+
+// One call (a request, or a call of a round): {"id", "plans", "route_errors"}.
+function answer(call) {
+  if (call.type !== "plan_routes" && call.type !== "fix_legs") fail(`unknown message type ${JSON.stringify(call.type)}`);
+  if (!Number.isInteger(call.id) || call.id < 1) fail(`request without a valid "id": ${JSON.stringify(call).slice(0, 200)}`);
+  const { task } = call;
+  if (!isObject(task) || !Number.isInteger(task.vehicle_id) || !Number.isInteger(task.goal_segment)) {
+    fail(`request ${call.id}: malformed "task"`);
+  }
+  return { id: call.id, ...(call.type === "plan_routes" ? planRoutes(task) : fixLegs(task)) };
+}
+
+// The plan in force handed back (the same JSON as fleetsim sent) changes nothing, like no plan at all.
+function changesNothing(reply) {
+  if (reply.route_errors.length !== 0 || reply.plans.length > 1) return false;
+  if (reply.plans.length === 0) return true;
+  const vehicleId = reply.plans[0].vehicle_id;
+  if (!fleet.plans.has(vehicleId)) return false;
+  if (!fleet.json.has(vehicleId)) fleet.json.set(vehicleId, JSON.stringify(fleet.plans.get(vehicleId)));
+  return JSON.stringify(reply.plans[0]) === fleet.json.get(vehicleId);
+}
+
+// A round: its calls in order against the same fleet, up to the first answer that changes something.
+function answerRound(calls) {
+  const answers = [];
+  const durations = [];
+  for (const call of calls) {
+    const started = process.hrtime.bigint();
+    const reply = answer(call);
+    const nothing = changesNothing(reply);
+    durations.push(Number(process.hrtime.bigint() - started) / 1e9);
+    answers.push(nothing ? { id: call.id, plans: [], route_errors: [] } : reply);
+    if (!nothing) break; // the calls after it must see the fleet as changed: fleetsim asks them again
+  }
+  send({ answers, durations });
 }
 
 // fleetsim waits for each answer before it sends the next message, so there is nothing for an event loop

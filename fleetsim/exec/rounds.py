@@ -1,0 +1,123 @@
+"""Planning rounds in one message (protocol 1.2): the harness's ``round`` message and the checks on its
+answer.
+
+A client that says ``{"type": "ready", "rounds": true}`` is sent, instead of one request per call,
+``{"type": "round", "calls": [CALL...], "fleet": FLEET}``: the calls of a planning round left to make,
+in order (each ``{"type": "plan_routes" | "fix_legs", "id": N, "vehicle": V, "task": TASK}``, a request
+without its fleet), and the fleet update as a request would carry it. The client makes the calls in
+order against that fleet and stops after the first whose answer changes something (a plan other than the
+vehicle's plan in force handed back, a route error, a whole-request route error); it answers
+``{"answers": [ANSWER...], "durations": [SECONDS...]}``, the answers to the calls it made (each one a
+request's answer, ``schemas/planner-response.schema.json``; all but the last change nothing) and how long
+each call took, by its own clock. fleetsim applies them as if the calls had come one by one and sends
+the calls left in a new round, with the fleet as changed. A call's ``id`` is its number in the run, as
+one call at a time: a call left unanswered is sent again in the next round with the same ``id``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+from fleetsim.exec.protocol import decode_response
+from fleetsim.exec.schemas import load_schema, violation
+from fleetsim.planning.plans import FleetPlan, Response, RouteError
+from fleetsim.planning.protocol import RoundCall
+from fleetsim.planning.snapshot import FleetSnapshot
+
+__all__ = ["RoundAnswerError", "describe_round", "nothing_to_change", "read_round_answer"]
+
+ROUND = b'{"type":"round","calls":[%b]%b}\n'  # the calls, then (when the fleet changed) ',"fleet":' and it
+CALL = b'{"type":"%b","id":%d,"vehicle":%d,"task":%b}'
+
+
+class RoundAnswerError(ValueError):
+    """The answer to a round breaks the protocol (the message says how)."""
+
+
+def nothing_to_change(answer: Any, number: int) -> bool:
+    """Exactly ``{"id": number, "plans": [], "route_errors": []}``."""
+    return (
+        type(answer) is dict
+        and len(answer) == 3
+        and answer.get("id") == number
+        and type(answer["id"]) is int
+        and answer.get("plans") == []
+        and answer.get("route_errors") == []
+    )
+
+
+def describe_round(first: int, calls: Sequence[RoundCall], shown: int = 3) -> str:
+    """The round's requests, in words (for error messages)."""
+    numbers = f"request {first}" if len(calls) == 1 else f"requests {first}-{first + len(calls) - 1}"
+    words = [f"{method} for vehicle {vehicle}" for method, vehicle, _ in calls[:shown]]
+    more = ", ..." if len(calls) > shown else ""
+    return f"{numbers} in one round ({', '.join(words)}{more})"
+
+
+def read_round_answer(
+    answer: Any, first: int, calls: Sequence[RoundCall], fleet: FleetSnapshot
+) -> list[tuple[Response | RouteError, float]]:
+    """The decoded answers to the first calls of a round (numbered from ``first``), each with its duration;
+    a whole-request route error is a ``RouteError`` object. Anything wrong raises :class:`RoundAnswerError`."""
+    is_object = type(answer) is dict
+    answers = answer.get("answers") if is_object else None
+    durations = answer.get("durations") if is_object else None
+    well_formed = (
+        is_object
+        and len(answer) == 2
+        and type(answers) is list
+        and len(answers) > 0
+        and type(durations) is list
+        and all(type(seconds) is float and seconds >= 0.0 for seconds in durations)
+    )
+    if not well_formed:
+        problem = violation(load_schema("round-answer"), answer)
+        if problem is not None:
+            msg = f"an invalid answer: {problem}"
+            raise RoundAnswerError(msg)
+    assert isinstance(answers, list) and isinstance(durations, list)  # the schema says so
+    if len(answers) != len(durations):
+        msg = f"{len(answers)} answers and {len(durations)} durations (one of each per call answered)"
+        raise RoundAnswerError(msg)
+    if len(answers) > len(calls):
+        msg = f"{len(answers)} answers to a round of {len(calls)} calls"
+        raise RoundAnswerError(msg)
+    last = len(answers) - 1
+    decoded: list[tuple[Response | RouteError, float]] = []
+    for index, item in enumerate(answers):
+        number = first + index
+        if nothing_to_change(item, number):  # the commonest answer, by far
+            decoded.append(([], durations[index]))
+            continue
+        problem = violation(load_schema("response"), item, f"answers[{index}]")
+        if problem is not None:
+            msg = f"an invalid answer: {problem}"
+            raise RoundAnswerError(msg)
+        if item["id"] != number:
+            msg = f"the answer to request {item['id']!r} in place of request {number}'s (answers[{index}])"
+            raise RoundAnswerError(msg)
+        response: Response | RouteError
+        try:
+            response = decode_response(item)
+        except RouteError as error:
+            response = error
+        if index < last and _changes(response, fleet):
+            msg = (
+                f"answers[{index}] (request {number}) changing something before the round's last answer"
+                " (a round's answers end with the first that changes something)"
+            )
+            raise RoundAnswerError(msg)
+        decoded.append((response, durations[index]))
+    return decoded
+
+
+def _changes(response: Response | RouteError, fleet: FleetSnapshot) -> bool:
+    """The answer changes something: anything but nothing, or one plan that is the plan in force."""
+    if isinstance(response, RouteError):
+        return True
+    if not response:
+        return False
+    [*items] = response
+    item = items[0]
+    return len(items) != 1 or not isinstance(item, FleetPlan) or item != fleet.plans.get(item.vehicle_id)
