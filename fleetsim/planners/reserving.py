@@ -92,6 +92,9 @@ class ReservingPlanner:
         # vehicle -> (until when, where not to stop, (whom, on which segment), near its way) while it steps
         # aside for others
         self._aside: dict[int, tuple[float, frozenset[int], tuple[tuple[int, int], ...], frozenset[int]]] = {}
+        # vehicle -> whom it last stepped aside for, where they stood: it does not step aside for them again
+        # while they stand there (it came back and they had not moved: the dance is left to try)
+        self._stepped_for: dict[int, tuple[tuple[int, int], ...]] = {}
 
     def _conflicts_of(self, segment: int) -> frozenset[int]:
         assert self._layout is not None
@@ -285,7 +288,8 @@ class ReservingPlanner:
             if moved:
                 return self._committed(moved, fleet)
             standing = [other for other in lower if self._standing(other, fleet)]
-            if standing:
+            where = tuple((other, fleet.vehicles[other].segment) for other in standing)
+            if standing and self._stepped_for.get(vehicle_id) != where:
                 # They cannot get out of its way (a dead end behind them, say): it gets out of theirs,
                 # off their routes and off the way they would take out of its way if it were not there.
                 keep_clear = set().union(*(self._near(fleet.plans[other], layout) for other in standing))
@@ -294,7 +298,7 @@ class ReservingPlanner:
                 plans = self._evacuate(vehicle_id, keep_clear, mine, fleet, layout, index, set(standing), depth=2)
                 if plans:
                     self._assumed(plans, index)
-                    where = tuple((other, fleet.vehicles[other].segment) for other in standing)
+                    self._stepped_for[vehicle_id] = where
                     way = frozenset(self._near(plan, layout))
                     self._aside[vehicle_id] = (fleet.time + self.aside_for, frozenset(keep_clear), where, way)
                     return self._committed(plans, fleet)
