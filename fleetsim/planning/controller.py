@@ -200,7 +200,7 @@ class FleetController:
     def _one_by_one(self, planner: Planner, time: float, heads: Iterable[tuple[int, Task]]) -> Iterator[CallOutcome]:
         # One planning round makes a call per busy vehicle, 10^4 a simulated minute in a large fleet, so
         # what every call needs is looked up once and the calls are made from this one frame.
-        is_routed, invoke, layout, plans = self.tasks.is_routed, self._invoke, self.layout, self._plans
+        is_routed, invoke, layout = self.tasks.is_routed, self._invoke, self.layout
         plan_routes, fix_legs = planner.plan_routes, planner.fix_legs
         for vehicle_id, task in heads:
             method: Method
@@ -212,22 +212,20 @@ class FleetController:
             if snapshot is None or snapshot.time != time:
                 snapshot = self.snapshot(time)
             try:
-                response = invoke(method, call, vehicle_id, task, snapshot, layout)
-                if type(response) is list and not response:
-                    continue  # nothing to change: the most common answer, so tested first
-                items = validate_response(response, method, vehicle_id)
-            except RouteError as error:
-                yield CallOutcome(vehicle_id, method, task, plans[vehicle_id], (), (), (error,), ())
-                continue
-            if not items or (len(items) == 1 and items[0] == plans.get(getattr(items[0], "vehicle_id", None))):  # type: ignore[arg-type]
-                continue  # nothing, or the plan in force handed back unchanged
-            yield self._apply(vehicle_id, method, task, items, time)
+                response: object = invoke(method, call, vehicle_id, task, snapshot, layout)
+            except RouteError as error:  # the whole request cannot be routed
+                response = error
+            if type(response) is list and not response:
+                continue  # nothing to change: the most common answer, so tested first
+            outcome = self._answered(vehicle_id, method, task, response, time)
+            if outcome is not None:
+                yield outcome
 
     def _rounds(self, planner: RoundPlanner, time: float, heads: list[tuple[int, Task]]) -> Iterator[CallOutcome]:
         """The calls of ``heads`` asked in rounds: each round holds the next ``ROUND_CALLS`` calls left, made
         as they would be now (a change can route another vehicle's task, turning its plan_routes into
         fix_legs)."""
-        is_routed, invoke_round, layout, plans = self.tasks.is_routed, self._invoke_round, self.layout, self._plans
+        is_routed, invoke_round, layout = self.tasks.is_routed, self._invoke_round, self.layout
         done = 0
         while done < len(heads):
             if planner.rounds is False:  # it turned out to answer one call at a time
@@ -246,16 +244,25 @@ class FleetController:
                 raise PlannerError(msg, vehicle_id=calls[0][1])
             done += len(answers)
             for (name, vehicle_id, task), response in zip(calls, answers, strict=False):
-                method: Method = "fix_legs" if name == "fix_legs" else "plan_routes"
                 if type(response) is list and not response:
                     continue  # nothing to change
-                if isinstance(response, RouteError):  # the whole request raised it
-                    yield CallOutcome(vehicle_id, method, task, plans[vehicle_id], (), (), (response,), ())
-                    continue
-                items = validate_response(response, method, vehicle_id)
-                if not items or (len(items) == 1 and items[0] == plans.get(getattr(items[0], "vehicle_id", None))):  # type: ignore[arg-type]
-                    continue  # nothing, or the plan in force handed back unchanged
-                yield self._apply(vehicle_id, method, task, items, time)
+                method: Method = "fix_legs" if name == "fix_legs" else "plan_routes"
+                outcome = self._answered(vehicle_id, method, task, response, time)
+                if outcome is not None:
+                    yield outcome
+
+    def _answered(
+        self, vehicle_id: int, method: Method, task: Task, response: object, time: float
+    ) -> CallOutcome | None:
+        """What an answer other than an empty list does: a whole-request ``RouteError`` is reported; a
+        response is checked and applied, unless it is empty or hands the plan in force back unchanged."""
+        plans = self._plans
+        if isinstance(response, RouteError):
+            return CallOutcome(vehicle_id, method, task, plans[vehicle_id], (), (), (response,), ())
+        items = validate_response(response, method, vehicle_id)
+        if not items or (len(items) == 1 and items[0] == plans.get(getattr(items[0], "vehicle_id", None))):  # type: ignore[arg-type]
+            return None
+        return self._apply(vehicle_id, method, task, items, time)
 
     def _context(self) -> CheckContext:
         return CheckContext(self.layout, self._types, self._plans, self.tasks.queues(), self.tasks.routed)
