@@ -40,49 +40,43 @@ def test_output_patterns(expected: str, actual: str, matches: bool) -> None:
     assert bool(output_pattern(normalise(expected)).fullmatch(normalise(actual))) is matches
 
 
-def test_a_command_whose_output_drifted_fails(tmp_path: Path) -> None:
-    page = tmp_path / "page.md"
-    page.write_text("```console\n$ echo actual\nshown\n```\n")
-    with pytest.raises(AssertionError, match="printed"):
-        PageRun(page, tmp_path / "work").run()
+def run_page(folder: Path, markdown: str) -> int:
+    """Run the examples of a page holding ``markdown``, in a working folder of its own under ``folder``."""
+    folder.mkdir()
+    page = folder / "page.md"
+    page.write_text(markdown)
+    return PageRun(page, folder / "work").run()
 
 
-def test_a_yaml_example_that_does_not_load_fails(tmp_path: Path) -> None:
-    page = tmp_path / "page.md"
-    page.write_text("```yaml\nscenarios:\n  - name: x\n    dir: no/such/folder\n```\n")
-    with pytest.raises(Exception, match="no/such/folder"):
-        PageRun(page, tmp_path / "work").run()
-
-
-def test_a_python_example_that_raises_fails(tmp_path: Path) -> None:
-    page = tmp_path / "page.md"
-    page.write_text("```python\nimport fleetsim\nfleetsim.no_such_name\n```\n")
-    with pytest.raises(AttributeError):
-        PageRun(page, tmp_path / "work").run()
+@pytest.mark.parametrize(
+    ("markdown", "raised", "message"),
+    [
+        ("```console\n$ echo actual\nshown\n```\n", AssertionError, "printed"),  # output drifted
+        ("```yaml\nscenarios:\n  - name: x\n    dir: no/such/folder\n```\n", Exception, "no/such/folder"),
+        ("```python\nimport fleetsim\nfleetsim.no_such_name\n```\n", AttributeError, "no_such_name"),
+        ("```pycon\n>>> 1 + 1\n3\n```\n", AssertionError, "doctest failed"),  # a shown result drifted
+    ],
+    ids=["console", "yaml", "python", "pycon"],
+)
+def test_an_example_that_no_longer_holds_fails(
+    tmp_path: Path, markdown: str, raised: type[BaseException], message: str
+) -> None:
+    with pytest.raises(raised, match=message):
+        run_page(tmp_path / "page", markdown)
 
 
 def test_titled_blocks_are_written_and_suites_loaded(tmp_path: Path) -> None:
-    page = tmp_path / "page.md"
-    page.write_text(
+    markdown = (
         '```yaml title="mine.fleetsim.yaml"\nfleetsim: 1\nname: mine\nscenarios:\n'
         "  - {name: c, dir: scenario_suites/examples/crossing}\n```\n"
         "```console\n$ ls mine.fleetsim.yaml\nmine.fleetsim.yaml\n```\n"
     )
-    assert PageRun(page, tmp_path / "work").run() == 2
-
-
-def test_a_session_whose_shown_result_drifted_fails(tmp_path: Path) -> None:
-    page = tmp_path / "page.md"
-    page.write_text("```pycon\n>>> 1 + 1\n3\n```\n")
-    with pytest.raises(AssertionError, match="doctest failed"):
-        PageRun(page, tmp_path / "work").run()
+    assert run_page(tmp_path / "page", markdown) == 2
 
 
 def test_a_broken_suite_is_checked_by_the_command_that_shows_its_error(tmp_path: Path) -> None:
-    page = tmp_path / "page.md"
     suite = '```yaml title="bad.fleetsim.yaml"\nfleetsim: 1\nname: bad\nscenarios:\n  - {name: c, dir: nowhere}\n```\n'
-    page.write_text(suite)
     with pytest.raises(Exception, match="nowhere"):  # loaded, and it does not load
-        PageRun(page, tmp_path / "alone").run()
-    page.write_text(suite + "```console\n$ fleetsim validate bad.fleetsim.yaml\n...\n```\n")
-    assert PageRun(page, tmp_path / "shown").run() == 2
+        run_page(tmp_path / "alone", suite)
+    shown = suite + "```console\n$ fleetsim validate bad.fleetsim.yaml\n...\n```\n"
+    assert run_page(tmp_path / "shown", shown) == 2

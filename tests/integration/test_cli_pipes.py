@@ -10,15 +10,14 @@ from fleetsim.load.tiled_writer import write_map
 from fleetsim.strategies.geometry import grid
 
 
+def inspect_command(map_path: Path) -> list[str]:
+    """``fleetsim inspect MAP`` run by this interpreter."""
+    return [sys.executable, "-c", "from fleetsim.cli import main; raise SystemExit(main())", "inspect", str(map_path)]
+
+
 def test_a_reader_that_stops_early_ends_fleetsim_quietly_with_the_sigpipe_status(tmp_path: Path) -> None:
     write_map(tmp_path / "map.json", grid(21))  # 840 segments: far more output than a pipe buffers
-    command = [
-        sys.executable,
-        "-c",
-        "from fleetsim.cli import main; raise SystemExit(main())",
-        "inspect",
-        str(tmp_path / "map.json"),
-    ]
+    command = inspect_command(tmp_path / "map.json")
     process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     assert process.stdout is not None and process.stderr is not None
     first = process.stdout.readline()  # `| head -1`
@@ -31,12 +30,6 @@ def test_a_reader_that_stops_early_ends_fleetsim_quietly_with_the_sigpipe_status
 
 def test_a_reader_that_reads_everything_sees_status_0(tmp_path: Path) -> None:
     write_map(tmp_path / "map.json", grid(3))
-    command = [
-        sys.executable,
-        "-c",
-        "from fleetsim.cli import main; raise SystemExit(main())",
-        "inspect",
-        str(tmp_path / "map.json"),
-    ]
+    command = inspect_command(tmp_path / "map.json")
     done = subprocess.run(command, capture_output=True, text=True, timeout=120, check=False)
     assert (done.returncode, done.stderr) == (0, "") and "12 segments" in done.stdout
