@@ -15,6 +15,7 @@ own duration, as the planner reports it, is held to the per-call timeout as if i
 
 from __future__ import annotations
 
+import functools
 import math
 import signal
 import threading
@@ -126,18 +127,11 @@ class PlannerGuard:
         except (RouteError, PlannerInterrupted):
             self._account(start)
             raise
-        except _Overrun:
+        except (_Overrun, Exception) as exc:
             self._account(start)
-            raise self._overrun(method, vehicle_id, call) from None
-        except PlannerProcessError as exc:  # a planner process failed: its stderr says more than our frames
-            self._account(start)
-            raise PlannerFault(
-                f"{method}() for vehicle {vehicle_id}: {exc}", vehicle_id=vehicle_id, details=exc.details
-            ) from None
-        except Exception as exc:
-            self._account(start)
-            msg = f"{method}() for vehicle {vehicle_id} raised {type(exc).__name__}: {exc}"
-            raise PlannerFault(msg, vehicle_id=vehicle_id, details=_planner_traceback(exc)) from None
+            where = f"{method}() for vehicle {vehicle_id}"
+            overrun = functools.partial(self._overrun, method, vehicle_id, call)
+            raise self._fault(exc, where, vehicle_id, overrun) from None
         elapsed = _clock() - start
         self._call_started = None
         self.calls += 1
@@ -167,16 +161,10 @@ class PlannerGuard:
         except PlannerInterrupted:
             self._account(start)
             raise
-        except _Overrun:
+        except (_Overrun, Exception) as exc:
             self._account(start)
-            raise self._round_overrun(method, vehicle_id, count, call_round) from None
-        except PlannerProcessError as exc:
-            self._account(start)
-            raise PlannerFault(f"{where}: {exc}", vehicle_id=vehicle_id, details=exc.details) from None
-        except Exception as exc:
-            self._account(start)
-            msg = f"{where} raised {type(exc).__name__}: {exc}"
-            raise PlannerFault(msg, vehicle_id=vehicle_id, details=_planner_traceback(exc)) from None
+            overrun = functools.partial(self._round_overrun, method, vehicle_id, count, call_round)
+            raise self._fault(exc, where, vehicle_id, overrun) from None
         finally:
             self._tick_limit = self._limit
         elapsed = _clock() - start
@@ -190,6 +178,16 @@ class PlannerGuard:
         if elapsed > limit * count:
             raise self._round_overrun(method, vehicle_id, count, call_round)
         return [response for response, _ in answers]
+
+    @staticmethod
+    def _fault(exc: BaseException, where: str, vehicle_id: int, overrun: Callable[[], PlannerFault]) -> PlannerFault:
+        """What a call (or a round) that ended in ``exc`` is reported as."""
+        if isinstance(exc, _Overrun):
+            return overrun()
+        if isinstance(exc, PlannerProcessError):  # a planner process failed: its stderr says more than our frames
+            return PlannerFault(f"{where}: {exc}", vehicle_id=vehicle_id, details=exc.details)
+        msg = f"{where} raised {type(exc).__name__}: {exc}"
+        return PlannerFault(msg, vehicle_id=vehicle_id, details=_planner_traceback(exc))
 
     def _round_overrun(self, method: str, vehicle_id: int, count: int, call: Callable[..., object]) -> PlannerFault:
         if count == 1:
