@@ -24,7 +24,7 @@ import os
 import sys
 import time
 import traceback
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping
 from types import MappingProxyType
 from typing import IO, Any
 
@@ -41,7 +41,7 @@ from fleetsim.exec.protocol import (
 )
 from fleetsim.layout.layout import Layout, build_layout
 from fleetsim.layout.segment import Segment
-from fleetsim.planning.plans import FleetPlan, RouteError
+from fleetsim.planning.plans import FleetPlan, RouteError, hands_back
 from fleetsim.planning.protocol import Planner
 from fleetsim.planning.snapshot import FleetSnapshot, VehicleState
 from fleetsim.scenario import Task, VehicleType
@@ -157,7 +157,7 @@ class _Session:
             items = call(self.tasks.get(request["task"]["id"]) or _task(request["task"]), self.fleet, self.layout)
         except RouteError as error:
             return {"id": request["id"], "route_error": error.message}
-        if not items or _handed_back(items, self.fleet):
+        if not items or (isinstance(items, (list, tuple)) and hands_back(items, self.fleet.plans)):
             return {"id": request["id"], "plans": [], "route_errors": []}
         plans = []
         for item in items:
@@ -186,14 +186,6 @@ class _Session:
             if "route_error" in reply or reply["plans"] or reply["route_errors"]:
                 break  # it changes something: the calls after it must see the fleet as changed
         return {"answers": answers, "durations": durations}
-
-
-def _handed_back(items: Sequence[FleetPlan | RouteError], fleet: FleetSnapshot) -> bool:
-    """The response is one plan, the plan in force: fleetsim changes nothing for it, as for no plan."""
-    if not isinstance(items, (list, tuple)) or len(items) != 1:
-        return False
-    item = items[0]
-    return isinstance(item, FleetPlan) and item == fleet.plans.get(item.vehicle_id)
 
 
 def _view(entries: dict[int, Any], changed: list[Any], before: Mapping[int, Any] | None) -> Mapping[int, Any]:

@@ -21,7 +21,7 @@ from typing import Any
 
 from fleetsim.exec.protocol import decode_response
 from fleetsim.exec.schemas import load_schema, violation
-from fleetsim.planning.plans import FleetPlan, Response, RouteError
+from fleetsim.planning.plans import Response, RouteError, hands_back
 from fleetsim.planning.protocol import RoundCall
 from fleetsim.planning.snapshot import FleetSnapshot
 
@@ -116,8 +116,4 @@ def _changes(response: Response | RouteError, fleet: FleetSnapshot) -> bool:
     """The answer changes something: anything but nothing, or one plan that is the plan in force."""
     if isinstance(response, RouteError):
         return True
-    if not response:
-        return False
-    [*items] = response
-    item = items[0]
-    return len(items) != 1 or not isinstance(item, FleetPlan) or item != fleet.plans.get(item.vehicle_id)
+    return bool(response) and not hands_back(list(response), fleet.plans)

@@ -19,7 +19,7 @@ from typing import Literal, cast
 from fleetsim.errors import PlannerError
 from fleetsim.layout.layout import Layout
 from fleetsim.planning.checks import CheckContext, Rejection, check_plans
-from fleetsim.planning.plans import FleetPlan, RouteError
+from fleetsim.planning.plans import FleetPlan, RouteError, hands_back
 from fleetsim.planning.protocol import Planner, RoundCall, RoundPlanner
 from fleetsim.planning.reservations import CollisionAlert, ConflictTable, ReservationIndex
 from fleetsim.planning.snapshot import FleetSnapshot, VehicleState, initial_plan, initial_state, read_only
@@ -260,7 +260,7 @@ class FleetController:
         if isinstance(response, RouteError):
             return CallOutcome(vehicle_id, method, task, plans[vehicle_id], (), (), (response,), ())
         items = validate_response(response, method, vehicle_id)
-        if not items or (len(items) == 1 and items[0] == plans.get(getattr(items[0], "vehicle_id", None))):  # type: ignore[arg-type]
+        if not items or hands_back(items, plans):
             return None
         return self._apply(vehicle_id, method, task, items, time)
 

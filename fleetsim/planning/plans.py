@@ -6,13 +6,13 @@ raising a ``RouteError`` fails the whole request. The planner itself is ``fleets
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 from fleetsim.enums import Progress, Traverse
 from fleetsim.errors import FleetsimError
 
-__all__ = ["FleetLeg", "FleetPlan", "Response", "ResponseItem", "RouteError"]
+__all__ = ["FleetLeg", "FleetPlan", "Response", "ResponseItem", "RouteError", "hands_back"]
 
 
 def _enum_value(enum: type[Traverse] | type[Progress], value: object, name: str) -> Traverse | Progress:
@@ -161,3 +161,12 @@ class RouteError(FleetsimError):
 
 ResponseItem = FleetPlan | RouteError
 Response = Sequence[ResponseItem]
+
+
+def hands_back(items: Sequence[object], plans: Mapping[int, FleetPlan]) -> bool:
+    """``items`` is one plan, its vehicle's plan in force (of ``plans``): accepting it changes nothing, as
+    an empty response does not."""
+    if len(items) != 1:
+        return False
+    item = items[0]
+    return isinstance(item, FleetPlan) and item == plans.get(item.vehicle_id)
