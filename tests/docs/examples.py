@@ -22,7 +22,6 @@ command.
 
 from __future__ import annotations
 
-import csv
 import doctest
 import importlib.util
 import io
@@ -158,8 +157,6 @@ class PageRun:
                 self.suites.append((block, path))
             elif block.title.endswith(".py"):
                 self.modules.append((block, path))
-            elif block.title.endswith(".csv"):
-                list(csv.reader(io.StringIO(block.text)))
             elif block.title.endswith((".yaml", ".yml")):
                 yaml.safe_load(block.text)
             return 1
