@@ -24,6 +24,7 @@ from fleetsim.planning.protocol import Planner, RoundCall, RoundPlanner
 from fleetsim.planning.reservations import CollisionAlert, ConflictTable, ReservationIndex
 from fleetsim.planning.snapshot import FleetSnapshot, VehicleState, initial_plan, initial_state, read_only
 from fleetsim.planning.tasks import TaskBook
+from fleetsim.planning.views import LiveCopy, held_only_here
 from fleetsim.scenario import Scenario, Task
 
 __all__ = ["CallOutcome", "FleetController", "validate_response"]
@@ -104,10 +105,13 @@ class FleetController:
         self._reservations = ReservationIndex(ConflictTable(self.layout))
         # The last snapshot handed out; reused until something it shows changes (most calls change nothing).
         self._snapshot: FleetSnapshot | None = None
-        # The read-only copies the snapshot shares until what they copy changes: a planning round changes
-        # plans many times and states not at all, so only the plans are copied again for each change.
-        self._states_view: Mapping[int, VehicleState] | None = None
-        self._plans_view: Mapping[int, FleetPlan] | None = None
+        self._stale = False  # something the last snapshot shows has changed since
+        # The read-only copies of the states and plans that snapshots show, brought up to date by what
+        # changed (a planning round changes plans many times and states not at all).
+        self._states_copy = LiveCopy(self._states)
+        self._plans_copy = LiveCopy(self._plans)
+        # The vehicles whose plans changed since the reservation index last saw them.
+        self._unfolded: set[int] = set(self._plans)
         # The alerts of the last reservation check, valid while no plan has changed since. Plans that
         # only lost legs (driven past) reserve less, so they can end alerts but never start one.
         self._alerts: tuple[CollisionAlert, ...] | None = None
@@ -124,32 +128,34 @@ class FleetController:
 
     def snapshot(self, time: float) -> FleetSnapshot:
         """An immutable view for a planner call: rebuilt when the fleet or the time has changed."""
-        if self._snapshot is not None and self._snapshot.time == time:
+        if self._snapshot is not None and not self._stale and self._snapshot.time == time:
             return self._snapshot
-        if self._states_view is None:
-            self._states_view = read_only(self._states)
-        if self._plans_view is None:
-            self._plans_view = read_only(self._plans)
+        # Held by nobody else, the last snapshot's copies may be brought up to date in place.
+        exclusive = self._snapshot is not None and held_only_here(self, "_snapshot")
         self._snapshot = FleetSnapshot(
             time=time,
-            vehicles=self._states_view,
-            plans=self._plans_view,
+            vehicles=self._states_copy.view(exclusive),
+            plans=self._plans_copy.view(exclusive),
             tasks=self.tasks.queues(),
             routed=self.tasks.routed,
         )
+        self._stale = False
         return self._snapshot
 
     def alerts(self) -> tuple[CollisionAlert, ...]:
         """The reservation check over the plans in force (step 3)."""
         if self._alerts is None:
-            self._alerts = self._reservations.alerts(self._plans)
+            self._alerts = self._reservations.alerts(self._plans, self._unfolded)
+            self._unfolded.clear()
         return self._alerts
 
     # -- changes -------------------------------------------------------------------------------------
 
     def _put_plan(self, plan: FleetPlan) -> None:
         self._plans[plan.vehicle_id] = plan
-        self._plans_view = self._snapshot = None
+        self._plans_copy.changed(plan.vehicle_id)
+        self._unfolded.add(plan.vehicle_id)
+        self._stale = True
 
     def set_plan(self, plan: FleetPlan) -> None:
         """Replace a vehicle's plan without checks."""
@@ -164,13 +170,15 @@ class FleetController:
 
     def set_state(self, state: VehicleState) -> None:
         self._states[state.id] = state
-        self._states_view = self._snapshot = None
+        self._states_copy.changed(state.id)
+        self._stale = True
 
     def set_states(self, states: Mapping[int, VehicleState]) -> None:
         """:meth:`set_state` for many vehicles (a step's motion), by vehicle id."""
         if states:
             self._states.update(states)
-            self._states_view = self._snapshot = None
+            self._states_copy.changed_many(states)
+            self._stale = True
 
     def consult(self, planner: Planner, vehicle_id: int, time: float) -> CallOutcome | None:
         """Step 2 for one vehicle: ask the planner, check the response, apply what passes.
@@ -209,7 +217,8 @@ class FleetController:
             else:
                 method, call = "plan_routes", plan_routes
             snapshot = self._snapshot
-            if snapshot is None or snapshot.time != time:
+            if snapshot is None or self._stale or snapshot.time != time:
+                snapshot = None  # not held here while the next is made (see LiveCopy)
                 snapshot = self.snapshot(time)
             try:
                 response: object = invoke(method, call, vehicle_id, task, snapshot, layout)
@@ -236,7 +245,8 @@ class FleetController:
                 for vehicle_id, task in heads[done : done + ROUND_CALLS]
             ]
             snapshot = self._snapshot
-            if snapshot is None or snapshot.time != time:
+            if snapshot is None or self._stale or snapshot.time != time:
+                snapshot = None  # not held here while the next is made (see LiveCopy)
                 snapshot = self.snapshot(time)
             answers = invoke_round(planner.plan_round, calls, snapshot, layout)
             if not 0 < len(answers) <= len(calls):
@@ -296,7 +306,7 @@ class FleetController:
         """Step 1: completed tasks leave their queues and their goal markers leave the plans."""
         dropped = self.tasks.drop_completed()
         if dropped:
-            self._snapshot = None
+            self._stale = True
         for task in dropped:
             plan = self._plans[task.vehicle_id]
             if any(leg.goal_for_task == task.id for leg in plan.legs):

@@ -16,7 +16,7 @@ check costs in proportion to what changed, not to the fleet or the map (1000 veh
 from __future__ import annotations
 
 from collections import Counter
-from collections.abc import Iterable, Mapping
+from collections.abc import Collection, Iterable, Mapping
 from dataclasses import dataclass
 
 from fleetsim.layout.layout import Layout
@@ -119,12 +119,19 @@ class ReservationIndex:
             _count(self._holders, rows[segment], vehicle, delta)
             touched.update(rows[segment])
 
-    def _fold(self, plans: Mapping[int, FleetPlan]) -> None:
-        """Bring the reservations up to ``plans``: out with what changed plans gave up, in with the new."""
+    def _fold(self, plans: Mapping[int, FleetPlan], candidates: Collection[int] | None) -> None:
+        """Bring the reservations up to ``plans``: out with what changed plans gave up, in with the new.
+        ``candidates``: the only vehicles whose plans may have changed since the last fold, when the caller
+        knows them (else every plan is compared)."""
         held = self._held
-        gone = [vehicle for vehicle in held if vehicle not in plans]
+        if candidates is None:
+            gone = [vehicle for vehicle in held if vehicle not in plans]
+            candidates = plans.keys()
+        else:
+            gone = sorted(vehicle for vehicle in candidates if vehicle not in plans and vehicle in held)
+            candidates = sorted(vehicle for vehicle in candidates if vehicle in plans)
         changed = [
-            vehicle for vehicle, plan in plans.items() if (entry := held.get(vehicle)) is None or entry[0] is not plan
+            vehicle for vehicle in candidates if (entry := held.get(vehicle)) is None or entry[0] is not plans[vehicle]
         ]
         if not gone and not changed:
             return
@@ -145,9 +152,13 @@ class ReservationIndex:
             else:
                 alerting.discard(segment)
 
-    def alerts(self, plans: Mapping[int, FleetPlan]) -> tuple[CollisionAlert, ...]:
-        """Collision alerts for the plans in force, sorted by segment id."""
-        self._fold(plans)
+    def alerts(
+        self, plans: Mapping[int, FleetPlan], changed: Collection[int] | None = None
+    ) -> tuple[CollisionAlert, ...]:
+        """Collision alerts for the plans in force, sorted by segment id. ``changed``: the vehicles whose
+        plans may have changed since the last call, when the caller keeps count (a run's controller does);
+        without it every plan is compared with the last seen."""
+        self._fold(plans, changed)
         alerts = []
         for segment in sorted(self._alerting):
             primary = sorted(self._primaries[segment])
