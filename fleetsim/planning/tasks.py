@@ -113,4 +113,7 @@ class TaskBook:
         if dropped:
             self._queues_view = None
             self._heads = None
+            # Routed names queued tasks only (so it stays as large as the fleet's queues, not its history).
+            self._routed.difference_update(task.id for task in dropped)
+            self._routed_view = None
         return tuple(dropped)
