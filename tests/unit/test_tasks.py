@@ -74,6 +74,16 @@ def test_a_plan_routes_every_task_it_marks_as_a_goal() -> None:
     assert book.queue(7) == (TASKS[0], TASKS[2], TASKS[4])  # routing leaves the queue alone
 
 
+def test_a_completed_task_leaves_the_routed_set_when_it_leaves_its_queue() -> None:
+    book = _book()
+    book.mark_routed(FleetPlan(7, (_leg(10, goal=1), _leg(12, goal=3))))
+    book.complete(1, 2.5)
+    assert book.routed == {1, 3}  # still queued until bookkeeping
+    book.drop_completed()
+    assert book.routed == {3}
+    assert not book.is_routed(1) and book.is_routed(3)
+
+
 def test_a_plan_without_goal_markers_routes_nothing() -> None:
     book = _book()
     book.mark_routed(FleetPlan(7, (_leg(1), _leg(2))))
