@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import gc
 import math
+import threading
 import time
 from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
@@ -220,7 +221,7 @@ def run_scenario(
     """
     sink = TraceFile(trace_file) if trace_file is not None else None
     try:
-        with PlannerGuard(planner_timeout) as guard, _collector_spared():
+        with PlannerGuard(planner_timeout) as guard, _COLLECTOR.spared(len(scenario.vehicles)):
             if stop is not None:
                 stop.guard = guard
             return _simulate(scenario, planner, guard, planner_name, keep_trace, on_progress, stop, sink)
@@ -236,18 +237,50 @@ def run_scenario(
                 close()
 
 
-@contextmanager
-def _collector_spared() -> Iterator[None]:
-    """The run with what exists at its start (the scenario, its layout and conflict tables, the planner's
-    own tables: millions of objects for a large site) set aside from the cyclic garbage collector, which
-    otherwise walks them all again each time the run's own objects pile up (2 s a time for 10,000
-    vehicles). Nothing set aside is freed or changed; they are handed back when the run ends, however it
-    ends. Collection timing never touches a result or a hash."""
-    gc.freeze()
-    try:
-        yield
-    finally:
-        gc.unfreeze()
+class _Collector:
+    """The cyclic garbage collector tuned for runs, for as long as any run in the process goes.
+
+    What exists when a run starts (the scenario, its layout, conflict tables and the planner's own
+    tables: millions of objects for a large site) is set aside (``gc.freeze``): otherwise each full
+    collection walks it all again (2 s a time for 10,000 vehicles). And the youngest generation is
+    collected after a number of new objects that grows with the fleet, not after every 700: a step's own
+    objects live for one step, and with a fixed threshold a large fleet's step spans many collections,
+    every one of which found them alive and moved them on to the older generations, which are walked
+    again and again. Nothing set aside is freed or changed; all is handed back when the last run ends,
+    however it ends. Collection timing never touches a result or a hash.
+    """
+
+    OBJECTS_PER_VEHICLE = 20  # new objects per vehicle before a collection of the youngest generation
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._runs = 0
+        self._thresholds = gc.get_threshold()
+
+    @contextmanager
+    def spared(self, vehicles: int) -> Iterator[None]:
+        with self._lock:
+            if self._runs == 0:
+                self._thresholds = gc.get_threshold()
+            self._runs += 1
+            young, *older = gc.get_threshold()
+            gc.set_threshold(max(young, self.OBJECTS_PER_VEHICLE * vehicles), *older)
+            gc.freeze()
+        try:
+            yield
+        finally:
+            with self._lock:
+                self._runs -= 1
+                if self._runs == 0:
+                    gc.unfreeze()
+                    gc.set_threshold(*self._thresholds)
+
+    def set_aside(self) -> None:
+        """What a run built before its first step (its tables, its drivers), too."""
+        gc.freeze()
+
+
+_COLLECTOR = _Collector()
 
 
 def _simulate(
@@ -262,6 +295,7 @@ def _simulate(
 ) -> RunResult:
     started = time.perf_counter()
     run = _Run(scenario, planner, guard, keep_trace)
+    _COLLECTOR.set_aside()
     run.trace.sink = sink
     settings = scenario.settings
     dt = settings.time_step
