@@ -134,6 +134,15 @@ class StepMotion(NamedTuple):
 class Driver:
     """The motion state of one vehicle; the simulation owns it and steps it once per time step."""
 
+    # Slots: every moving vehicle's driver is read field by field on every step, and a large fleet's
+    # drivers should sit compactly in memory rather than each beside a dict of its own.
+    __slots__ = (
+        "_elapsed", "_headings", "_last_out", "_layout", "_on", "_profile", "_stretch", "_till_stop",
+        "_tolerance", "_travelled", "_turn_left", "_turn_rate", "_turn_sign", "_turn_target", "distance",
+        "disturbed", "halted", "heading", "id", "odometer", "progress", "speed", "speed_limit", "still_on",
+        "type", "x", "y",
+    )  # fmt: skip
+
     def __init__(self, vehicle: Vehicle, layout: Layout, headings: HeadingTable, heading: float) -> None:
         self.id = vehicle.id
         self.type = vehicle.type
