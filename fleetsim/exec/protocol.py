@@ -57,6 +57,8 @@ a few microseconds per call.
 from __future__ import annotations
 
 from collections.abc import Mapping
+from itertools import compress
+from operator import is_not
 from typing import Any
 
 import orjson
@@ -212,7 +214,11 @@ def _changes(fleet: FleetSnapshot, previous: FleetSnapshot | None) -> tuple[list
             return sorted(mapping)
         if mapping is before:
             return []  # snapshots share a mapping until something in it changes
-        # Unchanged states and plans are the same objects from one snapshot to the next.
+        # Unchanged states and plans are the same objects from one snapshot to the next. Two copies of a
+        # run's dict hold the same vehicles in the same order: compared value by value in C; else by id.
+        if list(mapping) == list(before):
+            moved = compress(mapping, map(is_not, mapping.values(), before.values()))
+            return sorted(vid for vid in moved if mapping[vid] != before[vid])
         old = before.get
         return sorted(vid for vid, value in mapping.items() if old(vid) is not value and old(vid) != value)
 
@@ -245,6 +251,7 @@ class FleetEncoder:
 
     def __init__(self) -> None:
         self.plans: dict[int, tuple[FleetPlan, bytes]] = {}  # vehicle -> its plan as last sent, and its JSON
+        self._routed: tuple[frozenset[int], bytes] = (frozenset(), b"[]")  # the routed set last sent, as JSON
 
     def encode(self, fleet: FleetSnapshot, previous: FleetSnapshot | None = None) -> bytes:
         vehicles, plans, queues = _changes(fleet, previous)
@@ -258,8 +265,15 @@ class FleetEncoder:
             dumps([_state(fleet.vehicles[vid]) for vid in vehicles]),
             b",".join(encoded),
             dumps([[vid, [task.id for task in fleet.tasks[vid]]] for vid in queues]),
-            dumps(sorted(fleet.routed)),
+            self._routed_json(fleet.routed),
         )
+
+    def _routed_json(self, routed: frozenset[int]) -> bytes:
+        """``routed`` as JSON, sorted: encoded again only when the set is another (it changes when a task is
+        routed or done, not on every request)."""
+        if routed is not self._routed[0]:
+            self._routed = (routed, dumps(sorted(routed)))
+        return self._routed[1]
 
 
 def decode_plan(data: Mapping[str, Any]) -> FleetPlan:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import importlib.util
 import json
 from pathlib import Path
@@ -76,6 +77,46 @@ def test_init_and_requests_match_their_schemas_and_updates_carry_only_changes() 
     )
     assert [v["id"] for v in update["vehicles"]] == [task.vehicle_id]
     assert update["plans"] == [] and update["tasks"] == [] and update["time"] == 0.1
+
+
+def test_an_update_names_the_vehicles_that_changed_whatever_order_the_fleets_list_them_in() -> None:
+    # Two snapshots of a run list the vehicles in the same order (compared value by value); fleets put
+    # together otherwise are compared vehicle by vehicle, with the same result. A value replaced by an
+    # equal one is no change.
+    controller = FleetController(crossing())
+    first = controller.snapshot(0.0)
+    plan = controller.plans[2]
+    controller.set_state(controller.states[1]._replace(x=-4.5))
+    controller.set_plan(type(plan)(2, plan.legs + plan.legs[-1:]))
+    controller.set_plan(type(plan)(1, controller.plans[1].legs))  # an equal plan, another object
+    second = controller.snapshot(0.1)
+    in_order = encode_fleet(second, first)
+    reordered = dataclasses.replace(
+        first,
+        vehicles=dict(reversed(first.vehicles.items())),
+        plans=dict(reversed(first.plans.items())),
+    )
+    assert list(reordered.plans) != list(second.plans)
+    assert encode_fleet(second, reordered) == in_order
+    assert [v["id"] for v in in_order["vehicles"]] == [1]
+    assert [p["vehicle_id"] for p in in_order["plans"]] == [2]
+
+
+def test_the_routed_set_is_encoded_again_only_when_it_is_another() -> None:
+    controller = FleetController(crossing())
+    encoder = FleetEncoder()
+    first = controller.snapshot(0.0)
+    assert loads(encoder.encode(first))["routed"] == []
+    task = controller.tasks.head(1)
+    assert task is not None
+    routing = type(controller.plans[1])(
+        1, tuple(dataclasses.replace(leg, goal_for_task=task.id) for leg in controller.plans[1].legs[:1])
+    )
+    controller.tasks.mark_routed(routing)
+    second = controller.snapshot(0.1)
+    assert second.routed is not first.routed
+    assert loads(encoder.encode(second, first))["routed"] == [task.id]
+    assert loads(encoder.encode(controller.snapshot(0.2), second))["routed"] == [task.id]
 
 
 def test_the_python_client_keeps_the_fleet_by_vehicle_id_across_updates() -> None:
