@@ -11,6 +11,8 @@ from __future__ import annotations
 
 from collections import Counter
 from collections.abc import Iterable, Mapping, Sequence
+from itertools import compress
+from operator import is_not
 
 from fleetsim.enums import Traverse
 from fleetsim.layout.layout import Layout
@@ -61,8 +63,15 @@ class FleetIndex:
         if plans is self._plans:
             return  # the same snapshot as last call: nothing can have changed
         self._plans = plans
-        for vehicle_id, plan in plans.items():
-            self.assume(vehicle_id, plan)
+        seen = self._seen
+        if list(plans) == list(seen):
+            # The same vehicles in the same order (a run's snapshots always list them so): the plans that
+            # are other objects are found in C, rather than one by one, on every change of a large fleet.
+            changed = list(compress(plans, map(is_not, plans.values(), seen.values())))
+        else:
+            changed = list(plans)
+        for vehicle_id in changed:
+            self.assume(vehicle_id, plans[vehicle_id])
 
     def assume(self, vehicle: int, plan: FleetPlan) -> FleetPlan | None:
         """Count ``plan`` as the vehicle's from now on (a plan about to be returned, so that what else the

@@ -77,3 +77,40 @@ def test_holders_are_the_others_by_id() -> None:
     assert lone.holders(1, segment) == [] and lone.holders(2, segment) == [1]
     far = next(s for s in SEGMENTS if s not in LAYOUT.conflicts(segment))
     assert lone.holders(2, far) == []
+
+
+fleet_steps = st.lists(
+    st.tuples(
+        st.dictionaries(st.integers(1, 5), plans, max_size=5),  # vehicles given new plans
+        st.booleans(),  # the fleet lists its vehicles in another order
+        st.lists(plans, max_size=2),  # plans assumed (and left) between refreshes, as within a call
+    ),
+    min_size=1,
+    max_size=12,
+)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.dictionaries(st.integers(1, 5), plans, min_size=1, max_size=5), fleet_steps)
+def test_refreshing_from_each_fleet_counts_that_fleet(
+    first: dict[int, FleetPlan], steps: list[tuple[dict[int, FleetPlan], bool, list[FleetPlan]]]
+) -> None:
+    # Refresh recounts the vehicles whose plans are other objects than those it counts, found in C when
+    # the fleet lists the same vehicles in the same order, else one by one; either way the tables must be
+    # those of the fleet, counted from scratch.
+    index = FleetIndex(LAYOUT, AHEAD)
+    fleet = {vehicle: FleetPlan(vehicle, plan.legs) for vehicle, plan in sorted(first.items())}
+    index.refresh(dict(fleet))
+    for changes, reorder, assumed in steps:
+        for vehicle, plan in changes.items():
+            if vehicle in fleet:
+                fleet[vehicle] = FleetPlan(vehicle, plan.legs)
+        for plan in assumed:
+            if plan.vehicle_id in fleet:
+                index.assume(plan.vehicle_id, plan)
+        shown = dict(reversed(list(fleet.items()))) if reorder else dict(fleet)
+        index.refresh(shown)
+        fresh = FleetIndex(LAYOUT, AHEAD)
+        for vehicle, held in sorted(fleet.items()):
+            fresh.assume(vehicle, held)
+        assert tables(index) == tables(fresh)
