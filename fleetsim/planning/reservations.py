@@ -100,7 +100,8 @@ class ReservationIndex:
 
     ``_holders[s]`` counts each vehicle's reservations (primary or secondary) on segment ``s`` and
     ``_primaries[s]`` its primary ones; a segment alerts when it has a primary holder and two or more
-    holders. Only segments whose holders changed are judged again.
+    holders. Only segments whose holders changed are judged again, and an alert whose holders stay the
+    same stays the same object (so that what is new is told by identity).
     """
 
     def __init__(self, table: ConflictTable) -> None:
@@ -108,7 +109,9 @@ class ReservationIndex:
         self._held: dict[int, tuple[FleetPlan, list[int]]] = {}  # vehicle -> (plan, primary segments)
         self._holders: dict[int, dict[int, int]] = {}  # segment -> {vehicle: reservations}
         self._primaries: dict[int, dict[int, int]] = {}  # segment -> {vehicle: primary reservations}
-        self._alerting: set[int] = set()
+        # The alert of each alerting segment: kept, the very same object, while its holders stay the same.
+        self._alerts: dict[int, CollisionAlert] = {}
+        self._sorted: tuple[CollisionAlert, ...] | None = ()  # the alerts by segment (None: to be sorted again)
 
     def _reserve(self, vehicle: int, segments: Iterable[int], delta: int, touched: set[int]) -> None:
         """Add (``delta`` = 1) or remove (-1) the vehicle's primary reservations of ``segments`` and the
@@ -145,12 +148,18 @@ class ReservationIndex:
             self._reserve(vehicle, left, -1, touched)
             self._reserve(vehicle, joined, 1, touched)
             held[vehicle] = (plans[vehicle], new)
-        holders, primaries, alerting = self._holders, self._primaries, self._alerting
+        holders, primaries, alerts = self._holders, self._primaries, self._alerts
         for segment in touched:
+            old = alerts.get(segment)
             if segment in primaries and len(holders.get(segment, ())) > 1:
-                alerting.add(segment)
-            else:
-                alerting.discard(segment)
+                primary = tuple(sorted(primaries[segment]))
+                secondary = tuple(sorted(holders[segment].keys() - set(primary)))
+                if old is None or old.primary != primary or old.secondary != secondary:
+                    alerts[segment] = CollisionAlert(segment, primary, secondary)
+                    self._sorted = None
+            elif old is not None:
+                del alerts[segment]
+                self._sorted = None
 
     def alerts(
         self, plans: Mapping[int, FleetPlan], changed: Collection[int] | None = None
@@ -159,12 +168,10 @@ class ReservationIndex:
         plans may have changed since the last call, when the caller keeps count (a run's controller does);
         without it every plan is compared with the last seen."""
         self._fold(plans, changed)
-        alerts = []
-        for segment in sorted(self._alerting):
-            primary = sorted(self._primaries[segment])
-            secondary = sorted(self._holders[segment].keys() - set(primary))
-            alerts.append(CollisionAlert(segment, tuple(primary), tuple(secondary)))
-        return tuple(alerts)
+        if self._sorted is None:
+            alerts = self._alerts
+            self._sorted = tuple(alerts[segment] for segment in sorted(alerts))
+        return self._sorted
 
 
 def _count(counts: dict[int, dict[int, int]], segments: Iterable[int], vehicle: int, delta: int) -> None:

@@ -77,7 +77,7 @@ class _Run:
         self.rejections: list[RejectionEvent] = []
         self.collisions: list[AlertEvent] = []
         self.route_errors: list[dict[str, Any]] = []
-        self.active_alerts: set[CollisionAlert] = set()
+        self.active_alerts: tuple[CollisionAlert, ...] = ()  # the last check's, by segment
         self.waiting_time = dict.fromkeys(self.drivers, 0.0)
         self.last_activity = 0.0
         # For explaining a stuck fleet at the end (never hashed): when each vehicle last moved, when the
@@ -133,9 +133,18 @@ class _Run:
             self.last_activity = now
 
     def check_reservations(self, stamp: float, events: list[list[Any]]) -> int:
-        """Step 3; alerts are reported when they appear, not again while they persist."""
-        alerts = set(self.controller.alerts())
-        fresh = sorted(alerts - self.active_alerts, key=lambda a: (a.segment, a.primary, a.secondary))
+        """Step 3; alerts are reported when they appear, not again while they persist. The index keeps an
+        alert the same object while its holders stay the same, and the check hands back the same tuple
+        while no plan changed, so what is new is found without comparing every alert in force."""
+        alerts = self.controller.alerts()
+        if alerts is self.active_alerts:
+            return 0
+        before = {alert.segment: alert for alert in self.active_alerts}
+        fresh = [
+            alert
+            for alert in alerts  # by segment, one alert each
+            if (old := before.get(alert.segment)) is not alert and old != alert
+        ]
         self.active_alerts = alerts
         for alert in fresh:
             self.collisions.append(AlertEvent(stamp, alert))

@@ -255,3 +255,24 @@ def test_an_index_drops_the_alert_of_a_vehicle_that_drove_past_the_shared_segmen
     assert index.alerts(closer) == (CollisionAlert(12, (1,), (2,)), CollisionAlert(13, (2,), (1,)))
     past = {**closer, 1: _plan(1, fixed=(11,))}  # vehicle 1 no longer holds 12; 11 is clear of 13
     assert index.alerts(past) == ()
+
+
+def test_an_alert_stays_the_same_object_while_its_holders_stay_the_same() -> None:
+    # What is new is then told by identity (the loop reports an alert when it appears, not while it lasts).
+    index = ReservationIndex(TABLE)
+    closer = {1: _plan(1, fixed=(11, 12)), 2: _plan(2, fixed=(13,))}
+    first = index.alerts(closer)
+    assert index.alerts(closer) is first  # nothing changed: the same tuple
+    # Vehicle 2 gets another plan object that holds the same segments: same holders, the same alerts.
+    again = index.alerts({**closer, 2: _plan(2, fixed=(13,), planned=(22,))}, changed={2})
+    assert again == first and all(a is b for a, b in zip(again, first, strict=True))
+    # Vehicles 3 and 4 meet on 21 and 22, far away: new alerts there, the old ones the same objects.
+    elsewhere = {**closer, 3: _plan(3, fixed=(21,)), 4: _plan(4, fixed=(22,))}
+    third = index.alerts(elsewhere, changed={3, 4})
+    assert third[0] is first[0] and third[1] is first[1]
+    assert third[2:] == (CollisionAlert(21, (3,), (4,)), CollisionAlert(22, (4,), (3,)))
+    # Vehicle 3 joins vehicle 2 on 13: the alerts of 12 and 13 change holders and are new objects.
+    crowded = {**elsewhere, 3: _plan(3, fixed=(13,))}
+    fourth = index.alerts(crowded, changed={3})
+    assert fourth[:2] == (CollisionAlert(12, (1,), (2, 3)), CollisionAlert(13, (2, 3), (1,)))
+    assert fourth[0] is not first[0] and fourth[1] is not first[1]
