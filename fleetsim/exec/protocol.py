@@ -57,8 +57,6 @@ a few microseconds per call.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from itertools import compress
-from operator import is_not
 from typing import Any
 
 import orjson
@@ -67,6 +65,7 @@ from fleetsim.enums import Disturbed, Progress, Traverse
 from fleetsim.layout.layout import Layout
 from fleetsim.planning.plans import FleetLeg, FleetPlan, RouteError
 from fleetsim.planning.snapshot import FleetSnapshot, VehicleState
+from fleetsim.planning.views import replaced
 from fleetsim.scenario import Task, VehicleType
 
 __all__ = [
@@ -214,13 +213,9 @@ def _changes(fleet: FleetSnapshot, previous: FleetSnapshot | None) -> tuple[list
             return sorted(mapping)
         if mapping is before:
             return []  # snapshots share a mapping until something in it changes
-        # Unchanged states and plans are the same objects from one snapshot to the next. Two copies of a
-        # run's dict hold the same vehicles in the same order: compared value by value in C; else by id.
-        if list(mapping) == list(before):
-            moved = compress(mapping, map(is_not, mapping.values(), before.values()))
-            return sorted(vid for vid in moved if mapping[vid] != before[vid])
+        # Unchanged states and plans are the same objects from one snapshot to the next.
         old = before.get
-        return sorted(vid for vid, value in mapping.items() if old(vid) is not value and old(vid) != value)
+        return sorted(vid for vid in replaced(mapping, before) if mapping[vid] != old(vid))
 
     if previous is None:
         return changed(fleet.vehicles, None), changed(fleet.plans, None), changed(fleet.tasks, None)

@@ -11,12 +11,11 @@ from __future__ import annotations
 
 from collections import Counter
 from collections.abc import Iterable, Mapping, Sequence
-from itertools import compress
-from operator import is_not
 
 from fleetsim.enums import Traverse
 from fleetsim.layout.layout import Layout
 from fleetsim.planning.plans import FleetPlan
+from fleetsim.planning.views import replaced
 
 __all__ = ["FleetIndex"]
 
@@ -63,14 +62,9 @@ class FleetIndex:
         if plans is self._plans:
             return  # the same snapshot as last call: nothing can have changed
         self._plans = plans
-        seen = self._seen
-        if list(plans) == list(seen):
-            # The same vehicles in the same order (a run's snapshots always list them so): the plans that
-            # are other objects are found in C, rather than one by one, on every change of a large fleet.
-            changed = list(compress(plans, map(is_not, plans.values(), seen.values())))
-        else:
-            changed = list(plans)
-        for vehicle_id in changed:
+        # Only the plans that are other objects (found in C for a run's snapshots: a large fleet's differ
+        # in a few plans after each change).
+        for vehicle_id in replaced(plans, self._seen):
             self.assume(vehicle_id, plans[vehicle_id])
 
     def assume(self, vehicle: int, plan: FleetPlan) -> FleetPlan | None:

@@ -16,10 +16,12 @@ from __future__ import annotations
 
 import sys
 from collections.abc import Callable, Iterable, Mapping
+from itertools import compress
+from operator import is_not
 from types import MappingProxyType
 from typing import Generic, TypeVar
 
-__all__ = ["LiveCopy", "held_only_here"]
+__all__ = ["LiveCopy", "held_only_here", "replaced"]
 
 K = TypeVar("K")
 V = TypeVar("V")
@@ -99,3 +101,14 @@ class LiveCopy(Generic[K, V]):
         changed.clear()
         assert self._view is not None
         return self._view
+
+
+def replaced(mapping: Mapping[K, V], before: Mapping[K, V]) -> list[K]:
+    """The keys of ``mapping`` whose values are other objects than in ``before`` (or absent there), in
+    ``mapping``'s order. Two copies of one of a run's dicts list the same keys in the same order, and are
+    then compared value by value in C (a large fleet's snapshots differ in a few entries); other
+    mappings key by key."""
+    if list(mapping) == list(before):
+        return list(compress(mapping, map(is_not, mapping.values(), before.values())))
+    old = before.get
+    return [key for key, value in mapping.items() if old(key) is not value]
