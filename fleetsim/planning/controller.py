@@ -216,12 +216,10 @@ class FleetController:
                 method, call = "fix_legs", fix_legs
             else:
                 method, call = "plan_routes", plan_routes
-            snapshot = self._snapshot
-            if snapshot is None or self._stale or snapshot.time != time:
-                snapshot = None  # not held here while the next is made (see LiveCopy)
-                snapshot = self.snapshot(time)
             try:
-                response: object = invoke(method, call, vehicle_id, task, snapshot, layout)
+                # The snapshot is not kept in a local between calls: held here, it could not be brought up
+                # to date in place for the next call (see LiveCopy).
+                response: object = invoke(method, call, vehicle_id, task, self.snapshot(time), layout)
             except RouteError as error:  # the whole request cannot be routed
                 response = error
             if type(response) is list and not response:
@@ -244,11 +242,7 @@ class FleetController:
                 ("fix_legs" if is_routed(task.id) else "plan_routes", vehicle_id, task)
                 for vehicle_id, task in heads[done : done + ROUND_CALLS]
             ]
-            snapshot = self._snapshot
-            if snapshot is None or self._stale or snapshot.time != time:
-                snapshot = None  # not held here while the next is made (see LiveCopy)
-                snapshot = self.snapshot(time)
-            answers = invoke_round(planner.plan_round, calls, snapshot, layout)
+            answers = invoke_round(planner.plan_round, calls, self.snapshot(time), layout)  # (no local: see above)
             if not 0 < len(answers) <= len(calls):
                 msg = f"plan_round() answered {len(answers)} of a round's {len(calls)} calls; it must answer 1 to {len(calls)}"
                 raise PlannerError(msg, vehicle_id=calls[0][1])
