@@ -61,6 +61,10 @@ class Track(NamedTuple):
     # Per piece: (running distance at its start, ax, ay, bx − ax, by − ay, its length, travel heading,
     # where the nose points driving forward on it, where it points backing).
     pieces: tuple[tuple[float, float, float, float, float, float, float, float, float], ...]
+    # Per bisect index, for stepping many vehicles at once in arrays: (length, 1.0 if backward else 0.0,
+    # the coordinates [low, high) with that index, and its piece's start, ax, ay, dx, dy, length), and
+    # the nose forward and backing on the piece.
+    spans: tuple[tuple[tuple[float, ...], float, float], ...]
 
     @classmethod
     def of(cls, segment: Segment, traverse: Traverse) -> Track:
@@ -79,7 +83,14 @@ class Track(NamedTuple):
             heading = math.atan2(ay - by, ax - bx) if backward else math.atan2(by - ay, bx - ax)
             noses = (_nose(heading, Progress.FORWARD), _nose(heading, Progress.REVERSE))
             pieces.append((along[index], ax, ay, bx - ax, by - ay, along[index + 1] - along[index], heading, *noses))
-        return cls(segment.length, backward, along, tuple(piece_of), tuple(pieces))
+        spans = []
+        for found, index in enumerate(piece_of):
+            low = along[found - 1] if found > 0 else -math.inf
+            high = along[found] if found < len(along) else math.inf
+            start, ax, ay, dx, dy, length, _, forward, reverse = pieces[index]
+            terms = (segment.length, 1.0 if backward else 0.0, low, high, start, ax, ay, dx, dy, length)
+            spans.append((terms, forward, reverse))
+        return cls(segment.length, backward, along, tuple(piece_of), tuple(pieces), tuple(spans))
 
 
 class HeadingTable:
@@ -305,6 +316,36 @@ class Driver:
             (self.id, leg.segment, leg.traverse, self.progress, along, speed, x, y, heading, self.type, self.disturbed),
         )
         return state, distance
+
+    def cruise_terms(self, plan: FleetPlan) -> tuple[Profile, Track] | None:
+        """The profile and the track of the current leg when the next step may be a :meth:`cruise` on
+        ``plan`` (the plan the last step returned): ``None`` at rest, turning or standing still."""
+        if self._profile is None or self._turn_left != 0.0 or plan is not self._last_out or self.still_on is not None:
+            return None
+        return self._profile, self._track(plan.legs[0])
+
+    def kinematics(self) -> tuple[float, float, float, float, float, float, float, float]:
+        """What :meth:`cruise` changes: elapsed and travelled on the profile, odometer, then as in the
+        state: distance along the leg, speed, x, y, heading (for
+        :class:`~fleetsim.motion.fleet_cruise.FleetCruise`)."""
+        return (
+            self._elapsed, self._travelled, self.odometer, self.distance, self.speed, self.x, self.y, self.heading
+        )  # fmt: skip
+
+    def take_kinematics(
+        self,
+        elapsed: float,
+        travelled: float,
+        odometer: float,
+        distance: float,
+        speed: float,
+        x: float,
+        y: float,
+        heading: float,
+    ) -> None:
+        """Take back :meth:`kinematics` after cruise steps taken elsewhere."""
+        self._elapsed, self._travelled, self.odometer, self.distance = elapsed, travelled, odometer, distance
+        self.speed, self.x, self.y, self.heading = speed, x, y, heading
 
     def _track(self, leg: FleetLeg) -> Track:
         """The track of the leg the vehicle is on, kept while it stays on that leg."""

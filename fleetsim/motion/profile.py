@@ -131,6 +131,17 @@ class SpeedProfile:
             ), self.peak
         return max(self._cruised_distance, self._braked_at(t)), self._braking_speed(t)
 
+    def running_terms(self) -> tuple[float, float, float, float, float, float, float, float, float, float, float]:
+        """The constants :meth:`running_at` computes with, for stepping many profiles at once in arrays
+        (:class:`~fleetsim.motion.fleet_cruise.FleetCruise`): stop_time, accelerate_until, brake_from,
+        v0, acceleration, 0.5 · acceleration, peak, deceleration, distance, and the distances at the end
+        of the acceleration and of the hold."""
+        a = self.acceleration
+        return (
+            self.stop_time, self.accelerate_until, self.brake_from, self.v0, a, 0.5 * a, self.peak,
+            self.deceleration, self.distance, self._accelerated_distance, self._cruised_distance,
+        )  # fmt: skip
+
     def advance(self, t0: float, t1: float) -> float:
         """Distance covered from ``t0`` to ``t1`` (``t0 <= t1``): the exact area under the step."""
         start, end = self._clamped(t0, "t0"), self._clamped(t1, "t1")

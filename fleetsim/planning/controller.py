@@ -112,6 +112,8 @@ class FleetController:
         self._plans_copy = LiveCopy(self._plans)
         # The vehicles whose plans changed since the reservation index last saw them.
         self._unfolded: set[int] = set(self._plans)
+        # The vehicles whose plans changed since the motion last asked (take_replanned).
+        self._replanned: set[int] = set()
         # The alerts of the last reservation check, valid while no plan has changed since. Plans that
         # only lost legs (driven past) reserve less, so they can end alerts but never start one.
         self._alerts: tuple[CollisionAlert, ...] | None = None
@@ -155,7 +157,14 @@ class FleetController:
         self._plans[plan.vehicle_id] = plan
         self._plans_copy.changed(plan.vehicle_id)
         self._unfolded.add(plan.vehicle_id)
+        self._replanned.add(plan.vehicle_id)
         self._stale = True
+
+    def take_replanned(self) -> set[int]:
+        """The vehicles whose plans changed since the last call (the first call: since the start)."""
+        replanned = self._replanned
+        self._replanned = set()
+        return replanned
 
     def set_plan(self, plan: FleetPlan) -> None:
         """Replace a vehicle's plan without checks."""

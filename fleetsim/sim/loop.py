@@ -24,12 +24,14 @@ import time
 from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
+from operator import itemgetter
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Literal
 
 from fleetsim.errors import PlannerError
 from fleetsim.motion.driver import Driver, HeadingTable
+from fleetsim.motion.fleet_cruise import FleetCruise
 from fleetsim.planning.controller import CallOutcome, FleetController
 from fleetsim.planning.protocol import Planner
 from fleetsim.planning.reservations import CollisionAlert
@@ -43,6 +45,8 @@ from fleetsim.sim.result import AlertEvent, DeadlockReport, Ending, Failure, Met
 from fleetsim.sim.trace import Trace, TraceFile, plan_record
 
 __all__ = ["RunProgress", "run_scenario"]
+
+_first = itemgetter(0)
 
 
 @dataclass(frozen=True, slots=True)
@@ -58,6 +62,8 @@ class RunProgress:
 class _Run:
     """The mutable state of one run; everything a result is built from."""
 
+    batched = True  # cruising vehicles stepped together (FleetCruise); False: one by one, for comparison
+
     def __init__(self, scenario: Scenario, planner: Planner, guard: PlannerGuard, keep_trace: bool) -> None:
         self.scenario = scenario
         self.planner = planner
@@ -70,10 +76,14 @@ class _Run:
             v.id: Driver(v, scenario.layout, headings, states[v.id].heading)
             for v in sorted(scenario.vehicles, key=lambda v: v.id)
         }
+        self.ids = list(self.drivers)
+        self.driver_list = list(self.drivers.values())
+        self.cruise = FleetCruise(self.driver_list, batched=self.batched)
         self.trace = Trace(keep_lines=keep_trace)
         # Only a scenario with disturbances has a disturber: without, the run (and its hash) is as before.
+        # It reaches the drivers through the cruise, which hands each back up to date first.
         has_disturbances = bool(scenario.disturbances) or scenario.random_disturbances is not None
-        self.disturber = Disturber(scenario, self.drivers, self.controller) if has_disturbances else None
+        self.disturber = Disturber(scenario, self.cruise.released, self.controller) if has_disturbances else None
         self.rejections: list[RejectionEvent] = []
         self.collisions: list[AlertEvent] = []
         self.route_errors: list[dict[str, Any]] = []
@@ -154,16 +164,24 @@ class _Run:
     def move(self, dt: float, end: float, events: list[list[Any]]) -> Iterable[VehicleState]:
         """Step 4: every vehicle over the step ending at ``end``; entering a goal leg completes its task.
 
-        Returns the new states of the vehicles that moved, by id. (The per-vehicle path here
-        runs 10^5 times a simulated minute in a large fleet, so it reads the motion's fields directly.)
+        Returns the new states of the vehicles that moved, by id. The vehicles that cruise all step long
+        are stepped together (:class:`FleetCruise`); the others one by one, after which those that may
+        cruise on are armed for the next step. (The per-vehicle path reads the motion's fields directly.)
         """
         controller = self.controller
         tasks = controller.tasks
         plan_of = controller.plan_of
+        cruise = self.cruise
+        cruise.forget(controller.take_replanned(), plan_of)
+        cruised_ids, cruised_states, others = cruise.step(dt)
         busy = tasks.heads()  # the vehicles with tasks
         waiting = self.waiting_time
-        states: dict[int, VehicleState] = {}
-        for vehicle_id, driver in self.drivers.items():
+        ids = self.ids
+        drivers = self.driver_list
+        stepped: list[tuple[int, VehicleState]] = []
+        for i in others:
+            vehicle_id = ids[i]
+            driver = drivers[i]
             plan = plan_of(vehicle_id)
             if driver.still_on is plan:  # standing still with nothing new to drive: the step changes nothing
                 if vehicle_id in busy:
@@ -176,6 +194,7 @@ class _Run:
                 new_plan, entered, distance, turned, step_state = driver.step(plan, dt)
                 if new_plan is not plan:
                     controller.drive_past(new_plan)
+                    plan = new_plan
                 for leg in entered:
                     if leg.goal_for_task is not None and not tasks.is_completed(leg.goal_for_task):
                         tasks.complete(leg.goal_for_task, end)
@@ -183,9 +202,17 @@ class _Run:
                 if not (distance > 0.0 or turned or entered):
                     if vehicle_id in busy:
                         waiting[vehicle_id] += dt
+                    cruise.arm(i, plan)
                     continue
-                state = step_state or driver.moved_state(new_plan)
-            states[vehicle_id] = state
+                state = step_state or driver.moved_state(plan)
+            stepped.append((vehicle_id, state))
+            cruise.arm(i, plan)
+        if stepped:  # by id, as the trace lists them
+            stepped += zip(cruised_ids, cruised_states, strict=True)
+            stepped.sort(key=_first)
+            states = dict(stepped)
+        else:
+            states = dict(zip(cruised_ids, cruised_states, strict=True))
         if states:
             self.last_activity = end
             self.last_moved.update(dict.fromkeys(states, end))
@@ -365,6 +392,7 @@ def _simulate(
             events.append(["interrupted", signal_name(stop.signum or 0) if stop is not None else "signal"])
         run.trace.record(step, moved, plans, events)
         break
+    run.cruise.release_all()  # the drivers' odometers up to date
     steps = step + 1
     sim_time = steps * dt
     completed = run.controller.tasks.completed()
