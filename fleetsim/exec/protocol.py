@@ -57,6 +57,7 @@ a few microseconds per call.
 from __future__ import annotations
 
 from collections.abc import Mapping
+from collections.abc import Set as AbstractSet
 from typing import Any
 
 import orjson
@@ -246,7 +247,7 @@ class FleetEncoder:
 
     def __init__(self) -> None:
         self.plans: dict[int, tuple[FleetPlan, bytes]] = {}  # vehicle -> its plan as last sent, and its JSON
-        self._routed: tuple[frozenset[int], bytes] = (frozenset(), b"[]")  # the routed set last sent, as JSON
+        self._routed: tuple[AbstractSet[int], bytes] = (frozenset(), b"[]")  # the routed set last sent, as JSON
 
     def encode(self, fleet: FleetSnapshot, previous: FleetSnapshot | None = None) -> bytes:
         vehicles, plans, queues = _changes(fleet, previous)
@@ -263,7 +264,7 @@ class FleetEncoder:
             self._routed_json(fleet.routed),
         )
 
-    def _routed_json(self, routed: frozenset[int]) -> bytes:
+    def _routed_json(self, routed: AbstractSet[int]) -> bytes:
         """``routed`` as JSON, sorted: encoded again only when the set is another (it changes when a task is
         routed or done, not on every request)."""
         if routed is not self._routed[0]:

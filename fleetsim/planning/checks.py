@@ -9,6 +9,7 @@ change.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Set as AbstractSet
 from dataclasses import dataclass, field
 from enum import Enum
 from itertools import pairwise
@@ -118,7 +119,7 @@ class CheckContext:
     vehicle_types: Mapping[int, VehicleType]  # by vehicle id
     plans: Mapping[int, FleetPlan]  # the plans in force now
     queues: Mapping[int, tuple[Task, ...]]  # head first
-    routed: frozenset[int] = frozenset()  # queued tasks an accepted plan already marks
+    routed: AbstractSet[int] = frozenset()  # queued tasks an accepted plan already marks
 
 
 Check = Callable[[FleetPlan, CheckContext], "Rejection | None"]

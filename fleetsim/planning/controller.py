@@ -139,7 +139,7 @@ class FleetController:
             vehicles=self._states_copy.view(exclusive),
             plans=self._plans_copy.view(exclusive),
             tasks=self.tasks.queues(),
-            routed=self.tasks.routed,
+            routed=self.tasks.routed_for_snapshot(exclusive),
         )
         self._stale = False
         return self._snapshot
@@ -278,7 +278,7 @@ class FleetController:
         return self._apply(vehicle_id, method, task, items, time)
 
     def _context(self) -> CheckContext:
-        return CheckContext(self.layout, self._types, self._plans, self.tasks.queues(), self.tasks.routed)
+        return CheckContext(self.layout, self._types, self._plans, self.tasks.queues(), self.tasks.routed_now)
 
     def _apply(
         self, vehicle_id: int, method: Method, task: Task, items: tuple[FleetPlan | RouteError, ...], time: float

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from collections.abc import Set as AbstractSet
 from dataclasses import dataclass
 from types import MappingProxyType
 from typing import NamedTuple, TypeVar
@@ -72,14 +73,16 @@ class FleetSnapshot:
         tasks: Every vehicle's queue of [`Task`][fleetsim.scenario.Task]s, head first, by id (an empty
             tuple: no tasks left).
         routed: Ids of queued tasks whose goal an accepted plan already marks (``goal_for_task``): the
-            harness then asks ``fix_legs`` for them, else ``plan_routes``.
+            harness then asks ``fix_legs`` for them, else ``plan_routes``. A read-only set
+            (``collections.abc.Set``: ``in``, ``len``, iteration, ``|``, ``&``, ``-``); its iteration
+            order is not meaningful, so sort it where order matters.
     """
 
     time: float
     vehicles: Mapping[int, VehicleState]
     plans: Mapping[int, FleetPlan]
     tasks: Mapping[int, tuple[Task, ...]]  # each vehicle's queue, head first
-    routed: frozenset[int]  # ids of queued tasks that an accepted plan already marks as a goal
+    routed: AbstractSet[int]  # ids of queued tasks that an accepted plan already marks as a goal
 
     def head_task(self, vehicle_id: int) -> Task | None:
         """The task the vehicle works on now, or ``None`` when it has no more tasks."""

@@ -10,9 +10,11 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Set as AbstractSet
 from types import MappingProxyType
 
 from fleetsim.planning.plans import FleetPlan
+from fleetsim.planning.views import LiveKeys
 from fleetsim.scenario import Task
 
 __all__ = ["TaskBook"]
@@ -27,13 +29,16 @@ class TaskBook:
         for task in tasks:  # file order: the queue order
             self._queues[task.vehicle_id].append(task)
             self._tasks[task.id] = task
-        self._routed: set[int] = set()
-        # Whether a task is routed: the set's own lookup (asked on every planner call).
+        # The routed tasks, as an insertion-ordered set (a dict's keys), and the read-only copy snapshots
+        # show, brought up to date by what changed (a large fleet routes tasks many times a step).
+        self._routed: dict[int, None] = {}
+        self._routed_copy = LiveKeys(self._routed)
+        # Whether a task is routed: the dict's own lookup (asked on every planner call).
         self.is_routed: Callable[[int], bool] = self._routed.__contains__
+        self.routed_now: AbstractSet[int] = self._routed.keys()  # live, read-only: for checks made at once
         self._completed: dict[int, float] = {}  # task id -> sim time of completion
         # Read-only views handed out on every planner call, rebuilt only after a change.
         self._queues_view: Mapping[int, tuple[Task, ...]] | None = None
-        self._routed_view: frozenset[int] | None = None
         self._heads: Mapping[int, Task] | None = None  # heads(), until a queue changes
         self._undropped = False  # a task completed since the last drop_completed()
 
@@ -53,10 +58,14 @@ class TaskBook:
         return queue[0] if queue else None
 
     @property
-    def routed(self) -> frozenset[int]:
-        if self._routed_view is None:
-            self._routed_view = frozenset(self._routed)
-        return self._routed_view
+    def routed(self) -> AbstractSet[int]:
+        """The routed tasks now, as a read-only set that never changes (a new one after a change)."""
+        return self._routed_copy.keys(exclusive=False)
+
+    def routed_for_snapshot(self, exclusive: bool) -> AbstractSet[int]:
+        """:attr:`routed` for the next snapshot; ``exclusive``: nobody but the caller holds the last
+        snapshot, so the set it showed may be brought up to date in place (planning/views.py)."""
+        return self._routed_copy.keys(exclusive)
 
     def is_completed(self, task_id: int) -> bool:
         return task_id in self._completed
@@ -92,8 +101,8 @@ class TaskBook:
         """An accepted plan routes every task it marks as a goal."""
         for leg in plan.legs:
             if leg.goal_for_task is not None and leg.goal_for_task not in self._routed:
-                self._routed.add(leg.goal_for_task)
-                self._routed_view = None
+                self._routed[leg.goal_for_task] = None
+                self._routed_copy.changed(leg.goal_for_task)
 
     def complete(self, task_id: int, time: float) -> None:
         """The vehicle entered (or stands on) the task's goal leg."""
@@ -114,6 +123,8 @@ class TaskBook:
             self._queues_view = None
             self._heads = None
             # Routed names queued tasks only (so it stays as large as the fleet's queues, not its history).
-            self._routed.difference_update(task.id for task in dropped)
-            self._routed_view = None
+            for task in dropped:
+                if task.id in self._routed:
+                    del self._routed[task.id]
+                    self._routed_copy.changed(task.id)
         return tuple(dropped)

@@ -15,13 +15,13 @@ makes a fresh copy.
 from __future__ import annotations
 
 import sys
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, KeysView, Mapping
 from itertools import compress
 from operator import is_not
 from types import MappingProxyType
-from typing import Generic, TypeVar
+from typing import Any, Generic, TypeVar
 
-__all__ = ["LiveCopy", "held_only_here", "replaced"]
+__all__ = ["LiveCopy", "LiveKeys", "held_only_here", "replaced"]
 
 K = TypeVar("K")
 V = TypeVar("V")
@@ -56,9 +56,10 @@ def held_only_here(holder: object, name: str, others: int = 0) -> bool:
 class LiveCopy(Generic[K, V]):
     """A read-only copy of ``live`` (a dict the controller changes), kept up to date on demand.
 
-    Tell it each changed key (:meth:`changed`); :meth:`view` then gives a read-only mapping equal to
-    ``live`` at that moment: the view handed out last when nothing changed, that same view brought up
-    to date when only the caller holds it (``exclusive``), and else a new copy.
+    Tell it each changed key (:meth:`changed`; a key deleted from ``live`` is a change too); :meth:`view`
+    then gives a read-only mapping equal to ``live`` at that moment: the view handed out last when
+    nothing changed, that same view brought up to date when only the caller holds it (``exclusive``),
+    and else a new copy.
     """
 
     __slots__ = ("_changed", "_copy", "_live", "_view")
@@ -66,7 +67,7 @@ class LiveCopy(Generic[K, V]):
     def __init__(self, live: dict[K, V]) -> None:
         self._live = live
         self._copy: dict[K, V] = {}
-        self._view: Mapping[K, V] | None = None
+        self._view: object = None  # what _over(copy) made
         self._changed: set[K] = set()  # keys changed since the view was made
 
     def changed(self, key: K) -> None:
@@ -80,6 +81,14 @@ class LiveCopy(Generic[K, V]):
     def view(self, exclusive: bool) -> Mapping[K, V]:
         """The live dict as it is now, read-only. ``exclusive``: the caller knows that the snapshot which
         showed the last view is held by nobody else (the copy and the view themselves are checked here)."""
+        view: Mapping[K, V] = self._current(exclusive)
+        return view
+
+    def _over(self, copy: dict[K, V]) -> object:
+        """The read-only view handed out over a copy."""
+        return MappingProxyType(copy)
+
+    def _current(self, exclusive: bool) -> Any:
         changed = self._changed
         if self._view is not None and not changed:
             return self._view
@@ -94,13 +103,31 @@ class LiveCopy(Generic[K, V]):
         ):
             copy = self._copy
             for key in changed:
-                copy[key] = live[key]
+                try:
+                    copy[key] = live[key]
+                except KeyError:  # gone from the live dict
+                    del copy[key]
         else:
             self._copy = dict(live)
-            self._view = MappingProxyType(self._copy)
+            self._view = self._over(self._copy)
         changed.clear()
-        assert self._view is not None
         return self._view
+
+
+class LiveKeys(LiveCopy[K, None]):
+    """:class:`LiveCopy` of a dict used as an insertion-ordered set, handed out as a read-only set (the
+    copy's keys view): the routed tasks. Its iteration order is the order keys came in, so a reader that
+    needs an order sorts."""
+
+    __slots__ = ()
+
+    def keys(self, exclusive: bool) -> KeysView[K]:
+        """The live keys as they are now, read-only (``exclusive`` as for :meth:`LiveCopy.view`)."""
+        keys: KeysView[K] = self._current(exclusive)
+        return keys
+
+    def _over(self, copy: dict[K, None]) -> object:
+        return copy.keys()
 
 
 def replaced(mapping: Mapping[K, V], before: Mapping[K, V]) -> list[K]:

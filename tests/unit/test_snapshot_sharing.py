@@ -7,7 +7,9 @@ the dicts under them. Whatever a planner keeps must never change under it.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Iterator
+from collections.abc import Set as AbstractSet
 from pathlib import Path
 
 import pytest
@@ -17,7 +19,7 @@ from fleetsim.enums import Direction, Progress, Shape, Traverse
 from fleetsim.layout import Segment
 from fleetsim.load.tiled_writer import write_map
 from fleetsim.planning import FleetController, FleetLeg, FleetPlan, views
-from fleetsim.scenario import Scenario
+from fleetsim.scenario import Scenario, Task
 
 VEHICLES = 16
 
@@ -141,3 +143,69 @@ def test_held_only_here_counts_every_other_holder() -> None:
     assert views.held_only_here(holder, "thing", others=1)
     extra.clear()
     assert views.held_only_here(holder, "thing")
+
+
+# -- the routed set: the same rules for fleet.routed (a read-only set) -----------------------------------
+
+
+@pytest.fixture()
+def busy(scenario: Scenario) -> FleetController:
+    """Sixteen vehicles with one task each (task i is vehicle i's, to segment 2i)."""
+    tasks = tuple(Task(i, i, 2 * i, None) for i in range(1, VEHICLES + 1))
+    return FleetController(dataclasses.replace(scenario, tasks=tasks))
+
+
+def _route(controller: FleetController, *tasks: int) -> None:
+    for task in tasks:
+        plan = FleetPlan(
+            task, (*controller.plans[task].legs, FleetLeg(2 * task, Traverse.FORWARD, Progress.FORWARD, False, task))
+        )
+        controller.tasks.mark_routed(plan)
+        controller.set_plan(plan)
+
+
+def _routed_id(controller: FleetController, time: float) -> int:
+    """The id of the routed set of the snapshot at ``time``, keeping no reference to it."""
+    return id(controller.snapshot(time).routed)
+
+
+def test_the_routed_set_nobody_else_holds_is_brought_up_to_date_in_place(busy: FleetController) -> None:
+    _route(busy, *range(1, 13))
+    first = _routed_id(busy, 0.0)
+    _route(busy, 13)
+    assert _routed_id(busy, 0.0) == first and 13 in busy.snapshot(0.0).routed
+    busy.tasks.complete(2, 1.0)
+    busy.bookkeeping()  # a done task leaves the set: deleted in place too
+    routed = busy.snapshot(0.1).routed
+    assert id(routed) == first
+    assert sorted(routed) == [1, *range(3, 14)] == sorted(busy.tasks.routed_now)
+
+
+def test_a_kept_routed_set_or_iterator_never_changes(busy: FleetController) -> None:
+    _route(busy, *range(1, 13))
+    kept = busy.snapshot(0.0).routed
+    _route(busy, 13)
+    later = busy.snapshot(0.0).routed
+    assert later is not kept and 13 in later and 13 not in kept
+    walking = iter(later)
+    del later
+    _route(busy, 14)
+    assert 14 in busy.snapshot(0.0).routed
+    assert sorted(walking) == list(range(1, 14))  # the iterator's set was copied, not changed under it
+
+
+def test_a_kept_snapshot_keeps_its_routed_set(controller: FleetController) -> None:
+    route = FleetPlan(1, (*controller.plans[1].legs, FleetLeg(2, Traverse.FORWARD, Progress.FORWARD, False, 1)))
+    kept = controller.snapshot(0.0)
+    controller.tasks.mark_routed(route)
+    controller.set_plan(route)
+    later = controller.snapshot(0.0)
+    assert (set(kept.routed), set(later.routed)) == (set(), {1})
+    assert later.is_routed(controller.tasks.head(1)) and not kept.is_routed(controller.tasks.head(1))
+
+
+def test_the_routed_set_is_a_read_only_set(busy: FleetController) -> None:
+    _route(busy, 1, 2)
+    routed = busy.snapshot(0.0).routed
+    assert isinstance(routed, AbstractSet) and routed == {1, 2} and routed | {3} == {1, 2, 3}
+    assert not hasattr(routed, "add") and not hasattr(routed, "discard")
