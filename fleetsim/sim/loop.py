@@ -30,8 +30,9 @@ from types import MappingProxyType
 from typing import Any, Literal
 
 from fleetsim.errors import PlannerError
-from fleetsim.motion.driver import Driver, HeadingTable
+from fleetsim.motion.driver import Driver
 from fleetsim.motion.fleet_cruise import FleetCruise
+from fleetsim.motion.track import HeadingTable
 from fleetsim.planning.controller import CallOutcome, FleetController
 from fleetsim.planning.protocol import Planner
 from fleetsim.planning.reservations import CollisionAlert

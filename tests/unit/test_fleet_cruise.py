@@ -21,9 +21,10 @@ from fleetsim.enums import Direction, Progress, Shape, Traverse
 from fleetsim.layout import Segment, build_layout
 from fleetsim.load.scenario import load_scenario
 from fleetsim.load.suite import load_suite
-from fleetsim.motion.driver import Driver, HeadingTable
+from fleetsim.motion.driver import Driver
 from fleetsim.motion.fleet_cruise import FleetCruise
 from fleetsim.motion.slowdown import SlowDownProfile
+from fleetsim.motion.track import HeadingTable
 from fleetsim.planners import BFSPlanner, ReservingPlanner
 from fleetsim.planning.plans import FleetLeg, FleetPlan
 from fleetsim.scenario import Scenario, Vehicle, VehicleType

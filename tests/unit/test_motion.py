@@ -10,7 +10,8 @@ from scenario_factory import AGV, TUGGER, make_scenario
 
 from fleetsim.enums import Direction, Progress, Shape, Traverse
 from fleetsim.layout import Segment, build_layout
-from fleetsim.motion.driver import Driver, HeadingTable
+from fleetsim.motion.driver import Driver
+from fleetsim.motion.track import HeadingTable
 from fleetsim.planning.plans import FleetLeg, FleetPlan
 from fleetsim.scenario import Vehicle, VehicleType
 from fleetsim.sim.loop import run_scenario
