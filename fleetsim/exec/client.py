@@ -31,6 +31,7 @@ from typing import IO, Any
 from fleetsim.enums import ConflictModel, Direction, Shape, TurnCapability
 from fleetsim.exec.protocol import (
     PROTOCOL_FAMILY,
+    LegBook,
     decode_disturbed,
     decode_plan,
     decode_progress,
@@ -112,6 +113,7 @@ class _Session:
         # (fleetsim accepted it) becomes the planner's own object again, as in process, where a planner
         # that keeps state by plan identity (FleetIndex) then recounts nothing.
         self.answered: dict[int, tuple[FleetPlan, dict[str, Any]]] = {}
+        self.legs = LegBook()  # the fleet updates' legs, each decoded once
 
     def snapshot(self, data: Mapping[str, Any]) -> FleetSnapshot:
         """The fleet after ``data`` (complete the first time, then the entries that changed)."""
@@ -126,7 +128,7 @@ class _Session:
             ))  # fmt: skip
         for encoded in data["plans"]:
             mine = self.answered.get(encoded["vehicle_id"])
-            plan = mine[0] if mine is not None and mine[1] == encoded else decode_plan(encoded)
+            plan = mine[0] if mine is not None and mine[1] == encoded else decode_plan(encoded, self.legs)
             self.plans[plan.vehicle_id] = plan  # an unchanged plan stays the same object, as in process
         for vehicle_id, ids in data["tasks"]:
             self.queues[vehicle_id] = tuple(self.tasks[task_id] for task_id in ids)

@@ -32,7 +32,7 @@ from collections.abc import Sequence
 from typing import IO, Any
 
 from fleetsim.errors import PlannerProcessError
-from fleetsim.exec.protocol import FleetEncoder, decode_response, dumps, encode_init, encode_task, loads
+from fleetsim.exec.protocol import FleetEncoder, LegBook, decode_response, dumps, encode_init, encode_task, loads
 from fleetsim.exec.rounds import CALL, ROUND, RoundAnswerError, describe_round, nothing_to_change, read_round_answer
 from fleetsim.exec.schemas import SCHEMAS, load_schema, violation
 from fleetsim.layout.layout import Layout
@@ -89,6 +89,7 @@ class SubprocessPlanner:
         self._pipes = (-1, -1)  # the process's stdin and stdout, while it runs
         self._fleet: FleetSnapshot | None = None  # the fleet the process last saw
         self._encoder = FleetEncoder()
+        self._legs = LegBook()  # the answers' legs, each decoded once
         self._tasks: dict[int, tuple[Task, bytes]] = {}  # task id -> the task and its JSON
         self._asking: tuple[int, str, int] | None = None  # the request being answered (None: the init message)
         self._round: tuple[int, Sequence[RoundCall]] | None = None  # the round being answered: first id, calls
@@ -132,7 +133,7 @@ class SubprocessPlanner:
         # Each call may take the per-call timeout: the round, as many times as it has calls.
         answer = self._decode(self._read_line(None if self.timeout is None else self.timeout * len(calls)))
         try:
-            answers = read_round_answer(answer, first, calls, fleet)
+            answers = read_round_answer(answer, first, calls, fleet, self._legs)
         except RoundAnswerError as error:
             raise self._fail(f"answered {self._request()} with {error}") from None
         self.requests += len(answers)
@@ -194,6 +195,7 @@ class SubprocessPlanner:
         self.rounds = answer.get("rounds") is True
         self._fleet = None
         self._encoder = FleetEncoder()
+        self._legs = LegBook()
 
     def _call(self, method: str, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
         if self._process is None:
@@ -224,7 +226,7 @@ class SubprocessPlanner:
             raise self._fail(f"answered {self._request()} with an invalid response: {problem}")
         if answer["id"] != number:
             raise self._fail(f"answered {self._request()} with the answer to request {answer['id']!r}")
-        return decode_response(answer)
+        return decode_response(answer, self._legs)
 
     def _update(self, fleet: FleetSnapshot) -> bytes:
         """``,"fleet":`` and what changed since the fleet the process last saw, or nothing if it is the same."""

@@ -73,6 +73,7 @@ __all__ = [
     "PROTOCOL",
     "PROTOCOL_FAMILY",
     "FleetEncoder",
+    "LegBook",
     "decode_disturbed",
     "decode_plan",
     "decode_progress",
@@ -272,25 +273,51 @@ class FleetEncoder:
         return self._routed[1]
 
 
-def decode_plan(data: Mapping[str, Any]) -> FleetPlan:
-    """A plan from a schema-valid response (the schema has checked names, types and enum words)."""
-    legs = tuple(
-        FleetLeg(
-            leg["segment"],
-            decode_traverse[leg["traverse"]],
-            decode_progress[leg["progress"]],
-            leg["fixed"],
-            leg.get("goal_for_task"),
-        )
-        for leg in data["legs"]
+def _decode_leg(leg: Mapping[str, Any]) -> FleetLeg:
+    return FleetLeg(
+        leg["segment"],
+        decode_traverse[leg["traverse"]],
+        decode_progress[leg["progress"]],
+        leg["fixed"],
+        leg.get("goal_for_task"),
     )
-    return FleetPlan(data["vehicle_id"], legs)
 
 
-def decode_response(data: Mapping[str, Any]) -> list[FleetPlan | RouteError]:
+class LegBook:
+    """The legs of a run's messages, each decoded once: a plan mostly repeats legs already seen (its
+    fixed legs, a route planned before), and making a leg costs several times looking one up. A leg seen
+    again is the same immutable object, which also makes comparing plans a matter of identity. Kept to
+    ``LIMIT`` legs (then started afresh), so a long run's book stays small."""
+
+    LIMIT = 1 << 16
+
+    def __init__(self) -> None:
+        self._legs: dict[tuple[Any, ...], FleetLeg] = {}
+
+    def leg(self, data: Mapping[str, Any]) -> FleetLeg:
+        segment, goal = data["segment"], data.get("goal_for_task")
+        if type(segment) is not int or (goal is not None and type(goal) is not int):
+            return _decode_leg(data)  # 1.0 for 1, say: made (and refused) as without the book
+        key = (segment, data["traverse"], data["progress"], data["fixed"], goal)
+        found = self._legs.get(key)
+        if found is None:
+            if len(self._legs) >= self.LIMIT:
+                self._legs.clear()
+            found = self._legs[key] = _decode_leg(data)
+        return found
+
+
+def decode_plan(data: Mapping[str, Any], book: LegBook | None = None) -> FleetPlan:
+    """A plan from a schema-valid response (the schema has checked names, types and enum words); its legs
+    from ``book`` when given."""
+    decode = _decode_leg if book is None else book.leg
+    return FleetPlan(data["vehicle_id"], tuple(map(decode, data["legs"])))
+
+
+def decode_response(data: Mapping[str, Any], book: LegBook | None = None) -> list[FleetPlan | RouteError]:
     """The response items of a schema-valid answer; a whole-request route error is raised."""
     if "route_error" in data:
         raise RouteError(None, str(data["route_error"]))
-    items: list[FleetPlan | RouteError] = [decode_plan(plan) for plan in data["plans"]]
+    items: list[FleetPlan | RouteError] = [decode_plan(plan, book) for plan in data["plans"]]
     items += [RouteError(error.get("vehicle_id"), error["message"]) for error in data["route_errors"]]
     return items

@@ -19,7 +19,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
-from fleetsim.exec.protocol import decode_response
+from fleetsim.exec.protocol import LegBook, decode_response
 from fleetsim.exec.schemas import load_schema, violation
 from fleetsim.planning.plans import Response, RouteError, hands_back
 from fleetsim.planning.protocol import RoundCall
@@ -56,10 +56,11 @@ def describe_round(first: int, calls: Sequence[RoundCall], shown: int = 3) -> st
 
 
 def read_round_answer(
-    answer: Any, first: int, calls: Sequence[RoundCall], fleet: FleetSnapshot
+    answer: Any, first: int, calls: Sequence[RoundCall], fleet: FleetSnapshot, book: LegBook | None = None
 ) -> list[tuple[Response | RouteError, float]]:
     """The decoded answers to the first calls of a round (numbered from ``first``), each with its duration;
-    a whole-request route error is a ``RouteError`` object. Anything wrong raises :class:`RoundAnswerError`."""
+    a whole-request route error is a ``RouteError`` object; legs from ``book`` when given. Anything wrong
+    raises :class:`RoundAnswerError`."""
     is_object = type(answer) is dict
     answers = answer.get("answers") if is_object else None
     durations = answer.get("durations") if is_object else None
@@ -99,7 +100,7 @@ def read_round_answer(
             raise RoundAnswerError(msg)
         response: Response | RouteError
         try:
-            response = decode_response(item)
+            response = decode_response(item, book)
         except RouteError as error:
             response = error
         if index < last and _changes(response, fleet):

@@ -13,7 +13,7 @@ import pytest
 from fleetsim import load_scenario, load_suite
 from fleetsim.cli import main
 from fleetsim.exec import SubprocessPlanner, process
-from fleetsim.exec.protocol import decode_response
+from fleetsim.exec.protocol import LegBook, decode_response
 from fleetsim.planners import BFSPlanner, ReservingPlanner
 from fleetsim.scenario import Scenario
 from fleetsim.sim.loop import run_scenario
@@ -311,9 +311,9 @@ def test_a_plan_handed_back_unchanged_changes_nothing_however_it_is_spelt(
     script.write_text(textwrap.dedent(HAND_BACK), encoding="utf-8")
     decodes: list[object] = []
 
-    def counted(answer: dict[str, object]) -> object:
+    def counted(answer: dict[str, object], book: LegBook | None = None) -> object:
         decodes.append(answer)
-        return decode_response(answer)
+        return decode_response(answer, book)
 
     monkeypatch.setattr(process, "decode_response", counted)
     scenario = example("crossing")

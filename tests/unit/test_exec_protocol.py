@@ -17,6 +17,8 @@ from fleetsim.enums import Disturbed
 from fleetsim.exec.client import ProtocolError, _Session
 from fleetsim.exec.protocol import (
     FleetEncoder,
+    LegBook,
+    decode_plan,
     decode_response,
     dumps,
     encode_fleet,
@@ -398,3 +400,38 @@ def test_a_round_holds_at_most_round_calls_calls_so_a_hang_is_noticed_in_bounded
     asked = run_scenario(scenario, rounds)  # type: ignore[arg-type]
     assert max(rounds.asked) == ROUND_CALLS < 20  # 20 busy vehicles: the first rounds are cut at the cap
     assert asked.trace_hash == run_scenario(scenario, ReservingPlanner()).trace_hash
+
+
+# -- legs decoded once per run (LegBook) ------------------------------------------------------------------
+
+
+def _leg_json(segment: object, fixed: bool = True, goal: object = None) -> dict[str, object]:
+    return {"segment": segment, "traverse": "forward", "progress": "reverse", "fixed": fixed, "goal_for_task": goal}
+
+
+def test_a_leg_seen_again_is_the_same_object_and_plans_decode_equal_with_or_without_the_book() -> None:
+    book = LegBook()
+    data = {"vehicle_id": 3, "legs": [_leg_json(5), _leg_json(6, fixed=False, goal=2)]}
+    first, again = decode_plan(data, book), decode_plan(data, book)
+    assert first == again == decode_plan(data)
+    assert all(a is b for a, b in zip(first.legs, again.legs, strict=True))
+    assert decode_plan({"vehicle_id": 3, "legs": [_leg_json(5, fixed=False)]}, book).legs[0] is not first.legs[0]
+
+
+def test_a_leg_book_starts_afresh_at_its_limit(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(LegBook, "LIMIT", 2)
+    book = LegBook()
+    kept = book.leg(_leg_json(1))
+    book.leg(_leg_json(2))
+    assert book.leg(_leg_json(1)) is kept
+    book.leg(_leg_json(3))  # the third distinct leg: the book is emptied first
+    assert book.leg(_leg_json(1)) is not kept
+
+
+def test_a_leg_the_book_cannot_key_exactly_is_made_and_refused_as_without_it() -> None:
+    book = LegBook()
+    book.leg(_leg_json(1))
+    with pytest.raises(TypeError, match=r"segment=1\.0 must be an int"):
+        book.leg(_leg_json(1.0))
+    with pytest.raises(TypeError, match=r"goal_for_task=2\.0 must be an int"):
+        book.leg(_leg_json(1, goal=2.0))
