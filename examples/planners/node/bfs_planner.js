@@ -200,12 +200,9 @@ function updateFleet(message, what) {
     if (!isObject(message.fleet) || !Array.isArray(message.fleet.plans) || !Array.isArray(message.fleet.vehicles)) {
       fail(`${what}: malformed "fleet"`);
     }
-    if (fleet === null) fleet = { vehicles: new Map(), plans: new Map(), json: new Map() };
+    if (fleet === null) fleet = { vehicles: new Map(), plans: new Map() };
     for (const vehicle of message.fleet.vehicles) fleet.vehicles.set(vehicle.id, vehicle);
-    for (const plan of message.fleet.plans) {
-      fleet.plans.set(plan.vehicle_id, plan);
-      fleet.json.delete(plan.vehicle_id); // its JSON, computed when first compared with an answer
-    }
+    for (const plan of message.fleet.plans) fleet.plans.set(plan.vehicle_id, plan);
   } else if (fleet === null) {
     fail(`${what} has no "fleet" and no earlier message had one`);
   }
@@ -222,14 +219,21 @@ function answer(call) {
   return { id: call.id, ...(call.type === "plan_routes" ? planRoutes(task) : fixLegs(task)) };
 }
 
-// The plan in force handed back (the same JSON as fleetsim sent) changes nothing, like no plan at all.
+// Two legs drive the same way with the same flags (a leg has exactly these five fields).
+const sameLeg = (a, b) =>
+  a === b ||
+  (a.segment === b.segment && a.traverse === b.traverse && a.progress === b.progress && a.fixed === b.fixed &&
+    a.goal_for_task === b.goal_for_task);
+
+// The plan in force handed back (equal leg by leg) changes nothing, like no plan at all. Compared field by
+// field: writing both plans as JSON to compare them cost more than the rest of the call.
 function changesNothing(reply) {
   if (reply.route_errors.length !== 0 || reply.plans.length > 1) return false;
   if (reply.plans.length === 0) return true;
-  const vehicleId = reply.plans[0].vehicle_id;
-  if (!fleet.plans.has(vehicleId)) return false;
-  if (!fleet.json.has(vehicleId)) fleet.json.set(vehicleId, JSON.stringify(fleet.plans.get(vehicleId)));
-  return JSON.stringify(reply.plans[0]) === fleet.json.get(vehicleId);
+  const mine = reply.plans[0];
+  const current = fleet.plans.get(mine.vehicle_id);
+  if (current === undefined || current.legs.length !== mine.legs.length) return false;
+  return mine.legs.every((leg, i) => sameLeg(leg, current.legs[i]));
 }
 
 // A round: its calls in order against the same fleet, up to the first answer that changes something.
