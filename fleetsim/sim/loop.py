@@ -63,7 +63,9 @@ class RunProgress:
 class _Run:
     """The mutable state of one run; everything a result is built from."""
 
-    batched = True  # cruising vehicles stepped together (FleetCruise); False: one by one, for comparison
+    # Cruising vehicles stepped together in arrays (FleetCruise): None, when the fleet is large enough
+    # for that to pay; True or False always or never (for tests that compare the two).
+    batched: bool | None = None
 
     def __init__(self, scenario: Scenario, planner: Planner, guard: PlannerGuard, keep_trace: bool) -> None:
         self.scenario = scenario
@@ -79,7 +81,8 @@ class _Run:
         }
         self.ids = list(self.drivers)
         self.driver_list = list(self.drivers.values())
-        self.cruise = FleetCruise(self.driver_list, batched=self.batched)
+        batched = len(self.driver_list) >= FleetCruise.SMALLEST if self.batched is None else self.batched
+        self.cruise = FleetCruise(self.driver_list, batched=batched)
         self.trace = Trace(keep_lines=keep_trace)
         # Only a scenario with disturbances has a disturber: without, the run (and its hash) is as before.
         # It reaches the drivers through the cruise, which hands each back up to date first.

@@ -43,7 +43,7 @@ def _run(scenario: Scenario, planner: ReservingPlanner | BFSPlanner, batched: bo
     try:
         result = run_scenario(scenario, planner, keep_trace=True)
     finally:
-        loop._Run.batched = True
+        loop._Run.batched = None
     assert result.trace is not None
     return result.trace.lines, dict(result.metrics.distance), dict(result.metrics.waiting_time), result.ended
 

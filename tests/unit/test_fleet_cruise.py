@@ -231,7 +231,7 @@ def _runs(scenario: Scenario, planner: type[ReservingPlanner] | type[BFSPlanner]
         try:
             result = run_scenario(scenario, planner(), keep_trace=True)
         finally:
-            loop._Run.batched = True
+            loop._Run.batched = None
         assert result.trace is not None
         seen.append((result.trace.lines, dict(result.metrics.distance), dict(result.metrics.waiting_time)))
     return seen
@@ -265,3 +265,25 @@ def test_a_braking_vehicle_is_handed_back_on_the_step_its_profile_ends_and_not_b
         assert cruise.step(dt)[0] == [1]
     assert cruise.step(dt)[2] == [0]
     assert driver.step(route, dt).distance > 0.0 and driver.speed == 0.0
+
+
+@pytest.mark.parametrize(("smallest", "in_arrays"), [(2, True), (3, False)])
+def test_a_fleet_is_stepped_in_arrays_from_the_smallest_size_that_pays(
+    monkeypatch: pytest.MonkeyPatch, smallest: int, in_arrays: bool
+) -> None:
+    """Below ``FleetCruise.SMALLEST`` vehicles the arrays' fixed cost per step outweighs what they save:
+    every vehicle is stepped by its driver (the same run either way)."""
+    taken: list[int] = []
+    original = FleetCruise._take_pending
+
+    def counted(self: FleetCruise) -> None:
+        taken.extend(self._pending)
+        original(self)
+
+    monkeypatch.setattr(FleetCruise, "_take_pending", counted)
+    monkeypatch.setattr(FleetCruise, "SMALLEST", smallest)
+    suite = load_suite(next(p for p in SUITES if p.name.startswith("examples")))
+    scenario = load_scenario(next(s for s in suite.scenarios if s.name == "crossing"), suite)
+    assert len(scenario.vehicles) == 2
+    run_scenario(scenario, ReservingPlanner(), keep_trace=False)
+    assert bool(taken) is in_arrays
