@@ -63,7 +63,7 @@ class FleetCruise:
     def __init__(self, drivers: Sequence[Driver], *, batched: bool = True) -> None:
         n = len(drivers)
         self._drivers = list(drivers)
-        self._batched = batched  # False: nothing is ever armed; every vehicle is stepped by its driver
+        self.batched = batched  # False: nothing is ever armed; every vehicle is stepped by its driver
         self._everyone = list(range(n))
         self.released = _Released(self)  # the drivers by id, each handed back up to date first
         self.index = {driver.id: i for i, driver in enumerate(drivers)}
@@ -83,7 +83,7 @@ class FleetCruise:
     def arm(self, i: int, plan: FleetPlan) -> None:
         """Arm vehicle ``i`` if its driver will cruise on ``plan`` (its plan after the step just taken);
         taken into the tables at the next :meth:`step`."""
-        if not self._batched:
+        if not self.batched:
             return
         driver = self._drivers[i]
         terms = driver.cruise_terms(plan)
@@ -156,7 +156,7 @@ class FleetCruise:
         """
         if self._pending:
             self._take_pending()
-        if not self._batched:
+        if not self.batched:
             return [], [], self._everyone
         table = self._table
         armed = self._armed

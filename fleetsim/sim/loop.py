@@ -176,7 +176,10 @@ class _Run:
         tasks = controller.tasks
         plan_of = controller.plan_of
         cruise = self.cruise
-        cruise.forget(controller.take_replanned(), plan_of)
+        arming = cruise.batched
+        replanned = controller.take_replanned()
+        if arming:
+            cruise.forget(replanned, plan_of)
         cruised_ids, cruised_states, others = cruise.step(dt)
         busy = tasks.heads()  # the vehicles with tasks
         waiting = self.waiting_time
@@ -206,17 +209,17 @@ class _Run:
                 if not (distance > 0.0 or turned or entered):
                     if vehicle_id in busy:
                         waiting[vehicle_id] += dt
-                    cruise.arm(i, plan)
+                    if arming:
+                        cruise.arm(i, plan)
                     continue
                 state = step_state or driver.moved_state(plan)
             stepped.append((vehicle_id, state))
-            cruise.arm(i, plan)
-        if stepped:  # by id, as the trace lists them
+            if arming:
+                cruise.arm(i, plan)
+        if cruised_ids:  # by id, as the trace lists them
             stepped += zip(cruised_ids, cruised_states, strict=True)
             stepped.sort(key=_first)
-            states = dict(stepped)
-        else:
-            states = dict(zip(cruised_ids, cruised_states, strict=True))
+        states = dict(stepped)
         if states:
             self.last_activity = end
             self.last_moved.update(dict.fromkeys(states, end))
