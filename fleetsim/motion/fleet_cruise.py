@@ -16,6 +16,7 @@ loop steps it as before, then arms it again. While armed, a driver's own kinemat
 
 from __future__ import annotations
 
+import math
 from bisect import bisect_right
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from functools import partial
@@ -42,8 +43,8 @@ _REVERSE = Progress.REVERSE
 # The speed profile's terms (SpeedProfile.running_terms).
 (STOP, ACCELERATE_UNTIL, BRAKE_FROM, V0, ACCELERATION, HALF_ACCELERATION, PEAK, DECELERATION) = range(8, 16)
 (PROFILE_DISTANCE, ACCELERATED, CRUISED) = range(16, 19)
-# The leg's track and where on it the vehicle is (Track.spans): coordinates [LOW, HIGH) locate it on the
-# piece that starts at START; NOSE is its heading there.
+# The leg's track and where on it the vehicle is: coordinates [LOW, HIGH) locate it on the piece that
+# starts at START (Track.pieces); NOSE is its heading there.
 (LENGTH, BACKWARD, LOW, HIGH, START, AX, AY, DX, DY, PIECE, NOSE) = range(19, 30)
 _ROWS = 30
 # Rows of the object table: a state's other fields.
@@ -94,11 +95,16 @@ class FleetCruise:
             return  # slowing down for a disturbance: the driver steps it itself
         leg = plan.legs[0]
         coordinate = track.length - driver.distance if track.backward else driver.distance
-        span, forward, reverse = track.spans[bisect_right(track.along, coordinate)]
+        along = track.along
+        found = bisect_right(along, coordinate)
+        start, ax, ay, dx, dy, piece, _, forward, reverse = track.pieces[track.piece_of[found]]
+        low = along[found - 1] if found > 0 else -math.inf  # the coordinates that find the same piece
+        high = along[found] if found < len(along) else math.inf
+        where = (track.length, 1.0 if track.backward else 0.0, low, high, start, ax, ay, dx, dy, piece)
         nose = reverse if leg.progress is _REVERSE else forward
         self._plans[i] = plan
         self._pending.append(i)
-        self._pending_rows.append(driver.kinematics() + profile.running_terms() + span + (nose,))
+        self._pending_rows.append(driver.kinematics() + profile.running_terms() + where + (nose,))
         self._pending_objects.append(
             (driver.id, leg.segment, leg.traverse, driver.progress, driver.type, driver.disturbed)
         )

@@ -38,10 +38,6 @@ class Track(NamedTuple):
     # Per piece: (running distance at its start, ax, ay, bx − ax, by − ay, its length, travel heading,
     # where the nose points driving forward on it, where it points backing).
     pieces: tuple[tuple[float, float, float, float, float, float, float, float, float], ...]
-    # Per bisect index, for stepping many vehicles at once in arrays: (length, 1.0 if backward else 0.0,
-    # the coordinates [low, high) with that index, and its piece's start, ax, ay, dx, dy, length), and
-    # the nose forward and backing on the piece.
-    spans: tuple[tuple[tuple[float, ...], float, float], ...]
 
     @classmethod
     def of(cls, segment: Segment, traverse: Traverse) -> Track:
@@ -60,14 +56,7 @@ class Track(NamedTuple):
             heading = math.atan2(ay - by, ax - bx) if backward else math.atan2(by - ay, bx - ax)
             noses = (nose(heading, Progress.FORWARD), nose(heading, Progress.REVERSE))
             pieces.append((along[index], ax, ay, bx - ax, by - ay, along[index + 1] - along[index], heading, *noses))
-        spans = []
-        for found, index in enumerate(piece_of):
-            low = along[found - 1] if found > 0 else -math.inf
-            high = along[found] if found < len(along) else math.inf
-            start, ax, ay, dx, dy, length, _, forward, reverse = pieces[index]
-            terms = (segment.length, 1.0 if backward else 0.0, low, high, start, ax, ay, dx, dy, length)
-            spans.append((terms, forward, reverse))
-        return cls(segment.length, backward, along, tuple(piece_of), tuple(pieces), tuple(spans))
+        return cls(segment.length, backward, along, tuple(piece_of), tuple(pieces))
 
 
 class HeadingTable:
