@@ -19,7 +19,7 @@ from collections.abc import Callable, Iterable, KeysView, Mapping
 from itertools import compress
 from operator import is_not
 from types import MappingProxyType
-from typing import Any, Generic, TypeVar
+from typing import Any, Generic, TypeVar, cast
 
 __all__ = ["LiveCopy", "LiveKeys", "held_only_here", "replaced"]
 
@@ -81,8 +81,8 @@ class LiveCopy(Generic[K, V]):
     def view(self, exclusive: bool) -> Mapping[K, V]:
         """The live dict as it is now, read-only. ``exclusive``: the caller knows that the snapshot which
         showed the last view is held by nobody else (the copy and the view themselves are checked here)."""
-        view: Mapping[K, V] = self._current(exclusive)
-        return view
+        view = self._view if self._view is not None and not self._changed else self._current(exclusive)
+        return cast("Mapping[K, V]", view)
 
     def _over(self, copy: dict[K, V]) -> object:
         """The read-only view handed out over a copy."""
@@ -123,8 +123,8 @@ class LiveKeys(LiveCopy[K, None]):
 
     def keys(self, exclusive: bool) -> KeysView[K]:
         """The live keys as they are now, read-only (``exclusive`` as for :meth:`LiveCopy.view`)."""
-        keys: KeysView[K] = self._current(exclusive)
-        return keys
+        keys = self._view if self._view is not None and not self._changed else self._current(exclusive)
+        return cast("KeysView[K]", keys)
 
     def _over(self, copy: dict[K, None]) -> object:
         return copy.keys()
