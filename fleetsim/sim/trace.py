@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO, Any
 
+import numpy as np
 import orjson
 
 from fleetsim.enums import Progress, Traverse
@@ -66,8 +67,14 @@ def vehicle_records(states: Iterable[VehicleState]) -> list[VehicleRecord]:
     """Each state as (id, segment, traverse, progress, x mm, y mm, heading centidegrees, speed mm/s).
 
     ``round`` of a float is an int, rounded half to even, so -0.0 and tiny values become 0. One call for
-    all of a step's moving vehicles (a function call per vehicle would cost as much as the record).
+    all of a step's moving vehicles (a function call per vehicle would cost as much as the record); for
+    many, the rounding is done in arrays, with the same products and the same rounding.
     """
+    listed = states if isinstance(states, list) else list(states)
+    if len(listed) >= _IN_ARRAYS_FROM:
+        records = _records_in_arrays(listed)
+        if records is not None:
+            return records
     return [
         (
             state.id,
@@ -79,8 +86,31 @@ def vehicle_records(states: Iterable[VehicleState]) -> list[VehicleRecord]:
             round(state.heading * _DEGREES_PER_RADIAN * 100.0),
             round(state.speed * 1000.0),
         )
-        for state in states
+        for state in listed
     ]
+
+
+_IN_ARRAYS_FROM = 64  # states from which rounding in arrays costs less than one by one
+_EXACT = 2.0**53  # below this, every whole float is an exact int64 too
+
+
+def _records_in_arrays(states: list[VehicleState]) -> list[VehicleRecord] | None:
+    """:func:`vehicle_records` with the products and the rounding (half to even, as ``round``) in arrays;
+    ``None`` if some value is too large to pass through int64 exactly."""
+    ids, segments, traverses, progresses, _, speeds, xs, ys, headings, _, _ = zip(*states, strict=True)
+    values = np.array((xs, ys, headings, speeds))
+    values[0] *= 1000.0
+    values[1] *= 1000.0
+    values[2] *= _DEGREES_PER_RADIAN  # then * 100.0: the order of the one-by-one product
+    values[2] *= 100.0
+    values[3] *= 1000.0
+    np.rint(values, out=values)
+    if not (np.abs(values) < _EXACT).all():
+        return None
+    x, y, heading, speed = values.astype(np.int64).tolist()
+    traverse = map(_TRAVERSE.__getitem__, traverses)
+    progress = map(_PROGRESS.__getitem__, progresses)
+    return list(zip(ids, segments, traverse, progress, x, y, heading, speed, strict=True))
 
 
 def vehicle_record(state: VehicleState) -> VehicleRecord:

@@ -13,7 +13,10 @@ from typing import Any
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from fleetsim.sim.trace import Trace
+from fleetsim.enums import Progress, Traverse
+from fleetsim.planning.snapshot import VehicleState
+from fleetsim.scenario import DEFAULT_VEHICLE_TYPE
+from fleetsim.sim.trace import Trace, vehicle_records
 
 value = st.one_of(st.none(), st.integers(), st.text(), st.booleans())
 event = st.lists(value, min_size=1, max_size=4)
@@ -51,3 +54,79 @@ def test_a_trace_without_kept_lines_has_the_same_hash() -> None:
         trace.record(0, (), [[1, [[5, "f", "f", 1, None]]]], [["complete", 7], ["route-error", 2, "ü"]])
     assert streamed.lines == []
     assert streamed.digest == kept.digest
+
+
+# -- vehicle records rounded in arrays (many vehicles) ----------------------------------------------------
+
+_HALVES = st.integers(-(10**9), 10**9).map(lambda k: k / 2000.0)  # x * 1000 lands on .5: ties to even
+_COORDINATE = st.one_of(
+    st.floats(-1e6, 1e6, allow_nan=False),
+    _HALVES,
+    st.sampled_from([0.0, -0.0, 1e-300, -1e-300, 0.0005, -0.0005, 0.0015, 2.5e-3]),
+)
+
+
+def _one_by_one(state: VehicleState) -> tuple[Any, ...]:
+    traverse = {Traverse.FORWARD: "f", Traverse.BACKWARD: "b"}[state.traverse]
+    progress = {Progress.FORWARD: "f", Progress.REVERSE: "r"}[state.progress]
+    heading = round(state.heading * (180.0 / 3.141592653589793) * 100.0)
+    return (
+        state.id,
+        state.segment,
+        traverse,
+        progress,
+        round(state.x * 1000.0),
+        round(state.y * 1000.0),
+        heading,
+        round(state.speed * 1000.0),
+    )
+
+
+@st.composite
+def _states(draw: st.DrawFn) -> list[VehicleState]:
+    count = draw(st.integers(64, 90))
+    return [
+        VehicleState(
+            vid,
+            draw(st.integers(1, 10**6)),
+            draw(st.sampled_from(list(Traverse))),
+            draw(st.sampled_from(list(Progress))),
+            0.0,
+            draw(st.one_of(_COORDINATE.map(abs), st.just(0.0))),
+            draw(_COORDINATE),
+            draw(_COORDINATE),
+            draw(st.floats(-4.0, 4.0, allow_nan=False)),
+            DEFAULT_VEHICLE_TYPE,
+            None,
+        )
+        for vid in range(1, count + 1)
+    ]
+
+
+@settings(max_examples=100, deadline=None)
+@given(_states())
+def test_records_rounded_in_arrays_are_those_rounded_one_by_one(states: list[VehicleState]) -> None:
+    records = vehicle_records(states)
+    assert records == [_one_by_one(state) for state in states]
+    assert all(type(value) is int for record in records for value in record[4:])
+
+
+def test_a_value_too_large_for_int64_is_rounded_one_by_one() -> None:
+    states = [
+        VehicleState(
+            vid,
+            1,
+            Traverse.FORWARD,
+            Progress.FORWARD,
+            0.0,
+            0.0,
+            1e300 if vid == 7 else 1.5,
+            0.0,
+            0.0,
+            DEFAULT_VEHICLE_TYPE,
+            None,
+        )
+        for vid in range(1, 65)
+    ]
+    records = vehicle_records(states)
+    assert records[6][4] == round(1e300 * 1000.0) and records[0][4] == 1500
