@@ -27,9 +27,9 @@ from fleetsim.planning.plans import FleetLeg, FleetPlan
 from fleetsim.planning.snapshot import VehicleState
 from fleetsim.scenario import Vehicle
 
-__all__ = ["Driver", "StepMotion"]
+__all__ = ["EPS", "Driver", "StepMotion"]
 
-_EPS = 1e-9  # metres or seconds below which a remainder is rounding noise
+EPS = 1e-9  # metres or seconds below which a remainder is rounding noise
 # Makes a named tuple from a full tuple of its fields without the generated __new__'s keyword handling:
 # a fifth of the cost, for the state and motion made for every moving vehicle on every step.
 _new = tuple.__new__
@@ -147,7 +147,7 @@ class Driver:
             # Only a plan from outside (not the one this driver returned) can bring new fixed legs.
             if plan is not self._last_out and not self._till_stop and not self.halted:
                 reach, till_stop = self._reach_in(plan)
-                if reach > self._remaining() + _EPS:  # new fixed legs: re-plan from the current speed
+                if reach > self._remaining() + EPS:  # new fixed legs: re-plan from the current speed
                     self._start(reach, till_stop)
                 self._last_out = plan
             cruised = self.cruise(plan, dt)
@@ -158,7 +158,7 @@ class Driver:
         driven = 0.0
         turned = False
         budget = dt
-        while budget > _EPS:
+        while budget > EPS:
             if self.halted and self._profile is None:
                 break  # at rest (or its turn frozen) until the disturbance ends
             if self._turn_left > 0.0:
@@ -172,7 +172,7 @@ class Driver:
                 self._cross(legs, entered)
             else:
                 reach, till_stop = self.reach(legs)
-                if reach <= _EPS:
+                if reach <= EPS:
                     break  # nothing fixed ahead: wait
                 self._start(reach, till_stop)
         self.odometer += driven
@@ -208,7 +208,7 @@ class Driver:
         on = self._on
         track = on[1] if on is not None and on[0] is leg else self._track(leg)
         along = self.distance + distance
-        if along >= track.length - _EPS:
+        if along >= track.length - EPS:
             return None
         self._travelled = travelled
         self._elapsed = t1
@@ -279,7 +279,7 @@ class Driver:
         return profile
 
     def _at_leg_end(self, legs: list[FleetLeg]) -> bool:
-        return self.distance >= self._length(legs[0]) - _EPS
+        return self.distance >= self._length(legs[0]) - EPS
 
     def _drive(self, budget: float, legs: list[FleetLeg], entered: list[FleetLeg]) -> tuple[float, float]:
         """Follow the profile for up to ``budget`` seconds; the time spent and the distance driven."""
@@ -334,7 +334,7 @@ class Driver:
         """Turn in place for up to ``budget`` seconds towards the target heading; the time spent."""
         spent = min(budget, self._turn_left)
         self._turn_left -= spent
-        if self._turn_left <= _EPS:
+        if self._turn_left <= EPS:
             self._turn_left = 0.0
             self.heading = self._turn_target
         else:

@@ -26,14 +26,13 @@ import numpy as np
 import numpy.typing as npt
 
 from fleetsim.enums import Progress
-from fleetsim.motion.driver import Driver
+from fleetsim.motion.driver import EPS, Driver
 from fleetsim.motion.profile import SpeedProfile
 from fleetsim.planning.plans import FleetPlan
 from fleetsim.planning.snapshot import VehicleState
 
 __all__ = ["FleetCruise"]
 
-_EPS = 1e-9  # Driver's: a remainder below this is rounding noise
 _make_state = partial(tuple.__new__, VehicleState)
 _REVERSE = Progress.REVERSE
 
@@ -114,9 +113,7 @@ class FleetCruise:
         if self._pending:
             self._take_pending()
         if self._armed[i]:
-            self._drivers[i].take_kinematics(*self._table[: HEADING + 1, i].tolist())
-            self._armed[i] = False
-            self._plans[i] = None
+            self._release(np.array([i], dtype=np.intp))
 
     def release_all(self) -> None:
         self._release(np.flatnonzero(self._armed))
@@ -194,7 +191,7 @@ class FleetCruise:
             along = table[DISTANCE] + distance
             length = table[LENGTH]
             coordinate = np.where(table[BACKWARD] > 0.0, length - along, along)
-            ok = armed & (t1 < stop) & (distance > 0.0) & ~(along >= length - _EPS)
+            ok = armed & (t1 < stop) & (distance > 0.0) & ~(along >= length - EPS)
             ok &= (coordinate >= table[LOW]) & (coordinate < table[HIGH])
             piece = table[PIECE]
             fraction = np.where(piece > 0.0, (coordinate - table[START]) / piece, 0.0)

@@ -89,9 +89,8 @@ class LiveCopy(Generic[K, V]):
         return MappingProxyType(copy)
 
     def _current(self, exclusive: bool) -> Any:
+        """The view after a change (or the first): the last one brought up to date, or a new copy's."""
         changed = self._changed
-        if self._view is not None and not changed:
-            return self._view
         live = self._live
         # Updating in place pays while the changes are few; a whole copy is one fast C loop.
         if (

@@ -90,7 +90,9 @@ def vehicle_records(states: Iterable[VehicleState]) -> list[VehicleRecord]:
     ]
 
 
-_IN_ARRAYS_FROM = 64  # states from which rounding in arrays costs less than one by one
+# States from which rounding in arrays costs less than one by one (measured: 48 states 21 µs against 24,
+# 64 25 against 26, 128 43 against 52; 16 states 14 against 7).
+_IN_ARRAYS_FROM = 64
 _EXACT = 2.0**53  # below this, every whole float is an exact int64 too
 
 
