@@ -90,7 +90,8 @@ class SubprocessPlanner:
         self._fleet: FleetSnapshot | None = None  # the fleet the process last saw
         self._encoder = FleetEncoder()
         self._legs = LegBook()  # the answers' legs, each decoded once
-        self._tasks: dict[int, tuple[Task, bytes]] = {}  # task id -> the task and its JSON
+        # task id -> the task, its JSON, and its fix_legs and plan_routes calls of a round (formats of the id)
+        self._tasks: dict[int, tuple[Task, bytes, bytes, bytes]] = {}
         self._asking: tuple[int, str, int] | None = None  # the request being answered (None: the init message)
         self._round: tuple[int, Sequence[RoundCall]] | None = None  # the round being answered: first id, calls
         self._finalizer: weakref.finalize[..., SubprocessPlanner] | None = None
@@ -124,11 +125,20 @@ class SubprocessPlanner:
                 return [(error, None)]
         first = self.requests + 1
         self._asking, self._round = None, (first, calls)
-        encoded = self._encoded_task
-        requests = b",".join([
-            CALL % (_METHODS[method], first + index, vehicle, encoded(task))
-            for index, (method, vehicle, task) in enumerate(calls)
-        ])  # fmt: skip
+        # A round holds up to a few calls per vehicle a step: each is its task's call, formatted with its id.
+        tasks, known = self._tasks, self._known_task
+        parts = []
+        number = first
+        for method, vehicle, task in calls:
+            entry = tasks.get(task.id)
+            if entry is None or entry[0] is not task:
+                entry = known(task)
+            if vehicle == task.vehicle_id:  # always, for a vehicle's own head task
+                parts.append((entry[2] if method == "fix_legs" else entry[3]) % number)
+            else:
+                parts.append(CALL % (_METHODS[method], number, vehicle, entry[1]))
+            number += 1
+        requests = b",".join(parts)
         self._send(ROUND % (requests, self._update(fleet)))
         # Each call may take the per-call timeout: the round, as many times as it has calls.
         answer = self._decode(self._read_line(None if self.timeout is None else self.timeout * len(calls)))
@@ -240,8 +250,20 @@ class SubprocessPlanner:
         """The task's JSON, encoded at its first request (a task is asked about again and again)."""
         known = self._tasks.get(task.id)
         if known is None or known[0] is not task:
-            known = self._tasks[task.id] = (task, dumps(encode_task(task)))
+            known = self._known_task(task)
         return known[1]
+
+    def _known_task(self, task: Task) -> tuple[Task, bytes, bytes, bytes]:
+        """The task's JSON and its two calls of a round, kept for the requests to come."""
+        encoded = dumps(encode_task(task))
+        fix, plan = (
+            (CALL % (_METHODS[method], 0, task.vehicle_id, encoded))
+            .replace(b"%", b"%%")
+            .replace(b'"id":0,', b'"id":%d,', 1)
+            for method in ("fix_legs", "plan_routes")
+        )
+        entry = self._tasks[task.id] = (task, encoded, fix, plan)
+        return entry
 
     def _request(self) -> str:
         """The message being answered, in words (for error messages)."""

@@ -153,7 +153,6 @@ class PlannerGuard:
         which must be within the per-call timeout. Counted as one call per answer."""
         count = len(calls)
         method, vehicle_id, _task = calls[0]
-        where = f"{method}() for vehicle {vehicle_id}" if count == 1 else _round_words(method, vehicle_id, count)
         self._tick_limit = self._limit * count
         start = self._call_started = _clock()
         try:
@@ -164,6 +163,7 @@ class PlannerGuard:
         except (_Overrun, Exception) as exc:
             self._account(start)
             overrun = functools.partial(self._round_overrun, method, vehicle_id, count, call_round)
+            where = f"{method}() for vehicle {vehicle_id}" if count == 1 else _round_words(method, vehicle_id, count)
             raise self._fault(exc, where, vehicle_id, overrun) from None
         finally:
             self._tick_limit = self._limit

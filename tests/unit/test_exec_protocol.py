@@ -13,7 +13,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from fleetsim import load_scenario, load_suite
-from fleetsim.enums import Disturbed
+from fleetsim.enums import Disturbed, Progress
+from fleetsim.exec import SubprocessPlanner
 from fleetsim.exec.client import ProtocolError, _Session
 from fleetsim.exec.protocol import (
     FleetEncoder,
@@ -282,6 +283,51 @@ def test_the_python_client_answers_a_round_up_to_its_first_change_and_asks_for_r
     assert isinstance(plan, FleetPlan) and plan.vehicle_id == first.vehicle_id
     with pytest.raises(jsonschema.ValidationError):
         jsonschema.validate({**message, "calls": []}, schema("request"))
+
+
+class _Recorded(SubprocessPlanner):
+    """A planner process that is not started: what it is sent is kept, and every call answered with nothing."""
+
+    def __init__(self) -> None:
+        super().__init__(["unused"])
+        self.sent: list[bytes] = []
+        self._process = object()  # type: ignore[assignment]
+        self.rounds = True
+
+    def _send(self, message: bytes) -> None:
+        self.sent.append(message)
+
+    def _read_line(self, timeout: float | None) -> bytes:
+        first = self.requests + 1
+        calls = len(loads(self.sent[-1])["calls"])
+        nothing = [{"id": n, "plans": [], "route_errors": []} for n in range(first, first + calls)]
+        return dumps({"answers": nothing, "durations": [0.0] * calls})
+
+
+def test_a_rounds_calls_are_written_as_each_call_on_its_own_would_be() -> None:
+    scenario = crossing()
+    fleet = FleetController(scenario).snapshot(0.0)
+    task = scenario.tasks[0]
+    zero = dataclasses.replace(task, id=0, goal_progress=Progress.REVERSE)  # "id":0 twice in its call
+    again = dataclasses.replace(task)  # the same id, another task: encoded anew
+    calls = [
+        ("fix_legs", task.vehicle_id, task),
+        ("plan_routes", task.vehicle_id, task),
+        ("fix_legs", zero.vehicle_id, zero),
+        ("plan_routes", task.vehicle_id + 1, task),  # a vehicle asked about another's task
+        ("fix_legs", again.vehicle_id, dataclasses.replace(again, goal_segment=again.goal_segment + 1)),
+    ]
+    process = _Recorded()
+    for _ in range(2):  # the second round uses what the first kept
+        process.plan_round(calls, fleet, scenario.layout)
+    for round_number, message in enumerate(process.sent):
+        first = 1 + round_number * len(calls)
+        expected = [
+            {"type": method, "id": first + index, "vehicle": vehicle, "task": encode_task(asked)}
+            for index, (method, vehicle, asked) in enumerate(calls)
+        ]
+        assert loads(message)["calls"] == expected
+        assert message.startswith(b'{"type":"round","calls":[' + b",".join(dumps(call) for call in expected) + b"]")
 
 
 def test_a_round_answer_is_checked_against_its_round() -> None:
