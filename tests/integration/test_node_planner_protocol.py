@@ -335,6 +335,42 @@ def test_closing_stdin_ends_node_with_status_0(start_node) -> None:
     assert planner.stderr == ""
 
 
+def test_node_reads_messages_however_the_pipe_cuts_them(start_node) -> None:
+    """Lines written in pieces (one byte, a character split between two reads), several in one write,
+    blank lines between them, and a line many times larger than the example's 64 KiB read buffer: each is
+    answered as if written whole."""
+    calls = recorded("crossing")
+    planner = start_node()
+    init = json.dumps(encode_init(calls[0].layout, calls[0].fleet)).encode()
+    made = calls[0]
+    request = {"type": made.method, "id": 1, "vehicle": made.task.vehicle_id, "task": encode_task(made.task)}
+    fleet = encode_fleet(made.fleet)
+    # JSON allows white space between tokens, and a string may hold any character: the same request made
+    # 300 KiB long, and a route error's text carried through as a 2-byte UTF-8 character.
+    padded = json.dumps({**request, "id": 2, "fleet": fleet}).replace(",", "," + " " * 10_000).encode()
+    assert len(padded) > 300 * 1024
+    assert planner.process.stdin is not None
+    pieces = [init[:1], init[1:5000], init[5000:] + b"\n\n   \n", padded[:70_000], padded[70_000:] + b"\n"]
+    for piece in pieces:
+        planner.process.stdin.write(piece)
+        planner.process.stdin.flush()
+        time.sleep(0.05)  # each piece its own read
+    ready, first = json.loads(planner.read_line() or b"null"), json.loads(planner.read_line() or b"null")
+    assert ready == {"type": "ready", "rounds": True}
+    assert first["id"] == 2 and comparable(decode_response(first)) == comparable(made.response)
+    third = json.dumps({**request, "id": 3, "task": {**request["task"], "note": "\u00e4"}}, ensure_ascii=False).encode()
+    split = third.index("\u00e4".encode()) + 1  # between the character's two bytes
+    fourth = json.dumps({**request, "id": 4}).encode()
+    for piece in (third[:split], third[split:] + b"\n" + fourth + b"\n"):
+        planner.process.stdin.write(piece)
+        planner.process.stdin.flush()
+        time.sleep(0.05)
+    answers = [json.loads(planner.read_line() or b"null") for _ in range(2)]
+    assert [answer["id"] for answer in answers] == [3, 4]
+    assert all(comparable(decode_response(answer)) == comparable(made.response) for answer in answers)
+    assert planner.finish() == 0, planner.stderr
+
+
 MALFORMED = {
     "not JSON": (False, "this is not json"),
     "not an object": (False, "[1, 2, 3]"),
