@@ -1,30 +1,31 @@
 """What a planner process costs per call: the JSON-lines protocol against the same planner in process.
 
-    python benchmarks/exec_protocol.py [--vehicles 100] [--seconds 20] [--repeat 3] [--seed 1] [--cpu N]
+    python benchmarks/exec_protocol.py [--vehicles 100] [--seconds 40] [--warmup 10] [--repeat 3] [--seed 1]
+                                       [--cpu N]
 
 Runs a generated warehouse fleet with ReservingPlanner in process and served over the protocol
 (``exec:python -m fleetsim.exec fleetsim.planners:ReservingPlanner``), and with BFSPlanner in process
 and as the Node.js example (``exec:node examples/planners/node/bfs_planner.js``, when node is on PATH),
-checking that each pair gives the same trace hash. Each planner process runs twice: answering planning
-rounds in one message (protocol 1.2, the clients' default) and one request per call (``--no-rounds``,
-``BFS_PLANNER_ROUNDS=0``). The protocol's overhead per call is the difference of the time spent inside
-planner calls (the guard's measure: for the process, writing the request, the planner's work in the
-child, reading and validating the answer; in rounds, the same for a whole round message, whose calls
-then count one each) divided by the number of planner calls, leaving out the time to start the process
-(once per run: the interpreter, its imports and the init message; printed apart). The whole run's wall
-time per call against the in-process run's is printed too: it also holds the harness's own work outside
-planner calls (in rounds, putting each round's calls together). Each figure is
-the best of ``--repeat`` runs. The first call of each step carries the fleet snapshot (every vehicle
-moved); the others refer to it. A bare pipe round trip (a request-sized line through a child that echoes
-it, read the way fleetsim reads a planner) is measured in the same run, and the overhead's ratio to it
-printed (the issue's bar: at most 2). In rounds, the planner's own work by its clock (each answer's duration) is
-taken out instead, too: what is left is the protocol alone.
+checking that each pair gives the same trace hash and call count. Each planner process runs twice:
+answering planning rounds in one message (protocol 1.2, the clients' default) and one request per call
+(``--no-rounds``, ``BFS_PLANNER_ROUNDS=0``).
+
+The protocol's overhead per call is the time spent inside planner calls (for the process: writing the
+request, the planner's work in the child, reading and checking the answer; in rounds, the same for a
+whole round message, whose calls then count one each) per call, less the in-process planner's. Calls
+are counted from ``--warmup`` simulated seconds on, in both runs: the first calls of a run also pay for
+filling caches and, in a process with a JIT (Node.js), for its first compilations, a cost per run like
+starting the process (the interpreter, its imports and the init message), and both are printed apart.
+Each figure is the best of ``--repeat`` runs. A bare pipe round trip (a request-sized line through a
+child that echoes it, read the way fleetsim reads a planner) is measured in the same run, and the
+overhead's ratio to it printed (the issue's bar: at most 2). In rounds, the planner's own work by its
+clock (each answer's duration) is taken out instead, too: what is left is the protocol alone.
 
 Where the two processes of a round trip run decides what it costs: on one CPU (the kernel's choice on a
-busy machine) a round trip is two context switches, about 4–5 us on the development machine; on two
-(its choice when a CPU is idle) each message also wakes the other CPU, about 12 us. Unpinned, a run gets
-whichever the kernel picks; ``--cpu N`` pins this process and every process it starts (Linux) to one CPU
-for figures that repeat.
+busy machine) a round trip is two context switches, about 4-5 us on the development machine, and the
+two processes share that CPU's caches; on two (its choice when a CPU is idle) each message also wakes
+the other CPU, about 12 us. Unpinned, a run gets whichever the kernel picks; ``--cpu N`` pins this
+process and every process it starts (Linux) to one CPU for figures that repeat.
 """
 
 from __future__ import annotations
@@ -37,18 +38,21 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
 
 sys.path.insert(0, str(Path(__file__).parent))
 
 from warehouse import write_fleet_scenario
 
 from fleetsim.exec import SubprocessPlanner
+from fleetsim.layout.layout import Layout
 from fleetsim.load.scenario import load_scenario_dir
 from fleetsim.planners import BFSPlanner, ReservingPlanner
-from fleetsim.planning.protocol import Planner
-from fleetsim.scenario import ScenarioSettings
+from fleetsim.planning.plans import Response, RouteError
+from fleetsim.planning.protocol import Planner, RoundCall
+from fleetsim.planning.snapshot import FleetSnapshot
+from fleetsim.scenario import ScenarioSettings, Task
 from fleetsim.sim.loop import run_scenario
 
 NODE_PLANNER = Path(__file__).resolve().parents[1] / "examples" / "planners" / "node" / "bfs_planner.js"
@@ -86,30 +90,96 @@ def bare_round_trip(rounds: int) -> float:
         child.wait()
 
 
-class _TimedStart(SubprocessPlanner):
-    """A planner process that notes how long starting it took (process, imports, the init message): a cost
-    per run, not per call, which the first call would otherwise carry; and, in rounds, the time its calls
-    took by its own clock (each answer's duration), which is the planner's own work."""
+class _Clock:
+    """Time spent inside planner calls and rounds, counted from the simulated time ``warmup`` on (earlier
+    calls warm the planner up: caches, and a JIT's first compilations), with the calls counted and, in
+    rounds, the planner's own work by its clock (each answer's duration)."""
 
-    started = 0.0
-    own = 0.0
+    def __init__(self, warmup: float) -> None:
+        self.warmup = warmup
+        self.inside = 0.0
+        self.calls = 0
+        self.own = 0.0
 
-    def _start(self, layout: Any, fleet: Any) -> None:
+    def count(self, fleet: FleetSnapshot, seconds: float, answers: Sequence[tuple[object, float | None]]) -> None:
+        if fleet.time >= self.warmup:
+            self.inside += seconds
+            self.calls += len(answers)
+            self.own += sum(own for _, own in answers if own is not None)
+
+
+def _in_process(planner: type[Planner], clock: _Clock) -> Planner:
+    """``planner()``, each of its calls timed on ``clock``."""
+
+    class Timed(planner):  # type: ignore[valid-type,misc]
+        def plan_routes(self, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
+            start = time.perf_counter()
+            response: Response = super().plan_routes(task, fleet, layout)
+            clock.count(fleet, time.perf_counter() - start, ((None, None),))
+            return response
+
+        def fix_legs(self, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
+            start = time.perf_counter()
+            response: Response = super().fix_legs(task, fleet, layout)
+            clock.count(fleet, time.perf_counter() - start, ((None, None),))
+            return response
+
+    made: Planner = Timed()
+    return made
+
+
+class _Served(SubprocessPlanner):
+    """A planner process whose calls and rounds are timed on ``clock``, and which notes how long starting
+    it took (process, imports, the init message): a cost per run, not per call."""
+
+    def __init__(self, command: list[str], clock: _Clock) -> None:
+        super().__init__(command)
+        self.clock = clock
+        self.started = 0.0
+
+    def _start(self, layout: Layout, fleet: FleetSnapshot) -> None:
         begin = time.perf_counter()
         super()._start(layout, fleet)
-        _TimedStart.started = time.perf_counter() - begin
-        _TimedStart.own = 0.0
+        self.started = time.perf_counter() - begin
 
-    def plan_round(self, calls: Any, fleet: Any, layout: Any) -> Any:
+    def plan_round(
+        self, calls: Sequence[RoundCall], fleet: FleetSnapshot, layout: Layout
+    ) -> list[tuple[Response | RouteError, float | None]]:
+        start, starting = time.perf_counter(), self._process is None
         answers = super().plan_round(calls, fleet, layout)
-        _TimedStart.own += sum(seconds for _, seconds in answers if seconds is not None)
+        self.clock.count(fleet, time.perf_counter() - start - (self.started if starting else 0.0), answers)
         return answers
+
+    def plan_routes(self, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
+        start, starting = time.perf_counter(), self._process is None
+        response = super().plan_routes(task, fleet, layout)
+        self.clock.count(fleet, time.perf_counter() - start - (self.started if starting else 0.0), ((None, None),))
+        return response
+
+    def fix_legs(self, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
+        start, starting = time.perf_counter(), self._process is None
+        response = super().fix_legs(task, fleet, layout)
+        self.clock.count(fleet, time.perf_counter() - start - (self.started if starting else 0.0), ((None, None),))
+        return response
+
+
+def _best(runs: list[tuple[float, int, float]]) -> tuple[float, float]:
+    """The best of runs of (seconds inside calls, calls, own seconds): seconds per call, own per call."""
+    seconds, calls, own = min(runs)
+    return seconds / calls, own / calls
 
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--vehicles", type=int, default=100)
-    parser.add_argument("--seconds", type=float, default=20.0)
+    parser.add_argument("--seconds", type=float, default=40.0)
+    parser.add_argument(
+        "--warmup",
+        type=float,
+        default=10.0,
+        help="simulated seconds at the start of a run whose calls are not counted per call (caches, a JIT's"
+        " first compilations); what they cost more than the steady rate is printed apart",
+    )
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument(
@@ -120,6 +190,8 @@ def main() -> int:
         " and on two can differ threefold; unpinned, the kernel chooses per run)",
     )
     args = parser.parse_args()
+    if not 0 <= args.warmup < args.seconds:
+        parser.error(f"--warmup {args.warmup:g} must be at least 0 and less than --seconds {args.seconds:g}")
     if args.cpu is not None:
         os.sched_setaffinity(0, {args.cpu})
     with tempfile.TemporaryDirectory() as tmp:
@@ -141,56 +213,60 @@ def main() -> int:
         one_by_one = ["env", "BFS_PLANNER_ROUNDS=0", node, str(NODE_PLANNER)]
         cases.append(("BFSPlanner", BFSPlanner, [[node, str(NODE_PLANNER)], one_by_one]))
     pinned = "" if args.cpu is None else f", on CPU {args.cpu} only"
-    print(f"{args.vehicles} vehicles, {args.seconds:.0f} s simulated, best of {args.repeat}{pinned}")
+    print(
+        f"{args.vehicles} vehicles, {args.seconds:g} s simulated, calls from {args.warmup:g} s on counted per call,"
+        f" best of {args.repeat}{pinned}"
+    )
     for name, planner, commands in cases:
-        direct = [run_scenario(scenario, planner(), keep_trace=False) for _ in range(args.repeat)]
-        calls = direct[0].metrics.planner_calls
-        inside = min(r.metrics.planner_wall_time for r in direct)
-        whole = min(r.metrics.wall_time for r in direct)
-        print(f"  {name} in process: {inside / calls * 1e6:6.1f} us per call ({calls} calls)")
+        direct, hashes = [], set()
+        for _ in range(args.repeat):
+            clock = _Clock(args.warmup)
+            result = run_scenario(scenario, _in_process(planner, clock), keep_trace=False)
+            direct.append(
+                (clock.inside, clock.calls, 0.0, result.metrics.planner_wall_time, result.metrics.planner_calls)
+            )
+            hashes.add(result.trace_hash)
+        inside, _ = _best([run[:3] for run in direct])
+        whole_inside = min(run[3] / run[4] for run in direct)
+        calls = direct[0][4]
+        print(f"  {name} in process: {inside * 1e6:6.1f} us per call ({direct[0][1]} of {calls} calls counted)")
         pipe = min(bare_round_trip(calls) for _ in range(args.repeat))
         for command in commands:
-            served, starts, rounds, own = [], [], [], []
+            served, starts, whole, rounds = [], [], [], False
             for _ in range(args.repeat):
-                process = _TimedStart(command)
-                served.append(run_scenario(scenario, process, keep_trace=False))
-                starts.append(_TimedStart.started)
-                rounds.append(process.rounds)
-                own.append(_TimedStart.own)
-            if {r.trace_hash for r in direct} != {r.trace_hash for r in served}:
-                print(f"{name}: the planner process's runs differ from the in-process runs", file=sys.stderr)
-                return 1
-            if served[0].metrics.planner_calls != calls:
-                print(
-                    f"{name}: the planner process was called {served[0].metrics.planner_calls} times", file=sys.stderr
-                )
-                return 1
-            outside = min(r.metrics.planner_wall_time - start for r, start in zip(served, starts, strict=True))
-            run = min(r.metrics.wall_time - start for r, start in zip(served, starts, strict=True))
-            mode = "in rounds" if rounds[0] else "one call at a time"
+                clock = _Clock(args.warmup)
+                process = _Served(command, clock)
+                result = run_scenario(scenario, process, keep_trace=False)
+                served.append((clock.inside, clock.calls, clock.own))
+                starts.append(process.started)
+                whole.append((result.metrics.planner_wall_time - process.started) / result.metrics.planner_calls)
+                rounds = bool(process.rounds)
+                if result.trace_hash not in hashes or result.metrics.planner_calls != calls:
+                    print(f"{name}: the planner process's runs differ from the in-process runs", file=sys.stderr)
+                    return 1
+            per_call, own = _best(served)
+            mode = "in rounds" if rounds else "one call at a time"
             words = " ".join(Path(part).name for part in command)
+            overhead = per_call - inside
+            # What the whole run's calls cost over the in-process run's beyond the steady overhead: the warm-up
+            # (an estimate from the best runs of each; a few ms either way is noise).
+            warmup = ((min(whole) - whole_inside) - overhead) * calls
             print(
-                f"  {name} as `{words}` ({mode}): {outside / calls * 1e6:6.1f} us per call"
-                f" (starting the process: {min(starts):.2f} s, once per run, not counted)"
-            )
-            overhead = (outside - inside) / calls
-            print(
-                f"    protocol overhead {overhead * 1e6:6.1f} us per call; whole run {(run - whole) / calls * 1e6:6.1f} us"
-                f" per call more than in process; same trace hash {direct[0].trace_hash[:12]}"
+                f"  {name} as `{words}` ({mode}): {per_call * 1e6:6.1f} us per call; once per run, not counted:"
+                f" starting the process {min(starts):.2f} s, the first {args.warmup:g} s of calls {warmup * 1e3:+.0f} ms"
+                " over the steady rate"
             )
             print(
-                f"    bare pipe round trip {pipe * 1e6:6.1f} us; overhead / round trip {overhead / pipe:4.2f} [target <= 2]"
+                f"    protocol overhead {overhead * 1e6:6.1f} us per call; bare pipe round trip {pipe * 1e6:4.1f} us;"
+                f" overhead / round trip {overhead / pipe:4.2f} [target <= 2]; same trace hash {next(iter(hashes))[:12]}"
             )
-            if rounds[0]:
+            if rounds:
                 # The planner's own work by its clock taken out instead of the in-process planner's: what is
                 # left is the protocol alone (both sides' encoding and decoding, the pipe, the checks).
-                alone = min(
-                    r.metrics.planner_wall_time - start - mine
-                    for r, start, mine in zip(served, starts, own, strict=True)
-                )
+                alone = per_call - own
                 print(
-                    f"    the planner's own work {min(own) / calls * 1e6:6.1f} us per call by its clock; the protocol"
-                    f" alone {alone / calls * 1e6:6.1f} us per call, {alone / calls / pipe:4.2f} x the round trip"
+                    f"    the planner's own work {own * 1e6:6.1f} us per call by its clock; the protocol"
+                    f" alone {alone * 1e6:6.1f} us per call, {alone / pipe:4.2f} x the round trip"
                 )
     return 0
 
