@@ -53,6 +53,8 @@ from fleetsim.planning.plans import Response, RouteError
 from fleetsim.planning.protocol import Planner, RoundCall
 from fleetsim.planning.snapshot import FleetSnapshot
 from fleetsim.scenario import ScenarioSettings, Task
+from fleetsim.sim import loop
+from fleetsim.sim.guard import PlannerGuard
 from fleetsim.sim.loop import run_scenario
 
 NODE_PLANNER = Path(__file__).resolve().parents[1] / "examples" / "planners" / "node" / "bfs_planner.js"
@@ -90,47 +92,65 @@ def bare_round_trip(rounds: int) -> float:
         child.wait()
 
 
+class _Guard(PlannerGuard):
+    """The run's planner guard, kept where the benchmark can read it: its time inside planner calls and
+    its call count are the measure (the same for a planner in process and a planner process)."""
+
+    current: _Guard | None = None
+
+    def __init__(self, timeout: float | None = 10.0) -> None:
+        super().__init__(timeout)
+        _Guard.current = self
+
+
 class _Clock:
-    """Time spent inside planner calls and rounds, counted from the simulated time ``warmup`` on (earlier
-    calls warm the planner up: caches, and a JIT's first compilations), with the calls counted and, in
-    rounds, the planner's own work by its clock (each answer's duration)."""
+    """The guard's time inside planner calls and call count at the first call from the simulated time
+    ``warmup`` on (earlier calls warm the planner up: caches, and a JIT's first compilations), and, in
+    rounds, the answers' durations (the planner's own work by its clock) from then on."""
 
     def __init__(self, warmup: float) -> None:
         self.warmup = warmup
-        self.inside = 0.0
-        self.calls = 0
-        self.own = 0.0
+        self.at_warmup: tuple[float, int] | None = None
+        self.answers: list[Sequence[tuple[object, float | None]]] = []
 
-    def count(self, fleet: FleetSnapshot, seconds: float, answers: Sequence[tuple[object, float | None]]) -> None:
-        if fleet.time >= self.warmup:
-            self.inside += seconds
-            self.calls += len(answers)
-            self.own += sum(own for _, own in answers if own is not None)
+    def passed(self, fleet: FleetSnapshot) -> bool:
+        """Note the guard's figures the first time a call comes at or after the warm-up (the guard has not
+        counted that call yet); whether the warm-up is over."""
+        if self.at_warmup is None and fleet.time >= self.warmup:
+            guard = _Guard.current
+            assert guard is not None
+            self.at_warmup = (guard.wall_time, guard.calls)
+        return self.at_warmup is not None
+
+    def steady(self, total: float, calls: int) -> tuple[float, int, float]:
+        """Seconds inside the calls after the warm-up, their number, and their own seconds."""
+        assert self.at_warmup is not None, "no call after the warm-up"
+        own = sum(seconds for answers in self.answers for _, seconds in answers if seconds is not None)
+        return total - self.at_warmup[0], calls - self.at_warmup[1], own
 
 
 def _in_process(planner: type[Planner], clock: _Clock) -> Planner:
-    """``planner()``, each of its calls timed on ``clock``."""
+    """``planner()``, its calls noting the warm-up's end on ``clock``."""
 
-    class Timed(planner):  # type: ignore[valid-type,misc]
+    class Marked(planner):  # type: ignore[valid-type,misc]
         def plan_routes(self, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
-            start = time.perf_counter()
+            clock.passed(fleet)
             response: Response = super().plan_routes(task, fleet, layout)
-            clock.count(fleet, time.perf_counter() - start, ((None, None),))
             return response
 
         def fix_legs(self, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
-            start = time.perf_counter()
+            clock.passed(fleet)
             response: Response = super().fix_legs(task, fleet, layout)
-            clock.count(fleet, time.perf_counter() - start, ((None, None),))
             return response
 
-    made: Planner = Timed()
+    made: Planner = Marked()
     return made
 
 
 class _Served(SubprocessPlanner):
-    """A planner process whose calls and rounds are timed on ``clock``, and which notes how long starting
-    it took (process, imports, the init message): a cost per run, not per call."""
+    """A planner process whose calls note the warm-up's end on ``clock`` (and keep a round's answers for
+    their durations), and which notes how long starting it took (process, imports, the init message): a
+    cost per run, not per call."""
 
     def __init__(self, command: list[str], clock: _Clock) -> None:
         super().__init__(command)
@@ -145,22 +165,19 @@ class _Served(SubprocessPlanner):
     def plan_round(
         self, calls: Sequence[RoundCall], fleet: FleetSnapshot, layout: Layout
     ) -> list[tuple[Response | RouteError, float | None]]:
-        start, starting = time.perf_counter(), self._process is None
+        counted = self.clock.passed(fleet)
         answers = super().plan_round(calls, fleet, layout)
-        self.clock.count(fleet, time.perf_counter() - start - (self.started if starting else 0.0), answers)
+        if counted:
+            self.clock.answers.append(answers)
         return answers
 
     def plan_routes(self, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
-        start, starting = time.perf_counter(), self._process is None
-        response = super().plan_routes(task, fleet, layout)
-        self.clock.count(fleet, time.perf_counter() - start - (self.started if starting else 0.0), ((None, None),))
-        return response
+        self.clock.passed(fleet)
+        return super().plan_routes(task, fleet, layout)
 
     def fix_legs(self, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
-        start, starting = time.perf_counter(), self._process is None
-        response = super().fix_legs(task, fleet, layout)
-        self.clock.count(fleet, time.perf_counter() - start - (self.started if starting else 0.0), ((None, None),))
-        return response
+        self.clock.passed(fleet)
+        return super().fix_legs(task, fleet, layout)
 
 
 def _best(runs: list[tuple[float, int, float]]) -> tuple[float, float]:
@@ -194,6 +211,7 @@ def main() -> int:
         parser.error(f"--warmup {args.warmup:g} must be at least 0 and less than --seconds {args.seconds:g}")
     if args.cpu is not None:
         os.sched_setaffinity(0, {args.cpu})
+    loop.PlannerGuard = _Guard  # type: ignore[attr-defined]  # the runs' guards, kept for their figures
     with tempfile.TemporaryDirectory() as tmp:
         write_fleet_scenario(Path(tmp), args.vehicles, seed=args.seed)
         scenario = load_scenario_dir(Path(tmp), settings=ScenarioSettings(time_limit=args.seconds, stop_on=()))
@@ -222,9 +240,9 @@ def main() -> int:
         for _ in range(args.repeat):
             clock = _Clock(args.warmup)
             result = run_scenario(scenario, _in_process(planner, clock), keep_trace=False)
-            direct.append(
-                (clock.inside, clock.calls, 0.0, result.metrics.planner_wall_time, result.metrics.planner_calls)
-            )
+            metrics = result.metrics
+            steady = clock.steady(metrics.planner_wall_time, metrics.planner_calls)
+            direct.append((*steady, metrics.planner_wall_time, metrics.planner_calls))
             hashes.add(result.trace_hash)
         inside, _ = _best([run[:3] for run in direct])
         whole_inside = min(run[3] / run[4] for run in direct)
@@ -237,7 +255,9 @@ def main() -> int:
                 clock = _Clock(args.warmup)
                 process = _Served(command, clock)
                 result = run_scenario(scenario, process, keep_trace=False)
-                served.append((clock.inside, clock.calls, clock.own))
+                # A process starts in its first call: counted when the warm-up is 0, and then taken out.
+                started = process.started if args.warmup == 0 else 0.0
+                served.append(clock.steady(result.metrics.planner_wall_time - started, result.metrics.planner_calls))
                 starts.append(process.started)
                 whole.append((result.metrics.planner_wall_time - process.started) / result.metrics.planner_calls)
                 rounds = bool(process.rounds)
