@@ -33,7 +33,15 @@ from typing import IO, Any
 
 from fleetsim.errors import PlannerProcessError
 from fleetsim.exec.protocol import FleetEncoder, LegBook, decode_response, dumps, encode_init, encode_task, loads
-from fleetsim.exec.rounds import CALL, ROUND, RoundAnswerError, describe_round, nothing_to_change, read_round_answer
+from fleetsim.exec.rounds import (
+    CALL,
+    ROUND,
+    RoundAnswerError,
+    describe_round,
+    nothing_changed,
+    nothing_to_change,
+    read_round_answer,
+)
 from fleetsim.exec.schemas import SCHEMAS, load_schema, violation
 from fleetsim.layout.layout import Layout
 from fleetsim.planning.plans import Response, RouteError
@@ -141,9 +149,13 @@ class SubprocessPlanner:
         requests = b",".join(parts)
         self._send(ROUND % (requests, self._update(fleet)))
         # Each call may take the per-call timeout: the round, as many times as it has calls.
-        answer = self._decode(self._read_line(None if self.timeout is None else self.timeout * len(calls)))
+        line = self._read_line(None if self.timeout is None else self.timeout * len(calls))
+        durations = nothing_changed(line, first, len(calls))
+        if durations is not None:  # the commonest answer, recognised by its bytes
+            self.requests += len(calls)
+            return [([], seconds) for seconds in durations]
         try:
-            answers = read_round_answer(answer, first, calls, fleet, self._legs)
+            answers = read_round_answer(self._decode(line), first, calls, fleet, self._legs)
         except RoundAnswerError as error:
             raise self._fail(f"answered {self._request()} with {error}") from None
         self.requests += len(answers)

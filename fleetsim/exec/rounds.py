@@ -19,16 +19,21 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
-from fleetsim.exec.protocol import LegBook, decode_response
+from fleetsim.exec.protocol import LegBook, decode_response, loads
 from fleetsim.exec.schemas import load_schema, violation
 from fleetsim.planning.plans import Response, RouteError, hands_back
 from fleetsim.planning.protocol import RoundCall
 from fleetsim.planning.snapshot import FleetSnapshot
 
-__all__ = ["RoundAnswerError", "describe_round", "nothing_to_change", "read_round_answer"]
+__all__ = ["RoundAnswerError", "describe_round", "nothing_changed", "nothing_to_change", "read_round_answer"]
 
 ROUND = b'{"type":"round","calls":[%b]%b}\n'  # the calls, then (when the fleet changed) ',"fleet":' and it
 CALL = b'{"type":"%b","id":%d,"vehicle":%d,"task":%b}'
+
+
+# The commonest answer to a round, every call answered with nothing to change, as both of fleetsim's clients
+# write it (compact JSON, keys in this order): the part before the durations, for a round of N calls.
+_NOTHING_ANSWERED: dict[int, bytes] = {}
 
 
 class RoundAnswerError(ValueError):
@@ -45,6 +50,29 @@ def nothing_to_change(answer: Any, number: int) -> bool:
         and answer.get("plans") == []
         and answer.get("route_errors") == []
     )
+
+
+def nothing_changed(line: bytes, first: int, count: int) -> list[float] | None:
+    """The durations of an answer ``line`` to a round of ``count`` calls (numbered from ``first``) that
+    answers every call with nothing to change, spelt as fleetsim's clients spell it (the commonest answer:
+    recognised by its bytes, without decoding the answers); ``None`` for any other answer or spelling,
+    which :func:`read_round_answer` then reads and checks."""
+    template = _NOTHING_ANSWERED.get(count)
+    if template is None:
+        nothing = b'{"id":%d,"plans":[],"route_errors":[]}'
+        template = _NOTHING_ANSWERED[count] = b'{"answers":[%b],"durations":[' % b",".join([nothing] * count)
+    head = template % tuple(range(first, first + count))
+    if not (line.startswith(head) and line.endswith(b"]}")):
+        return None
+    try:
+        durations = loads(line[len(head) - 1 : -1])  # from the durations' "[" to their "]"
+    except ValueError:
+        return None
+    if type(durations) is not list or len(durations) != count:
+        return None
+    if not all(type(seconds) is float and seconds >= 0.0 for seconds in durations):
+        return None
+    return durations
 
 
 def describe_round(first: int, calls: Sequence[RoundCall], shown: int = 3) -> str:

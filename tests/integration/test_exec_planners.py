@@ -341,3 +341,27 @@ def test_the_node_example_planner_gives_the_bfs_planners_runs(
     served = run_scenario(scenario, SubprocessPlanner([node, str(NODE_PLANNER)]))
     assert (served.status, served.ended, served.trace_hash) == (direct.status, direct.ended, direct.trace_hash)
     assert [(f.kind, f.message) for f in served.failures] == [(f.kind, f.message) for f in direct.failures]
+
+
+@pytest.mark.parametrize("client", ["python", "node"])
+def test_both_clients_rounds_of_nothing_to_change_are_recognised_by_their_bytes(
+    client: str, request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The commonest round answer skips decoding with fleetsim's own clients, and the run is the same."""
+    recognised = []
+    read = process.nothing_changed
+
+    def counted(line: bytes, first: int, count: int) -> list[float] | None:
+        durations = read(line, first, count)
+        recognised.append(durations is not None)
+        return durations
+
+    monkeypatch.setattr(process, "nothing_changed", counted)
+    command = [*SERVE, "fleetsim.planners:BFSPlanner"]
+    if client == "node":
+        command = [request.getfixturevalue("node"), str(NODE_PLANNER)]
+    scenario = example("corridor-passing-bay")  # two vehicles, 182 calls: most rounds change nothing
+    served = run_scenario(scenario, SubprocessPlanner(command))
+    direct = run_scenario(scenario, BFSPlanner())
+    assert (served.status, served.trace_hash) == (direct.status, direct.trace_hash)
+    assert any(recognised) and not all(recognised), "some rounds change something: those are decoded"

@@ -28,7 +28,7 @@ from fleetsim.exec.protocol import (
     encode_task,
     loads,
 )
-from fleetsim.exec.rounds import RoundAnswerError, read_round_answer
+from fleetsim.exec.rounds import RoundAnswerError, nothing_changed, read_round_answer
 from fleetsim.load.scenario import load_scenario_dir
 from fleetsim.planners import ReservingPlanner
 from fleetsim.planning.controller import ROUND_CALLS, FleetController
@@ -328,6 +328,38 @@ def test_a_rounds_calls_are_written_as_each_call_on_its_own_would_be() -> None:
         ]
         assert loads(message)["calls"] == expected
         assert message.startswith(b'{"type":"round","calls":[' + b",".join(dumps(call) for call in expected) + b"]")
+
+
+def test_a_round_answered_with_nothing_to_change_is_recognised_by_its_bytes_as_the_clients_spell_it() -> None:
+    scenario = crossing()
+    fleet = FleetController(scenario).snapshot(0.0)
+    init = loads(dumps(encode_init(scenario.layout, fleet)))
+    calls = [("fix_legs", task) for task in scenario.tasks[:2]]
+    # The Python client's spelling (orjson, compact) and JSON.stringify's (the Node.js example) are the same.
+    answer = _Session(init).answer_round(_HandBack(), _round_message(calls, fleet))
+    line = dumps(answer)
+    compact = json.dumps(answer, separators=(",", ":")).encode()  # JSON.stringify's spelling, floats aside
+    assert line.partition(b'"durations"')[0] == compact.partition(b'"durations"')[0]
+    assert nothing_changed(compact, 1, 2) == answer["durations"]
+    assert nothing_changed(line, 1, 2) == answer["durations"]
+    nothing = [{"id": n, "plans": [], "route_errors": []} for n in (1, 2)]
+    refused = {
+        "another round's ids": (dumps({"answers": nothing, "durations": [0.5, 0.25]}), 2, 2),
+        "fewer answers than calls": (dumps({"answers": nothing, "durations": [0.5, 0.25]}), 1, 3),
+        "more durations": (dumps({"answers": nothing, "durations": [0.5, 0.25, 0.1]}), 1, 2),
+        "fewer durations": (dumps({"answers": nothing, "durations": [0.5]}), 1, 2),
+        "a whole-number duration": (dumps({"answers": nothing, "durations": [0.5, 0]}), 1, 2),
+        "a negative duration": (dumps({"answers": nothing, "durations": [0.5, -0.25]}), 1, 2),
+        "another key after them": (dumps({"answers": nothing, "durations": [0.5, 0.25], "x": 1}), 1, 2),
+        "spaces": (json.dumps({"answers": nothing, "durations": [0.5, 0.25]}).encode(), 1, 2),
+        "a plan": (dumps({"answers": [nothing[0], {**nothing[1], "plans": [encode_plan(fleet.plans[1])]}],
+                          "durations": [0.5, 0.25]}), 1, 2),
+        "cut short": (dumps({"answers": nothing, "durations": [0.5, 0.25]})[:-2], 1, 2),
+        "not JSON after all": (dumps({"answers": nothing, "durations": [0.5, 0.25]})[:-1] + b"]", 1, 2),
+    }  # fmt: skip
+    for case, (other, first, count) in refused.items():
+        assert nothing_changed(other, first, count) is None, case
+    assert nothing_changed(dumps({"answers": nothing, "durations": [0.5, 0.25]}), 1, 2) == [0.5, 0.25]
 
 
 def test_a_round_answer_is_checked_against_its_round() -> None:
