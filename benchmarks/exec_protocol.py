@@ -1,6 +1,6 @@
 """What a planner process costs per call: the JSON-lines protocol against the same planner in process.
 
-    python benchmarks/exec_protocol.py [--vehicles 100] [--seconds 40] [--warmup 10] [--repeat 3] [--seed 1]
+    python benchmarks/exec_protocol.py [--vehicles 100] [--seconds 40] [--warmup 10] [--repeat 5] [--seed 1]
                                        [--cpu N]
 
 Runs a generated warehouse fleet with ReservingPlanner in process and served over the protocol
@@ -16,7 +16,7 @@ whole round message, whose calls then count one each) per call, less the in-proc
 are counted from ``--warmup`` simulated seconds on, in both runs: the first calls of a run also pay for
 filling caches and, in a process with a JIT (Node.js), for its first compilations, a cost per run like
 starting the process (the interpreter, its imports and the init message), and both are printed apart.
-Each figure is the best of ``--repeat`` runs. A bare pipe round trip (a request-sized line through a
+Each figure is the median of ``--repeat`` runs. A bare pipe round trip (a request-sized line through a
 child that echoes it, read the way fleetsim reads a planner) is measured in the same run, and the
 overhead's ratio to it printed (the issue's bar: at most 2). In rounds, the planner's own work by its
 clock (each answer's duration) is taken out instead, too: what is left is the protocol alone.
@@ -40,6 +40,7 @@ import tempfile
 import time
 from collections.abc import Sequence
 from pathlib import Path
+from statistics import median
 
 sys.path.insert(0, str(Path(__file__).parent))
 
@@ -180,10 +181,9 @@ class _Served(SubprocessPlanner):
         return super().fix_legs(task, fleet, layout)
 
 
-def _best(runs: list[tuple[float, int, float]]) -> tuple[float, float]:
-    """The best of runs of (seconds inside calls, calls, own seconds): seconds per call, own per call."""
-    seconds, calls, own = min(runs)
-    return seconds / calls, own / calls
+def _median(runs: list[tuple[float, int, float]]) -> tuple[float, float]:
+    """The medians over runs of (seconds inside calls, calls, own seconds): seconds per call, own per call."""
+    return median(seconds / calls for seconds, calls, _ in runs), median(own / calls for _, calls, own in runs)
 
 
 def main() -> int:
@@ -197,7 +197,7 @@ def main() -> int:
         help="simulated seconds at the start of a run whose calls are not counted per call (caches, a JIT's"
         " first compilations); what they cost more than the steady rate is printed apart",
     )
-    parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument(
         "--cpu",
@@ -233,7 +233,7 @@ def main() -> int:
     pinned = "" if args.cpu is None else f", on CPU {args.cpu} only"
     print(
         f"{args.vehicles} vehicles, {args.seconds:g} s simulated, calls from {args.warmup:g} s on counted per call,"
-        f" best of {args.repeat}{pinned}"
+        f" medians of {args.repeat} runs{pinned}"
     )
     for name, planner, commands in cases:
         direct, hashes = [], set()
@@ -244,11 +244,11 @@ def main() -> int:
             steady = clock.steady(metrics.planner_wall_time, metrics.planner_calls)
             direct.append((*steady, metrics.planner_wall_time, metrics.planner_calls))
             hashes.add(result.trace_hash)
-        inside, _ = _best([run[:3] for run in direct])
-        whole_inside = min(run[3] / run[4] for run in direct)
+        inside, _ = _median([run[:3] for run in direct])
+        whole_inside = median(run[3] / run[4] for run in direct)
         calls = direct[0][4]
         print(f"  {name} in process: {inside * 1e6:6.1f} us per call ({direct[0][1]} of {calls} calls counted)")
-        pipe = min(bare_round_trip(calls) for _ in range(args.repeat))
+        pipe = median(bare_round_trip(calls) for _ in range(args.repeat))
         for command in commands:
             served, starts, whole, rounds = [], [], [], False
             for _ in range(args.repeat):
@@ -264,16 +264,16 @@ def main() -> int:
                 if result.trace_hash not in hashes or result.metrics.planner_calls != calls:
                     print(f"{name}: the planner process's runs differ from the in-process runs", file=sys.stderr)
                     return 1
-            per_call, own = _best(served)
+            per_call, own = _median(served)
             mode = "in rounds" if rounds else "one call at a time"
             words = " ".join(Path(part).name for part in command)
             overhead = per_call - inside
             # What the whole run's calls cost over the in-process run's beyond the steady overhead: the warm-up
-            # (an estimate from the best runs of each; a few ms either way is noise).
-            warmup = ((min(whole) - whole_inside) - overhead) * calls
+            # (an estimate from the medians of each; a few ms either way is noise).
+            warmup = ((median(whole) - whole_inside) - overhead) * calls
             print(
                 f"  {name} as `{words}` ({mode}): {per_call * 1e6:6.1f} us per call; once per run, not counted:"
-                f" starting the process {min(starts):.2f} s, the first {args.warmup:g} s of calls {warmup * 1e3:+.0f} ms"
+                f" starting the process {median(starts):.2f} s, the first {args.warmup:g} s of calls {warmup * 1e3:+.0f} ms"
                 " over the steady rate"
             )
             print(
