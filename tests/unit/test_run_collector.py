@@ -61,7 +61,7 @@ def test_a_run_that_ends_in_a_planner_error_puts_the_collector_back(tmp_path: Pa
         planner = _Watching(fail=True)
         result = run_scenario(_corridor(tmp_path), planner)
         assert result.ended == "planner-error"
-        assert planner.seen[0][0] == (20, 7, 9)
+        assert planner.seen[0][0] == (_COLLECTOR.OBJECTS_PER_VEHICLE, 7, 9)
         assert (gc.get_threshold(), gc.get_freeze_count()) == ((5, 7, 9), 0)
     finally:
         gc.set_threshold(*original)
@@ -82,8 +82,10 @@ def test_overlapping_runs_in_threads_put_the_collector_back_when_the_last_ends()
     thread.start()
     first_in.wait(5.0)
     with _COLLECTOR.spared(100):
-        assert gc.get_threshold()[0] == 200_000
+        assert gc.get_threshold()[0] == _COLLECTOR.OBJECTS_PER_VEHICLE * 10_000
     second_done.set()
     thread.join()
-    assert seen_after_second == [200_000]  # still the larger fleet's after the other run ended
+    assert seen_after_second == [
+        _COLLECTOR.OBJECTS_PER_VEHICLE * 10_000
+    ]  # still the larger fleet's after the other run ended
     assert (gc.get_threshold(), gc.get_freeze_count()) == before
