@@ -35,6 +35,7 @@ from fleetsim.errors import PlannerProcessError
 from fleetsim.exec.protocol import FleetEncoder, LegBook, decode_response, dumps, encode_init, encode_task, loads
 from fleetsim.exec.rounds import (
     CALL,
+    NOTHING_TO_CHANGE,
     ROUND,
     RoundAnswerError,
     describe_round,
@@ -56,8 +57,8 @@ _GRACE = 1.0  # seconds a process gets to exit after stdin closes, and again aft
 # A request: its type, id, vehicle, task and (when the fleet changed) ',"fleet":' and the update.
 _REQUEST = b'{"type":"%b","id":%d,"vehicle":%d,"task":%b%b}\n'
 _METHODS = {"plan_routes": b"plan_routes", "fix_legs": b"fix_legs"}
-_NOTHING_TO_CHANGE = b'{"id":%d,"plans":[],"route_errors":[]}'
 _PLAN_HANDED_BACK = b'{"id":%d,"plans":[%b],"route_errors":[]}'
+_CALL_OF_ID = CALL.replace(b'"id":%d', b'"id":%%d')  # a round's call with all but its id filled in
 
 
 def _kill_group(process: subprocess.Popen[bytes]) -> None:
@@ -235,7 +236,7 @@ class SubprocessPlanner:
         # The two commonest answers, as fleetsim's own clients spell them, need no decoding or checking:
         # nothing to change, and the vehicle's plan handed back unchanged (it is the plan in force, as the
         # process last saw it).
-        if line == _NOTHING_TO_CHANGE % number:
+        if line == NOTHING_TO_CHANGE % number:
             return []
         sent = self._encoder.plans.get(task.vehicle_id)
         if sent is not None and line == _PLAN_HANDED_BACK % (number, sent[1]):
@@ -268,11 +269,9 @@ class SubprocessPlanner:
     def _known_task(self, task: Task) -> tuple[Task, bytes, bytes, bytes]:
         """The task's JSON and its two calls of a round, kept for the requests to come."""
         encoded = dumps(encode_task(task))
+        escaped = encoded.replace(b"%", b"%%")  # the call is formatted again, with its id
         fix, plan = (
-            (CALL % (_METHODS[method], 0, task.vehicle_id, encoded))
-            .replace(b"%", b"%%")
-            .replace(b'"id":0,', b'"id":%d,', 1)
-            for method in ("fix_legs", "plan_routes")
+            _CALL_OF_ID % (_METHODS[method], task.vehicle_id, escaped) for method in ("fix_legs", "plan_routes")
         )
         entry = self._tasks[task.id] = (task, encoded, fix, plan)
         return entry

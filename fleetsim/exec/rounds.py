@@ -25,11 +25,19 @@ from fleetsim.planning.plans import Response, RouteError, hands_back
 from fleetsim.planning.protocol import RoundCall
 from fleetsim.planning.snapshot import FleetSnapshot
 
-__all__ = ["RoundAnswerError", "describe_round", "nothing_changed", "nothing_to_change", "read_round_answer"]
+__all__ = [
+    "NOTHING_TO_CHANGE",
+    "RoundAnswerError",
+    "describe_round",
+    "nothing_changed",
+    "nothing_to_change",
+    "read_round_answer",
+]
 
 ROUND = b'{"type":"round","calls":[%b]%b}\n'  # the calls, then (when the fleet changed) ',"fleet":' and it
 CALL = b'{"type":"%b","id":%d,"vehicle":%d,"task":%b}'
-
+# An answer with nothing to change (to the request with id %d), as fleetsim's own clients write it.
+NOTHING_TO_CHANGE = b'{"id":%d,"plans":[],"route_errors":[]}'
 
 # The commonest answer to a round, every call answered with nothing to change, as both of fleetsim's clients
 # write it (compact JSON, keys in this order): the part before the durations, for a round of N calls.
@@ -59,8 +67,8 @@ def nothing_changed(line: bytes, first: int, count: int) -> list[float] | None:
     which :func:`read_round_answer` then reads and checks."""
     template = _NOTHING_ANSWERED.get(count)
     if template is None:
-        nothing = b'{"id":%d,"plans":[],"route_errors":[]}'
-        template = _NOTHING_ANSWERED[count] = b'{"answers":[%b],"durations":[' % b",".join([nothing] * count)
+        nothing = b",".join([NOTHING_TO_CHANGE] * count)
+        template = _NOTHING_ANSWERED[count] = b'{"answers":[%b],"durations":[' % nothing
     head = template % tuple(range(first, first + count))
     if not (line.startswith(head) and line.endswith(b"]}")):
         return None
@@ -68,11 +76,13 @@ def nothing_changed(line: bytes, first: int, count: int) -> list[float] | None:
         durations = loads(line[len(head) - 1 : -1])  # from the durations' "[" to their "]"
     except ValueError:
         return None
-    if type(durations) is not list or len(durations) != count:
-        return None
-    if not all(type(seconds) is float and seconds >= 0.0 for seconds in durations):
-        return None
-    return durations
+    # (The slice starts with "[": what parses is a list.)
+    return durations if len(durations) == count and _all_seconds(durations) else None
+
+
+def _all_seconds(durations: list[Any]) -> bool:
+    """Every duration a float of seconds, not negative (a float: the schema allows any number)."""
+    return all(type(seconds) is float and seconds >= 0.0 for seconds in durations)
 
 
 def describe_round(first: int, calls: Sequence[RoundCall], shown: int = 3) -> str:
@@ -98,7 +108,7 @@ def read_round_answer(
         and type(answers) is list
         and len(answers) > 0
         and type(durations) is list
-        and all(type(seconds) is float and seconds >= 0.0 for seconds in durations)
+        and _all_seconds(durations)
     )
     if not well_formed:
         problem = violation(load_schema("round-answer"), answer)
