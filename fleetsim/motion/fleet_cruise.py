@@ -20,18 +20,19 @@ import math
 from bisect import bisect_right
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from functools import partial
-from typing import Any
+from itertools import chain
+from typing import Any, NamedTuple
 
 import numpy as np
 import numpy.typing as npt
 
-from fleetsim.enums import Progress
+from fleetsim.enums import Progress, Traverse
 from fleetsim.motion.driver import EPS, Driver
 from fleetsim.motion.profile import SpeedProfile
 from fleetsim.planning.plans import FleetPlan
 from fleetsim.planning.snapshot import VehicleState
 
-__all__ = ["FleetCruise"]
+__all__ = ["CruiseStep", "FleetCruise", "StateColumns"]
 
 _make_state = partial(tuple.__new__, VehicleState)
 _REVERSE = Progress.REVERSE
@@ -50,6 +51,31 @@ _ROWS = 30
 _OBJECTS = 6  # id, segment, traverse, progress, type, disturbed
 
 FloatRows = npt.NDArray[np.float64]
+
+
+class StateColumns(NamedTuple):
+    """The new states of a step's cruising vehicles, ascending id, as objects and as the columns they were
+    made from: what the trace records of them is read from the columns, without taking each state apart
+    again."""
+
+    ids: list[int]
+    states: list[VehicleState]
+    segments: list[int]
+    traverses: list[Traverse]
+    progresses: list[Progress]
+    motion: FloatRows  # rows: speed, x, y, heading (the states' fields)
+    positions: npt.NDArray[np.intp]  # each vehicle's index in the drivers (the loop's order)
+
+
+class CruiseStep(NamedTuple):
+    """One step of the arrays: the vehicles stepped, and the indices (ascending) of all the others, which
+    their drivers step one by one."""
+
+    cruised: StateColumns
+    others: list[int]
+
+
+_NOBODY = StateColumns([], [], [], [], [], np.zeros((4, 0)), np.zeros(0, dtype=np.intp))
 
 
 class FleetCruise:
@@ -141,7 +167,9 @@ class FleetCruise:
 
     def _take_pending(self) -> None:
         indices = self._pending
-        self._table[:, indices] = np.array(self._pending_rows).T
+        # One flat pass over the rows' floats (np.array of the tuples would first look for their shape).
+        flat = np.fromiter(chain.from_iterable(self._pending_rows), np.float64, count=len(indices) * _ROWS)
+        self._table[:, indices] = flat.reshape(len(indices), _ROWS).T
         # Every field is a scalar to numpy (ints, str enums, a dataclass, None): one object per cell.
         self._objects[:, indices] = np.array(self._pending_objects, dtype=object).T
         self._armed[indices] = True
@@ -151,16 +179,16 @@ class FleetCruise:
 
     # -- the step ------------------------------------------------------------------------------------
 
-    def step(self, dt: float) -> tuple[list[Any], list[VehicleState], list[int]]:
+    def step(self, dt: float) -> CruiseStep:
         """Step every armed vehicle that cruises all step long, as :meth:`Driver.cruise` would.
 
-        Returns the ids of the vehicles stepped, their new states (ascending id), and the indices of
-        all the others (ascending), released to their drivers, which the loop steps one by one.
+        Returns the vehicles stepped (ascending id) and the indices of all the others (ascending),
+        released to their drivers, which the loop steps one by one.
         """
         if self._pending:
             self._take_pending()
         if not self.batched:
-            return [], [], self._everyone
+            return CruiseStep(_NOBODY, self._everyone)
         table = self._table
         armed = self._armed
         with np.errstate(all="ignore"):  # the columns of vehicles not armed hold anything
@@ -208,11 +236,14 @@ class FleetCruise:
             self._release(handed_back)
         stepped = np.flatnonzero(ok)
         ids, segments, traverses, progresses, types, disturbed = self._objects[:, stepped].tolist()
-        distances, speeds, xs, ys, headings = table[DISTANCE : HEADING + 1, stepped].tolist()
+        moved = table[DISTANCE : HEADING + 1, stepped]
+        distances, speeds, xs, ys, headings = moved.tolist()
         fields = zip(
             ids, segments, traverses, progresses, distances, speeds, xs, ys, headings, types, disturbed, strict=True
         )
-        return ids, list(map(_make_state, fields)), np.flatnonzero(~ok).tolist()
+        states = list(map(_make_state, fields))
+        cruised = StateColumns(ids, states, segments, traverses, progresses, moved[SPEED - DISTANCE :], stepped)
+        return CruiseStep(cruised, np.flatnonzero(~ok).tolist())
 
 
 class _Released(Mapping[int, Driver]):

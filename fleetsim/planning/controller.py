@@ -182,11 +182,11 @@ class FleetController:
         self._states_copy.changed(state.id)
         self._stale = True
 
-    def set_states(self, states: Mapping[int, VehicleState]) -> None:
-        """:meth:`set_state` for many vehicles (a step's motion), by vehicle id."""
-        if states:
-            self._states.update(states)
-            self._states_copy.changed_many(states)
+    def set_states(self, ids: Sequence[int], states: Iterable[VehicleState]) -> None:
+        """:meth:`set_state` for many vehicles (a step's motion): ``states`` are those of ``ids``."""
+        if ids:
+            self._states.update(zip(ids, states, strict=True))
+            self._states_copy.changed_many(ids)
             self._stale = True
 
     def consult(self, planner: Planner, vehicle_id: int, time: float) -> CallOutcome | None:

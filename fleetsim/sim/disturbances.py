@@ -209,4 +209,4 @@ class Disturber:
             kinds = {kind for v, kind in self._going if v == vehicle}
             driver.disturbed = Disturbed.STOPPED if "stop" in kinds else Disturbed.SLOWED if "slow" in kinds else None
             states[vehicle] = self._controller.state_of(vehicle)._replace(disturbed=driver.disturbed)
-        self._controller.set_states(states)
+        self._controller.set_states(list(states), states.values())

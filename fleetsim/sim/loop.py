@@ -21,17 +21,18 @@ import gc
 import math
 import threading
 import time
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
-from operator import itemgetter
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Literal
 
+import numpy as np
+
 from fleetsim.errors import PlannerError
 from fleetsim.motion.driver import Driver
-from fleetsim.motion.fleet_cruise import FleetCruise
+from fleetsim.motion.fleet_cruise import FleetCruise, StateColumns
 from fleetsim.motion.track import HeadingTable
 from fleetsim.planning.controller import CallOutcome, FleetController
 from fleetsim.planning.protocol import Planner
@@ -46,8 +47,6 @@ from fleetsim.sim.result import AlertEvent, DeadlockReport, Ending, Failure, Met
 from fleetsim.sim.trace import Trace, TraceFile, plan_record
 
 __all__ = ["RunProgress", "run_scenario"]
-
-_first = itemgetter(0)
 
 
 @dataclass(frozen=True, slots=True)
@@ -96,7 +95,7 @@ class _Run:
         self.last_activity = 0.0
         # For explaining a stuck fleet at the end (never hashed): when each vehicle last moved, when the
         # planner last changed its plan, and how many changed plans were accepted in all.
-        self.last_moved: dict[int, float] = {}
+        self.last_moved = np.full(len(self.ids), np.nan)  # by index; NaN: never
         self.plan_changed: dict[int, float] = {}
         self.accepted_plans = 0
         self.planner_error: Failure | None = None
@@ -165,12 +164,13 @@ class _Run:
             events.append(["alert", alert.segment, list(alert.primary), list(alert.secondary)])
         return len(fresh)
 
-    def move(self, dt: float, end: float, events: list[list[Any]]) -> Iterable[VehicleState]:
+    def move(self, dt: float, end: float, events: list[list[Any]]) -> tuple[list[VehicleState], StateColumns]:
         """Step 4: every vehicle over the step ending at ``end``; entering a goal leg completes its task.
 
-        Returns the new states of the vehicles that moved, by id. The vehicles that cruise all step long
-        are stepped together (:class:`FleetCruise`); the others one by one, after which those that may
-        cruise on are armed for the next step. (The per-vehicle path reads the motion's fields directly.)
+        Returns the new states of the vehicles that moved, ascending id: those stepped one by one, and
+        those that cruised all step long, stepped together (:class:`FleetCruise`) and kept in columns for
+        the trace. The others are stepped one by one, after which those that may cruise on are armed
+        for the next step. (The per-vehicle path reads the motion's fields directly.)
         """
         controller = self.controller
         tasks = controller.tasks
@@ -180,12 +180,13 @@ class _Run:
         replanned = controller.take_replanned()
         if arming:
             cruise.forget(replanned, plan_of)
-        cruised_ids, cruised_states, others = cruise.step(dt)
+        cruised, others = cruise.step(dt)
         busy = tasks.heads()  # the vehicles with tasks
         waiting = self.waiting_time
         ids = self.ids
         drivers = self.driver_list
-        stepped: list[tuple[int, VehicleState]] = []
+        stepped: list[VehicleState] = []
+        stepped_at: list[int] = []  # their indices
         for i in others:
             vehicle_id = ids[i]
             driver = drivers[i]
@@ -194,9 +195,9 @@ class _Run:
                 if vehicle_id in busy:
                     waiting[vehicle_id] += dt
                 continue
-            cruised = driver.cruise(plan, dt)  # the commonest step, in short; None for any other
-            if cruised is not None:
-                state = cruised[0]
+            cruised_alone = driver.cruise(plan, dt)  # the commonest step, in short; None for any other
+            if cruised_alone is not None:
+                state = cruised_alone[0]
             else:
                 new_plan, entered, distance, turned, step_state = driver.step(plan, dt)
                 if new_plan is not plan:
@@ -213,18 +214,17 @@ class _Run:
                         cruise.arm(i, plan)
                     continue
                 state = step_state or driver.moved_state(plan)
-            stepped.append((vehicle_id, state))
+            stepped.append(state)
+            stepped_at.append(i)
             if arming:
                 cruise.arm(i, plan)
-        if cruised_ids:  # by id, as the trace lists them
-            stepped += zip(cruised_ids, cruised_states, strict=True)
-            stepped.sort(key=_first)
-        states = dict(stepped)
-        if states:
+        if stepped or cruised.ids:
             self.last_activity = end
-            self.last_moved.update(dict.fromkeys(states, end))
-        controller.set_states(states)
-        return states.values()
+            self.last_moved[stepped_at] = end
+            self.last_moved[cruised.positions] = end
+            controller.set_states([ids[i] for i in stepped_at], stepped)
+            controller.set_states(cruised.ids, cruised.states)
+        return stepped, cruised
 
     def diagnose(self, kind: Literal["deadlock", "timeout"], now: float) -> Diagnosis:
         """Why the vehicles with pending tasks have not finished them (at the run's end)."""
@@ -236,7 +236,11 @@ class _Run:
             plans=controller.plans,
             states=controller.states,
             heads=controller.tasks.heads(),
-            last_moved=self.last_moved,
+            last_moved={
+                vehicle: moved
+                for vehicle, moved in zip(self.ids, self.last_moved.tolist(), strict=True)
+                if not math.isnan(moved)
+            },
             plan_changed=self.plan_changed,
             route_errors=self.route_errors,
             accepted_plans=self.accepted_plans,
@@ -374,10 +378,10 @@ def _simulate(
         planned_ok = run.plan(now, end, events, plans) if step % period == 0 else True
         rejected = any(e[0] == "reject" for e in events)
         alerted = run.check_reservations(end, events) > 0 if planned_ok else False
-        moved = run.move(dt, end, events) if planned_ok else ()
+        moved, cruised = run.move(dt, end, events) if planned_ok else ([], None)
         # The trace holds what changed; at step 0 that is everyone (the start), later only who moved.
         if step == 0:
-            moved = [run.controller.state_of(v) for v in run.drivers]
+            moved, cruised = [run.controller.state_of(v) for v in run.drivers], None
         if not planned_ok:
             ended = "planner-error"
         elif run.interrupted_planning:  # the step's planning was cut short: no other ending can be judged
@@ -394,7 +398,7 @@ def _simulate(
         elif stop is not None and stop.requested:
             ended = "interrupted"
         else:
-            run.trace.record(step, moved, plans, events)
+            run.trace.record(step, moved, plans, events, cruised)
             if on_progress is not None and step % 50 == 0:
                 on_progress(
                     RunProgress(end, step + 1, len(run.controller.tasks.completed()), run.controller.tasks.total)
@@ -402,7 +406,7 @@ def _simulate(
             continue
         if ended == "interrupted":
             events.append(["interrupted", signal_name(stop.signum or 0) if stop is not None else "signal"])
-        run.trace.record(step, moved, plans, events)
+        run.trace.record(step, moved, plans, events, cruised)
         break
     run.cruise.release_all()  # the drivers' odometers up to date
     steps = step + 1

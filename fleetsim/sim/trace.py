@@ -19,9 +19,11 @@ from pathlib import Path
 from typing import IO, Any
 
 import numpy as np
+import numpy.typing as npt
 import orjson
 
 from fleetsim.enums import Progress, Traverse
+from fleetsim.motion.fleet_cruise import StateColumns
 from fleetsim.planning.plans import FleetPlan
 from fleetsim.planning.snapshot import VehicleState
 
@@ -31,6 +33,7 @@ __all__ = [
     "Trace",
     "TraceFile",
     "complete_lines",
+    "cruised_records",
     "first_divergence",
     "plan_record",
     "vehicle_record",
@@ -100,7 +103,19 @@ def _records_in_arrays(states: list[VehicleState]) -> list[VehicleRecord] | None
     """:func:`vehicle_records` with the products and the rounding (half to even, as ``round``) in arrays;
     ``None`` if some value is too large to pass through int64 exactly."""
     ids, segments, traverses, progresses, _, speeds, xs, ys, headings, _, _ = zip(*states, strict=True)
-    values = np.array((xs, ys, headings, speeds))
+    return _rounded(ids, segments, traverses, progresses, np.array((xs, ys, headings, speeds)))
+
+
+def _rounded(
+    ids: Sequence[int],
+    segments: Sequence[int],
+    traverses: Iterable[Traverse],
+    progresses: Iterable[Progress],
+    values: npt.NDArray[np.float64],
+) -> list[VehicleRecord] | None:
+    """The records of vehicles given as columns, ``values`` holding their x, y, heading and speed (its
+    rows, changed in place). The products and the rounding are those of one record at a time, in the
+    same order; ``None`` if some value is too large to pass through int64 exactly."""
     values[0] *= 1000.0
     values[1] *= 1000.0
     values[2] *= _DEGREES_PER_RADIAN  # then * 100.0: the order of the one-by-one product
@@ -113,6 +128,18 @@ def _records_in_arrays(states: list[VehicleState]) -> list[VehicleRecord] | None
     traverse = map(_TRAVERSE.__getitem__, traverses)
     progress = map(_PROGRESS.__getitem__, progresses)
     return list(zip(ids, segments, traverse, progress, x, y, heading, speed, strict=True))
+
+
+def cruised_records(cruised: StateColumns) -> list[VehicleRecord]:
+    """:func:`vehicle_records` of a step's cruising vehicles, read from the columns their states were made
+    of (the same floats), so no state is taken apart again."""
+    if len(cruised.ids) < _IN_ARRAYS_FROM:
+        return vehicle_records(cruised.states)
+    speed, x, y, heading = cruised.motion
+    records = _rounded(
+        cruised.ids, cruised.segments, cruised.traverses, cruised.progresses, np.array((x, y, heading, speed))
+    )
+    return records if records is not None else vehicle_records(cruised.states)
 
 
 def vehicle_record(state: VehicleState) -> VehicleRecord:
@@ -215,12 +242,20 @@ class Trace:
         vehicles: Iterable[VehicleState],
         plans: Sequence[list[Any]],
         events: Sequence[list[Any]],
+        cruised: StateColumns | None = None,
     ) -> None:
-        """One step's line: the records of ``vehicles`` that differ from their last, the plans accepted and
-        the events."""
+        """One step's line: the records of the vehicles that differ from their last, the plans accepted and
+        the events. The vehicles are ``vehicles`` (ascending id) and those of ``cruised``, in columns."""
+        records = vehicle_records(vehicles)
+        if cruised is not None and cruised.ids:
+            if records:
+                records += cruised_records(cruised)
+                records.sort()  # by id (ids are unique): two runs, merged
+            else:
+                records = cruised_records(cruised)
         changed = []
         last = self._last
-        for record in vehicle_records(vehicles):
+        for record in records:
             if last.get(record[0]) != record:
                 last[record[0]] = record
                 changed.append(record)

@@ -106,7 +106,8 @@ def test_each_step_is_taken_in_the_arrays_exactly_when_the_driver_would_cruise_o
         cruise = FleetCruise([armed])
         cruise.arm(0, route)
         was_armed = armed.cruise_terms(route) is not None
-        ids, states, others = cruise.step(DT)
+        cruised, others = cruise.step(DT)
+        ids, states = cruised.ids, cruised.states
         own = driver.cruise(route, DT)
         if ids:
             in_arrays += 1
@@ -140,7 +141,7 @@ def test_a_vehicle_whose_plan_changed_is_handed_back_before_the_step() -> None:
     cruise = FleetCruise([driver])
     cruise.arm(0, route)
     cruise.forget([1], {1: route}.__getitem__)  # the same plan object: stays armed
-    assert cruise.step(DT)[0] == [1]
+    assert cruise.step(DT).cruised.ids == [1]
     longer = plan((1, F, FWD), (2, F, FWD))
     cruise.forget([1], {1: longer}.__getitem__)
     before = copy.copy(driver)
@@ -148,7 +149,8 @@ def test_a_vehicle_whose_plan_changed_is_handed_back_before_the_step() -> None:
     before_fields = driver.kinematics()
     cruise.arm(0, route)
     cruise.forget([1], {1: longer}.__getitem__)
-    ids, _, others = cruise.step(DT)
+    cruised, others = cruise.step(DT)
+    ids = cruised.ids
     assert (ids, others) == ([], [0])
     assert driver.kinematics() == before_fields != before.kinematics()
 
@@ -163,13 +165,13 @@ def test_the_released_mapping_hands_out_drivers_up_to_date_and_no_longer_armed()
     cruise = FleetCruise([driver])
     cruise.arm(0, route)
     for _ in range(10):
-        assert cruise.step(DT)[0] == [1]
+        assert cruise.step(DT).cruised.ids == [1]
         twin.cruise(route, DT)
     assert driver.odometer != twin.odometer  # still in the arrays
     assert cruise.released[1] is driver
     assert driver.kinematics() == twin.kinematics()
     assert (list(cruise.released), len(cruise.released)) == ([1], 1)
-    assert cruise.step(DT)[2] == [0]  # handed back: its driver steps it now
+    assert cruise.step(DT).others == [0]  # handed back: its driver steps it now
 
 
 def test_release_all_brings_every_odometer_up_to_date() -> None:
@@ -196,7 +198,7 @@ def test_a_vehicle_slowing_down_to_a_lower_limit_is_left_to_its_driver() -> None
     assert isinstance(driver._profile, SlowDownProfile)
     cruise = FleetCruise([driver])
     cruise.arm(0, route)
-    assert cruise.step(DT)[:2] == ([], [])
+    assert cruise.step(DT).cruised.ids == []
     driver.cruise(route, DT)  # its own cruise goes on slowing down
     assert driver.speed < 0.99 * driver.type.max_speed
 
@@ -206,7 +208,8 @@ def test_unbatched_cruise_arms_nothing() -> None:
     route = driver.step(plan((1, F, FWD)), DT).plan
     cruise = FleetCruise([driver], batched=False)
     cruise.arm(0, route)
-    assert cruise.step(DT) == ([], [], [0])
+    cruised, others = cruise.step(DT)
+    assert (cruised.ids, cruised.states, others) == ([], [], [0])
 
 
 def test_a_vehicle_at_rest_or_turning_is_not_armed() -> None:
@@ -262,8 +265,8 @@ def test_a_braking_vehicle_is_handed_back_on_the_step_its_profile_ends_and_not_b
     cruise = FleetCruise([driver])
     cruise.arm(0, route)
     for _ in range(7):
-        assert cruise.step(dt)[0] == [1]
-    assert cruise.step(dt)[2] == [0]
+        assert cruise.step(dt).cruised.ids == [1]
+    assert cruise.step(dt).others == [0]
     assert driver.step(route, dt).distance > 0.0 and driver.speed == 0.0
 
 

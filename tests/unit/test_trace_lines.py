@@ -10,13 +10,15 @@ import hashlib
 import json
 from typing import Any
 
+import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from fleetsim.enums import Progress, Traverse
+from fleetsim.motion.fleet_cruise import StateColumns
 from fleetsim.planning.snapshot import VehicleState
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE
-from fleetsim.sim.trace import Trace, vehicle_records
+from fleetsim.sim.trace import Trace, cruised_records, vehicle_records
 
 value = st.one_of(st.none(), st.integers(), st.text(), st.booleans())
 event = st.lists(value, min_size=1, max_size=4)
@@ -130,3 +132,52 @@ def test_a_value_too_large_for_int64_is_rounded_one_by_one() -> None:
     ]
     records = vehicle_records(states)
     assert records[6][4] == round(1e300 * 1000.0) and records[0][4] == 1500
+
+
+# -- the records of cruising vehicles, read from their columns ----------------------------------------------
+
+
+def _columns(states: list[VehicleState]) -> StateColumns:
+    """``states`` as the arrays hand them over: the objects and the columns they were made of."""
+    return StateColumns(
+        [state.id for state in states],
+        states,
+        [state.segment for state in states],
+        [state.traverse for state in states],
+        [state.progress for state in states],
+        np.array([[state.speed, state.x, state.y, state.heading] for state in states]).reshape(-1, 4).T,
+        np.arange(len(states), dtype=np.intp),
+    )
+
+
+@settings(max_examples=100, deadline=None)
+@given(_states())
+def test_records_read_from_columns_are_those_of_the_states(states: list[VehicleState]) -> None:
+    records = cruised_records(_columns(states))
+    assert records == [_one_by_one(state) for state in states]
+    assert all(type(value) is int for record in records for value in record[4:])
+
+
+def test_a_value_too_large_for_int64_in_the_columns_is_rounded_one_by_one() -> None:
+    states = [_state(vid, x=1e300 if vid == 7 else 1.5) for vid in range(1, 65)]
+    records = cruised_records(_columns(states))
+    assert records[6][4] == round(1e300 * 1000.0) and records[0][4] == 1500
+
+
+@settings(max_examples=50, deadline=None)
+@given(_states(), st.lists(st.booleans(), min_size=120, max_size=120))
+def test_a_step_of_some_vehicles_one_by_one_and_some_in_columns_is_the_line_of_all_in_order(
+    states: list[VehicleState], in_columns: list[bool]
+) -> None:
+    alone = [state for state, columns in zip(states, in_columns, strict=False) if not columns]
+    cruised = [state for state, columns in zip(states, in_columns, strict=False) if columns]
+    split, whole = Trace(), Trace()
+    for trace in (split, whole):
+        trace.begin({"vehicles": [state.id for state in states]})
+    split.record(0, alone, [], [], _columns(cruised))
+    whole.record(0, states, [], [])
+    assert split.lines == whole.lines and split.digest == whole.digest
+
+
+def _state(vid: int, *, x: float) -> VehicleState:
+    return VehicleState(vid, 1, Traverse.FORWARD, Progress.FORWARD, 0.0, 0.0, x, 0.0, 0.0, DEFAULT_VEHICLE_TYPE, None)
