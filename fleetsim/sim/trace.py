@@ -13,8 +13,10 @@ import hashlib
 import json
 import os
 import time
-from collections.abc import Iterable, Sequence
+from bisect import bisect_left
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
+from itertools import chain
 from pathlib import Path
 from typing import IO, Any
 
@@ -103,19 +105,16 @@ def _records_in_arrays(states: list[VehicleState]) -> list[VehicleRecord] | None
     """:func:`vehicle_records` with the products and the rounding (half to even, as ``round``) in arrays;
     ``None`` if some value is too large to pass through int64 exactly."""
     ids, segments, traverses, progresses, _, speeds, xs, ys, headings, _, _ = zip(*states, strict=True)
-    return _rounded(ids, segments, traverses, progresses, np.array((xs, ys, headings, speeds)))
+    values = _quantised(np.array((xs, ys, headings, speeds)))
+    if values is None:
+        return None
+    return _zipped(ids, segments, traverses, progresses, values.tolist())
 
 
-def _rounded(
-    ids: Sequence[int],
-    segments: Sequence[int],
-    traverses: Iterable[Traverse],
-    progresses: Iterable[Progress],
-    values: npt.NDArray[np.float64],
-) -> list[VehicleRecord] | None:
-    """The records of vehicles given as columns, ``values`` holding their x, y, heading and speed (its
-    rows, changed in place). The products and the rounding are those of one record at a time, in the
-    same order; ``None`` if some value is too large to pass through int64 exactly."""
+def _quantised(values: npt.NDArray[np.float64]) -> npt.NDArray[np.int64] | None:
+    """Rows of x, y, heading and speed (changed in place) as millimetres, centidegrees and mm/s: the
+    products and the rounding of one record at a time, in the same order. ``None`` if some value is too
+    large to pass through int64 exactly."""
     values[0] *= 1000.0
     values[1] *= 1000.0
     values[2] *= _DEGREES_PER_RADIAN  # then * 100.0: the order of the one-by-one product
@@ -124,22 +123,67 @@ def _rounded(
     np.rint(values, out=values)
     if not (np.abs(values) < _EXACT).all():
         return None
-    x, y, heading, speed = values.astype(np.int64).tolist()
+    return values.astype(np.int64)
+
+
+def _zipped(
+    ids: Iterable[int],
+    segments: Iterable[int],
+    traverses: Iterable[Traverse],
+    progresses: Iterable[Progress],
+    quantised: list[list[int]],
+) -> list[VehicleRecord]:
+    x, y, heading, speed = quantised
     traverse = map(_TRAVERSE.__getitem__, traverses)
     progress = map(_PROGRESS.__getitem__, progresses)
     return list(zip(ids, segments, traverse, progress, x, y, heading, speed, strict=True))
 
 
+# Records made, compared and encoded at a time: a piece's objects stay in the processor's cache from the
+# first to the last (a large fleet's whole step of records does not: 10,000 vehicles' take some 2 MiB).
+_PIECE = 1024
+
+
+def _pieces(alone: list[VehicleRecord], cruised: StateColumns | None) -> Iterator[list[VehicleRecord]]:
+    """A step's records, ascending id, in pieces of about ``_PIECE``: ``alone``, the records of the
+    vehicles stepped one by one, merged with those of the cruising vehicles, read from their columns."""
+    if cruised is None or not cruised.ids:
+        yield alone
+        return
+    values = None
+    if len(cruised.ids) >= _IN_ARRAYS_FROM:
+        speed, x, y, heading = cruised.motion
+        values = _quantised(np.array((x, y, heading, speed)))
+    if values is None:  # few, or a value too large for the arrays: one by one
+        records = alone + vehicle_records(cruised.states)
+        records.sort()  # by id (ids are unique): two runs, merged
+        yield records
+        return
+    ids, segments, traverses, progresses = cruised.ids, cruised.segments, cruised.traverses, cruised.progresses
+    alone_ids = [record[0] for record in alone]
+    taken = 0  # of alone
+    count = len(ids)
+    for start in range(0, count, _PIECE):
+        end = min(start + _PIECE, count)
+        piece = _zipped(
+            ids[start:end],
+            segments[start:end],
+            traverses[start:end],
+            progresses[start:end],
+            values[:, start:end].tolist(),
+        )
+        until = bisect_left(alone_ids, ids[end]) if end < count else len(alone)  # those before the next piece
+        if until > taken:
+            piece += alone[taken:until]
+            piece.sort()
+            taken = until
+        yield piece
+
+
 def cruised_records(cruised: StateColumns) -> list[VehicleRecord]:
     """:func:`vehicle_records` of a step's cruising vehicles, read from the columns their states were made
     of (the same floats), so no state is taken apart again."""
-    if len(cruised.ids) < _IN_ARRAYS_FROM:
-        return vehicle_records(cruised.states)
-    speed, x, y, heading = cruised.motion
-    records = _rounded(
-        cruised.ids, cruised.segments, cruised.traverses, cruised.progresses, np.array((x, y, heading, speed))
-    )
-    return records if records is not None else vehicle_records(cruised.states)
+    return list(chain.from_iterable(_pieces([], cruised)))
 
 
 def vehicle_record(state: VehicleState) -> VehicleRecord:
@@ -246,20 +290,20 @@ class Trace:
     ) -> None:
         """One step's line: the records of the vehicles that differ from their last, the plans accepted and
         the events. The vehicles are ``vehicles`` (ascending id) and those of ``cruised``, in columns."""
-        records = vehicle_records(vehicles)
-        if cruised is not None and cruised.ids:
-            if records:
-                records += cruised_records(cruised)
-                records.sort()  # by id (ids are unique): two runs, merged
-            else:
-                records = cruised_records(cruised)
-        changed = []
+        # The line is written piece by piece (see _pieces), as one json.dumps of [step, changed, plans,
+        # events] would write it.
+        encoded = []
         last = self._last
-        for record in records:
-            if last.get(record[0]) != record:
-                last[record[0]] = record
-                changed.append(record)
-        self._write(_encode_step([step, changed, list(plans), list(events)]))
+        for piece in _pieces(vehicle_records(vehicles), cruised):
+            changed = []
+            for record in piece:
+                if last.get(record[0]) != record:
+                    last[record[0]] = record
+                    changed.append(record)
+            if changed:
+                encoded.append(_encode_step(changed)[1:-1])
+        rest = _encode_step([list(plans), list(events)])  # "[[plans],[events]]"
+        self._write(b"[%d,[%b],%b" % (step, b",".join(encoded), rest[1:]))
         self.steps = step + 1
         sink = self.sink
         if self.steps % CHECKPOINT_EVERY == 0:

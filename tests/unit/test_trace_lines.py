@@ -9,6 +9,7 @@ from __future__ import annotations
 import hashlib
 import json
 from typing import Any
+from unittest.mock import patch
 
 import numpy as np
 from hypothesis import given, settings
@@ -18,6 +19,7 @@ from fleetsim.enums import Progress, Traverse
 from fleetsim.motion.fleet_cruise import StateColumns
 from fleetsim.planning.snapshot import VehicleState
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE
+from fleetsim.sim import trace as trace_module
 from fleetsim.sim.trace import Trace, cruised_records, vehicle_records
 
 value = st.one_of(st.none(), st.integers(), st.text(), st.booleans())
@@ -164,19 +166,28 @@ def test_a_value_too_large_for_int64_in_the_columns_is_rounded_one_by_one() -> N
     assert records[6][4] == round(1e300 * 1000.0) and records[0][4] == 1500
 
 
-@settings(max_examples=50, deadline=None)
-@given(_states(), st.lists(st.booleans(), min_size=120, max_size=120))
+@settings(max_examples=100, deadline=None)
+@given(_states(), st.lists(st.booleans(), min_size=120, max_size=120), st.integers(1, 100))
 def test_a_step_of_some_vehicles_one_by_one_and_some_in_columns_is_the_line_of_all_in_order(
-    states: list[VehicleState], in_columns: list[bool]
+    states: list[VehicleState], in_columns: list[bool], piece: int
 ) -> None:
+    """However the vehicles are split, and however many records a piece of the line holds."""
     alone = [state for state, columns in zip(states, in_columns, strict=False) if not columns]
     cruised = [state for state, columns in zip(states, in_columns, strict=False) if columns]
     split, whole = Trace(), Trace()
     for trace in (split, whole):
         trace.begin({"vehicles": [state.id for state in states]})
-    split.record(0, alone, [], [], _columns(cruised))
-    whole.record(0, states, [], [])
+    # Pieces of any size, and the arrays however few cruise (their records are those one by one: above).
+    with patch.object(trace_module, "_PIECE", piece), patch.object(trace_module, "_IN_ARRAYS_FROM", 1):
+        split.record(0, alone, [[1, []]], [["complete", 2]], _columns(cruised))
+        moved = [state._replace(x=state.x + 1.0) for state in states[::3]]  # a later step: some changed
+        split.record(
+            1, [state for state in moved if state.id % 2], [], [], _columns([s for s in moved if not s.id % 2])
+        )
+    whole.record(0, states, [[1, []]], [["complete", 2]])
+    whole.record(1, moved, [], [])
     assert split.lines == whole.lines and split.digest == whole.digest
+    assert json.loads(split.lines[1])[1] == [list(_one_by_one(state)) for state in states]
 
 
 def _state(vid: int, *, x: float) -> VehicleState:
