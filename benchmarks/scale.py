@@ -3,12 +3,14 @@
     python benchmarks/scale.py [--sizes 100,1000,10000] [--seconds 60] [--repeat 3] [--planner BFSPlanner]
 
 Each size gets a generated warehouse sized to the fleet (``warehouse.write_fleet_scenario``: about four
-aisles per vehicle, 2-3 tasks each, seeded) and is simulated for ``--seconds`` in a process of its own,
-so that its peak memory (the process's maximum resident set) is its own. The planner is a cheap one
+aisles per vehicle, 2-3 tasks each, seeded), written once in a process of its own. Each repeat loads it
+and simulates ``--seconds`` in a fresh process, as a user's run loads a site written beforehand, so that
+its peak memory (the process's maximum resident set) is that of loading and simulating, and no
+generator's leftovers share its heap. The planner is a cheap one
 (BFSPlanner by default: bounded breadth-first routes, three legs fixed per call) so that the harness's
 own cost is what is measured; the harness's time is the run's wall time less the time inside planner
 calls. Per size: harness µs per vehicle-step (median of the repeats, and its ratio to the first size's),
-planner µs per call, realtime factor, peak memory, and the time to write and load the scenario. The
+planner µs per call, realtime factor, peak memory, and the time to write and to load the scenario. The
 trace hash of every repeat of a size must be the same (the script fails otherwise).
 
 Targets (issue 18): harness µs per vehicle-step at 1,000 vehicles <= 1.2x the figure at 100, at
@@ -36,26 +38,29 @@ from warehouse import write_fleet_scenario
 PLANNERS = ("BFSPlanner", "GreedyPlanner", "ReservingPlanner")
 
 
-def run_one(vehicles: int, seconds: float, planner_name: str) -> dict[str, Any]:
-    """Generate, load and simulate one fleet in this process; its figures."""
+def write_one(vehicles: int, folder: Path) -> float:
+    """Generate and write the scenario of a fleet of ``vehicles``; the seconds it took."""
+    start = time.perf_counter()
+    write_fleet_scenario(folder, vehicles, seed=1)
+    return time.perf_counter() - start
+
+
+def run_one(vehicles: int, folder: Path, seconds: float, planner_name: str) -> dict[str, Any]:
+    """Load and simulate one fleet's scenario in this process; its figures."""
     from fleetsim import planners
     from fleetsim.load.scenario import load_scenario_dir
     from fleetsim.scenario import ScenarioSettings
     from fleetsim.sim.loop import run_scenario
 
-    with tempfile.TemporaryDirectory() as tmp:
-        start = time.perf_counter()
-        folder = write_fleet_scenario(Path(tmp) / f"fleet-{vehicles}", vehicles, seed=1)
-        written = time.perf_counter()
-        scenario = load_scenario_dir(folder, settings=ScenarioSettings(time_limit=seconds, stop_on=()))
-        loaded = time.perf_counter()
+    start = time.perf_counter()
+    scenario = load_scenario_dir(folder, settings=ScenarioSettings(time_limit=seconds, stop_on=()))
+    loaded = time.perf_counter()
     result = run_scenario(scenario, getattr(planners, planner_name)(), keep_trace=False)
     metrics = result.metrics
     vehicle_steps = vehicles * result.steps
     return {
         "vehicles": vehicles,
-        "write_s": written - start,
-        "load_s": loaded - written,
+        "load_s": loaded - start,
         "sim_s": result.sim_time,
         "ended": result.ended,
         "hash": result.trace_hash,
@@ -67,11 +72,11 @@ def run_one(vehicles: int, seconds: float, planner_name: str) -> dict[str, Any]:
     }
 
 
-def _in_child(vehicles: int, seconds: float, planner: str) -> dict[str, Any]:
-    command = [sys.executable, __file__, "--child", str(vehicles), "--seconds", str(seconds), "--planner", planner]
+def _in_child(*arguments: str) -> Any:
+    """This script run with ``arguments`` in a process of its own: the JSON it printed last."""
+    command = [sys.executable, __file__, *arguments]
     output = subprocess.run(command, check=True, capture_output=True, text=True).stdout
-    figures: dict[str, Any] = json.loads(output.strip().splitlines()[-1])
-    return figures
+    return json.loads(output.strip().splitlines()[-1])
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -80,17 +85,28 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--seconds", type=float, default=60.0, help="simulated seconds per run (default: 60)")
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--planner", choices=PLANNERS, default="BFSPlanner")
+    parser.add_argument("--write", type=int, help=argparse.SUPPRESS)
     parser.add_argument("--child", type=int, help=argparse.SUPPRESS)
+    parser.add_argument("--folder", type=Path, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
+    if args.write is not None:
+        print(json.dumps(write_one(args.write, args.folder)))
+        return 0
     if args.child is not None:
-        print(json.dumps(run_one(args.child, args.seconds, args.planner)))
+        print(json.dumps(run_one(args.child, args.folder, args.seconds, args.planner)))
         return 0
     sizes = [int(size) for size in args.sizes.split(",") if size]
     runs: dict[int, list[dict[str, Any]]] = {size: [] for size in sizes}
-    for _ in range(args.repeat):  # the sizes in turn, so that each repeat sees the machine's same moments
-        for size in sizes:
-            runs[size].append(_in_child(size, args.seconds, args.planner))
-    print(f"{args.planner}, {args.seconds:g} s simulated, median of {args.repeat} (each size in a process of its own)")
+    with tempfile.TemporaryDirectory() as tmp:
+        folders = {size: Path(tmp) / f"fleet-{size}" for size in sizes}
+        written = {size: float(_in_child("--write", str(size), "--folder", str(folders[size]))) for size in sizes}
+        for _ in range(args.repeat):  # the sizes in turn, so that each repeat sees the machine's same moments
+            for size in sizes:
+                child = ("--child", str(size), "--folder", str(folders[size]))
+                runs[size].append(_in_child(*child, "--seconds", str(args.seconds), "--planner", args.planner))
+    print(
+        f"{args.planner}, {args.seconds:g} s simulated, median of {args.repeat} (each run loads the scenario, written beforehand, in a process of its own)"
+    )
     print(
         f"{'vehicles':>8} {'harness µs/vs':>14} {'ratio':>6} {'µs/call':>8} {'realtime':>9} {'peak MiB':>9} {'write s':>8} {'load s':>7}  tasks      ended"
     )
@@ -109,7 +125,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(
             f"{size:>8} {harness:>14.2f} {harness / first:>6.2f} {statistics.median(r['planner_us_per_call'] for r in rows):>8.1f} "
             f"{statistics.median(r['realtime'] for r in rows):>8.2f}x {max(r['peak_mib'] for r in rows):>9.0f} "
-            f"{statistics.median(r['write_s'] for r in rows):>8.1f} {statistics.median(r['load_s'] for r in rows):>7.1f}  "
+            f"{written[size]:>8.1f} {statistics.median(r['load_s'] for r in rows):>7.1f}  "
             f"{rows[0]['tasks']:<10} {rows[0]['ended']}"
         )
     return 1 if failed else 0
