@@ -290,3 +290,33 @@ def test_a_fleet_is_stepped_in_arrays_from_the_smallest_size_that_pays(
     assert len(scenario.vehicles) == 2
     run_scenario(scenario, ReservingPlanner(), keep_trace=False)
     assert bool(taken) is in_arrays
+
+
+def test_a_vehicle_about_to_reach_the_end_of_its_leg_or_profile_is_not_armed() -> None:
+    """Armed, it would most likely be handed back within ``AHEAD`` steps: its driver steps it. With a
+    little more room than that many steps' length at its speed, it is armed and cruises."""
+    driver = driver_on((straight(1, (0.0, 0.0), (7.0, 0.0)), straight(2, (7.0, 0.0), (9.0, 0.0))))
+    route = plan((1, F, FWD), (2, F, FWD))
+    outcomes: Counter[str] = Counter()
+    for _ in range(400):
+        armed = copy.copy(driver)
+        cruise = FleetCruise([armed])
+        cruise.step(DT)  # nothing armed yet: the step's length is known from now on
+        cruise.arm(0, route)
+        in_arrays = cruise.step(DT).cruised.ids == [1]
+        profile = driver._profile
+        ahead = FleetCruise.AHEAD * DT  # the steps looked ahead, as long as the last
+        if profile is not None and armed.cruise_terms(route) is not None:
+            room = driver._headings.track(route.legs[0].segment, F).length - EPS - driver.distance
+            ends = driver._elapsed + ahead >= profile.stop_time
+            if ends or room <= driver.speed * ahead:
+                assert not in_arrays
+                outcomes["profile ends" if ends else "leg ends"] += 1
+            elif room <= driver.speed * (ahead + 0.5 * DT):
+                assert in_arrays == (copy.copy(driver).cruise(route, DT) is not None)
+                outcomes["armed near the end"] += in_arrays
+        if driver.cruise(route, DT) is None:
+            route = driver.step(route, DT).plan
+        if not route.legs or (len(route.legs) == 1 and driver._profile is None and driver.speed == 0.0):
+            break
+    assert outcomes["leg ends"] and outcomes["profile ends"] and outcomes["armed near the end"], outcomes
