@@ -167,10 +167,11 @@ class _Run:
     def move(self, dt: float, end: float, events: list[list[Any]]) -> tuple[list[VehicleState], StateColumns]:
         """Step 4: every vehicle over the step ending at ``end``; entering a goal leg completes its task.
 
-        Returns the new states of the vehicles that moved, ascending id: those stepped one by one, and
-        those that cruised all step long, stepped together (:class:`FleetCruise`) and kept in columns for
-        the trace. The others are stepped one by one, after which those that may cruise on are armed
-        for the next step. (The per-vehicle path reads the motion's fields directly.)
+        The vehicles that cruise all step long are stepped together (:class:`FleetCruise`); the rest one
+        by one, after which those that may cruise on are armed for the next step. (The per-vehicle path
+        reads the motion's fields directly.) Returns the new states of the vehicles that moved, each part
+        ascending by id: those stepped one by one, and the cruising ones with their columns (for the
+        trace).
         """
         controller = self.controller
         tasks = controller.tasks
