@@ -6,6 +6,7 @@ offending value's repr. Each class also subclasses the builtin it resembles so c
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -13,6 +14,7 @@ __all__ = [
     "FleetsimError",
     "LayoutError",
     "LoadError",
+    "LoadErrors",
     "Location",
     "MapError",
     "PlannerError",
@@ -57,6 +59,34 @@ class LoadError(FleetsimError, ValueError):
         self.problem = problem
         self.location = location
         super().__init__(f"{location}: {problem}" if location is not None else problem)
+
+
+class LoadErrors(LoadError):
+    """Several load errors found in one pass over a scenario's or suite's files, reported together.
+
+    ``errors`` are the located errors in the order they were found (file by file, row by row);
+    ``omitted`` counts, per file, the further errors left out after the cap (see
+    :class:`fleetsim.load.collect.ErrorCollector`). ``location`` is the first error's. A scenario or
+    suite with a ``LoadErrors`` is not loaded at all. Catch ``LoadError`` to handle one or many.
+    """
+
+    def __init__(self, errors: Sequence[LoadError], omitted: Mapping[str, int] | None = None) -> None:
+        if not errors:
+            msg = "LoadErrors needs at least one error"
+            raise ValueError(msg)
+        self.errors = tuple(errors)
+        self.omitted = dict(omitted or {})
+        lines = [f"{len(self.errors) + sum(self.omitted.values())} errors:"]
+        lines += [f"  {_indented(str(error))}" for error in self.errors]
+        lines += [f"  ... and {count} more in {path}" for path, count in self.omitted.items()]
+        first = self.errors[0]
+        self.problem = "\n".join(lines)
+        self.location = first.location
+        Exception.__init__(self, self.problem)
+
+
+def _indented(text: str) -> str:
+    return text.replace("\n", "\n    ")
 
 
 class MapError(LoadError):
