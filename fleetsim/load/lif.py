@@ -26,6 +26,7 @@ from fleetsim.errors import Location, MapError
 from fleetsim.layout.geometry import point_segment_distances
 from fleetsim.layout.nurbs import Nurbs, sample_nurbs
 from fleetsim.layout.segment import Point, Segment
+from fleetsim.load.collect import ErrorCollector
 from fleetsim.load.import_notes import ImportNotes
 from fleetsim.load.json_at import JsonAt
 from fleetsim.load.map_options import MapOptions, SiteMap
@@ -116,16 +117,30 @@ class _Edge:
 
 
 def load_lif(path: Path, document: object, options: MapOptions) -> SiteMap:
-    """The segments of one layout and robot type of a parsed LIF document (see the module docstring)."""
+    """The segments of one layout and robot type of a parsed LIF document (see the module docstring).
+
+    The problems of every node and edge of the chosen layout are reported together: an edge whose
+    node is in no layout of the file, an edge id used twice, malformed values.
+    """
     root = JsonAt(path, "", document)
     notes = ImportNotes(path)
     structure = _structure(root)
-    layout = _choose_layout(root, structure, options, notes)
+    layouts = _layouts(root, structure, notes)
+    layout = _choose_layout(root, layouts, options, notes)
     layout_id = layout.need("layoutId").identifier()
-    nodes = _nodes(layout, structure, notes)
+    errors = ErrorCollector()
+    nodes = _nodes(layout, structure, notes, errors)
     edges_at = list(layout.need("edges").items())
+    _check_edges(edges_at, structure, nodes, _nodes_elsewhere(layouts, layout), errors)
+    errors.raise_if_any()
     robot_type = _choose_robot_type(edges_at, structure, options, layout_id, path)
-    edges = [edge for at in edges_at if (edge := _edge(at, structure, robot_type, nodes, notes)) is not None]
+    edges: list[_Edge] = []
+    for at in edges_at:
+        with errors.collecting():
+            edge = _edge(at, structure, robot_type, nodes, notes)
+            if edge is not None:
+                edges.append(edge)
+    errors.raise_if_any()
     for option in ("level", "graph"):
         if getattr(options, option) is not None:
             notes.note("option-ignored", f"map option {option!r} (an RMF option)", "map_options")
@@ -159,8 +174,7 @@ def _layouts(root: JsonAt, structure: _Structure, notes: ImportNotes) -> list[Js
     return layouts
 
 
-def _choose_layout(root: JsonAt, structure: _Structure, options: MapOptions, notes: ImportNotes) -> JsonAt:
-    layouts = _layouts(root, structure, notes)
+def _choose_layout(root: JsonAt, layouts: list[JsonAt], options: MapOptions, notes: ImportNotes) -> JsonAt:
     if not layouts:
         raise root.error("the file holds no layout")
     ids: list[str] = []
@@ -246,20 +260,68 @@ def _choose_robot_type(
 # -- nodes and edges ------------------------------------------------------------------------------
 
 
-def _nodes(layout: JsonAt, structure: _Structure, notes: ImportNotes) -> dict[str, Point]:
+def _nodes(layout: JsonAt, structure: _Structure, notes: ImportNotes, errors: ErrorCollector) -> dict[str, Point]:
+    """The positions of the layout's nodes by id (a broken node's problem goes to ``errors``)."""
     nodes: dict[str, Point] = {}
     for node in layout.need("nodes").items():
-        node_id = node.need("nodeId").identifier()
-        if node_id in nodes:
-            raise node.need("nodeId").error(f"nodeId {node_id!r} is used twice in this layout")
-        position = node.need("nodePosition")
-        nodes[node_id] = (position.need("x").number(), position.need("y").number())
-        _note_unknown(node, "node", notes)
-        _note_unknown(position, "node position", notes)
-        properties = node.get(structure.node_properties)
-        for prop in properties.items() if properties is not None else ():
-            _note_unknown(prop, "node property", notes)
+        with errors.collecting():
+            node_id = node.need("nodeId").identifier()
+            if node_id in nodes:
+                raise node.need("nodeId").error(f"nodeId {node_id!r} is used twice in this layout")
+            nodes[node_id] = (math.nan, math.nan)  # known from here on, so no edge to it is called dangling
+            position = node.need("nodePosition")
+            nodes[node_id] = (position.need("x").number(), position.need("y").number())
+            _note_unknown(node, "node", notes)
+            _note_unknown(position, "node position", notes)
+            properties = node.get(structure.node_properties)
+            for prop in properties.items() if properties is not None else ():
+                _note_unknown(prop, "node property", notes)
     return nodes
+
+
+def _nodes_elsewhere(layouts: list[JsonAt], chosen: JsonAt) -> dict[str, str]:
+    """Node id → the id of the (first) other layout holding it. Other layouts are not checked, only read."""
+    found: dict[str, str] = {}
+    for layout in layouts:
+        members = layout.value
+        if layout is chosen or not isinstance(members, dict) or not isinstance(members.get("nodes"), list):
+            continue
+        layout_id = str(members.get("layoutId"))
+        for node in members["nodes"]:
+            if isinstance(node, dict) and isinstance(node.get("nodeId"), str):
+                found.setdefault(node["nodeId"], layout_id)
+    return found
+
+
+def _check_edges(
+    edges: list[JsonAt],
+    structure: _Structure,
+    nodes: dict[str, Point],
+    elsewhere: dict[str, str],
+    errors: ErrorCollector,
+) -> None:
+    """Every edge's id (unique in the layout), nodes (each in some layout of the file) and property objects."""
+    first_at: dict[str, str] = {}  # edge id → pointer of the edge that has it
+    for at in edges:
+        with errors.collecting():
+            edge_id = at.need("edgeId").identifier()
+            if edge_id in first_at:
+                msg = f"edgeId {edge_id!r} is used twice in this layout: by {first_at[edge_id]} and by {at.pointer}"
+                errors.add(at.error(msg))
+            else:
+                first_at[edge_id] = at.pointer
+            for key in ("startNodeId", "endNodeId"):
+                with errors.collecting():
+                    node_id = at.need(key).identifier()
+                    if node_id not in nodes and node_id not in elsewhere:
+                        known = sorted(nodes)
+                        msg = (
+                            f"edge {edge_id!r}: {key} {node_id!r} is not a node of any layout of this file"
+                            f"{did_you_mean(node_id, known)}"
+                        )
+                        raise at.error(msg)
+        with errors.collecting():
+            _edge_properties(at, structure)
 
 
 def _edge(

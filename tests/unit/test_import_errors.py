@@ -11,7 +11,7 @@ from typing import Any
 import pytest
 from site_documents import edge, layout, lif_v1, node, quarter, save_json, save_yaml, to_v2
 
-from fleetsim.errors import MapError
+from fleetsim.errors import LoadError, LoadErrors, MapError
 from fleetsim.load.map_options import MapOptions
 from fleetsim.load.scenario import load_scenario_dir
 from fleetsim.load.site_map import load_site_map
@@ -94,8 +94,8 @@ LIF_CASES: list[tuple[str, Mutation, dict[str, Any], str, str]] = [
         "unknown-start-node",
         _set("/layouts/0/edges/0/startNodeId", "Q"),
         {},
-        "/layouts/0/edges/0/startNodeId",
-        "startNodeId 'Q' is not a node of this layout",
+        "/layouts/0/edges/0",
+        "edge 'A-B': startNodeId 'Q' is not a node of any layout of this file",
     ),
     (
         "end-node-number",
@@ -204,7 +204,7 @@ def test_a_malformed_lif_file_gives_one_located_error(
     document = copy.deepcopy(BASE)
     mutate(document)
     path = save_json(tmp_path, document)
-    with pytest.raises(MapError) as caught:
+    with pytest.raises(LoadError) as caught:  # several errors (LoadErrors): this one is the first
         load_site_map(path, MapOptions(**options))
     location = caught.value.location
     assert location is not None and Path(location.path) == path
@@ -330,6 +330,82 @@ RMF_CASES = [
         8,
         "parameter 'distance' is 10; it must be [type, value]",
     ),
+    # Mutated files whose structure the loader used to trust (a TypeError or KeyError leaked from them).
+    (
+        "lanes-a-number",
+        BUILDING.replace("    lanes:\n", "    lanes: 0.5\n    old_lanes:\n"),
+        {},
+        9,
+        "lanes is 0.5; it must be a list",
+    ),
+    ("lifts-a-number", BUILDING + "lifts: -1.0e+9\n", {}, 12, "lifts is -1000000000.0; it must be a mapping"),
+    (
+        "measurements-a-number",
+        BUILDING.replace("    measurements:\n", "    measurements: 3\n    m:\n"),
+        {},
+        7,
+        "measurements is 3; it must be a list",
+    ),
+    (
+        "vertices-a-string",
+        "levels:\n  L1:\n    vertices: many\n",
+        {},
+        3,
+        "vertices is 'many'; it must be a list of [x, y",
+    ),
+    ("doors-a-number", BUILDING + "    doors: 5\n", {}, 12, "doors is 5; it must be a list"),
+    ("vertex-a-number", BUILDING.replace("[200, 0, 0, b]", "7"), {}, 5, "vertex 1 is 7; it must be a list [x, y"),
+    (
+        "vertex-name-a-number",
+        BUILDING.replace("[200, 0, 0, b]", "[200, 0, 0, 5]"),
+        {},
+        5,
+        "vertex 1 name is 5; it must be a string",
+    ),
+    (
+        "distance-nan",
+        BUILDING.replace("[3, 10]", "[3, .nan]"),
+        {},
+        8,
+        "measurement distance is nan; it must be a finite number",
+    ),
+    ("distance-negative", BUILDING.replace("[3, 10]", "[3, -10]"), {}, 8, "both must be positive"),
+    (
+        "distance-text",
+        BUILDING.replace("[3, 10]", "[3, far]"),
+        {},
+        8,
+        "measurement distance is 'far'; it must be a finite number",
+    ),
+    (
+        "graph-negative",
+        BUILDING.replace("graph_idx: [2, 0]}]\n      - [1", "graph_idx: [2, -1]}]\n      - [1"),
+        {},
+        10,
+        "graph_idx is -1; it must be a whole number >= 0",
+    ),
+    ("level-a-list", "levels:\n  L1: [1, 2]\n", {}, 2, "level 'L1' is [1, 2]; it must be a mapping"),
+    (
+        "lane-end-a-string",
+        BUILDING.replace("[1, 2, {", "[1, two, {"),
+        {},
+        11,
+        "lane vertex 'two' is not a vertex index (0 to 2)",
+    ),
+    (
+        "scale-overflow",
+        BUILDING.replace("[3, 10]", "[3, 1.0e+308]").replace("[200, 0, 0, b]", "[1.0e-10, 0, 0, b]"),
+        {},
+        8,
+        "give a finite scale",
+    ),
+    (
+        "coordinates-overflow",
+        BUILDING.replace("[200, 200, 0", "[1.0e+308, 200, 0").replace("[3, 10]", "[3, 1000]"),
+        {},
+        6,
+        "vertex 2 lies at infinity",
+    ),
 ]
 
 
@@ -345,6 +421,50 @@ def test_a_malformed_building_map_gives_one_error_at_its_yaml_line(
     location = caught.value.location
     assert location is not None and Path(location.path) == path and location.line == line, str(caught.value)
     assert words in caught.value.problem, caught.value.problem
+
+
+def test_an_error_in_a_building_map_names_its_key_path(tmp_path: Path) -> None:
+    path = save_yaml(
+        tmp_path, BUILDING.replace("graph_idx: [2, 0]}]\n      - [1", "graph_idx: [2, zero]}]\n      - [1")
+    )
+    with pytest.raises(MapError) as caught:
+        load_site_map(path)
+    assert caught.value.location is not None and caught.value.location.field == "levels.L1.lanes[0][2].graph_idx"
+    assert str(caught.value).startswith(f"{path}:10:")
+
+
+def test_every_broken_vertex_measurement_and_lane_of_a_level_is_reported_at_once(tmp_path: Path) -> None:
+    text = (
+        BUILDING.replace('[200, 200, 0, ""]', '[200, "200", 0, ""]')
+        .replace("[3, 10]", "[3, -1]")
+        .replace("[4, false]", "[4, 0.5]")
+        .replace("[0, 1, {bidirectional", "[0, 7, {bidirectional")
+    )
+    with pytest.raises(LoadErrors) as caught:
+        load_site_map(save_yaml(tmp_path, text))
+    assert [(e.location.line if e.location else None, e.problem) for e in caught.value.errors] == [
+        (6, "vertex 2 y is '200'; it must be a finite number"),
+        (
+            8,
+            "measurement 0 joins vertices 0 and 1 200 px apart at distance -1 m; both must be positive (and give a finite scale)",
+        ),
+        (10, "lane vertex 7 is not a vertex index (0 to 2)"),
+        (11, "bidirectional is 0.5; it must be true or false"),
+    ]
+
+
+@pytest.mark.parametrize(
+    ("change", "segments"),
+    [
+        (("  L1:", "  1:"), 2),  # a level named by a number
+        (("levels:", "lifts:\nlevels:"), 2),  # no lifts written
+        (("    lanes:", "    doors:\n    vertices_note: 1\n    lanes:"), 2),  # no doors written, an unknown key
+    ],
+    ids=["numbered-level", "empty-lifts", "empty-doors"],
+)
+def test_near_misses_of_the_mutations_still_load(tmp_path: Path, change: tuple[str, str], segments: int) -> None:
+    site = load_site_map(save_yaml(tmp_path, BUILDING.replace(*change, 1)))
+    assert len(site.segments) == segments
 
 
 def test_a_scenario_on_a_malformed_site_does_not_load_at_all(tmp_path: Path) -> None:

@@ -10,7 +10,7 @@ import pytest
 from site_documents import edge, layout, lif_v1, load, node, nurbs, quarter, save_json, to_v2
 
 from fleetsim.enums import Direction, Shape
-from fleetsim.errors import MapError
+from fleetsim.errors import LoadErrors, MapError
 from fleetsim.layout.nurbs import CHORD_TOLERANCE
 from fleetsim.load.map_options import MapOptions
 from fleetsim.load.site_map import load_site_map
@@ -243,14 +243,89 @@ def test_parallel_edges_in_one_direction_are_separate_segments_and_pair_up_in_or
 
 def test_an_edge_to_a_node_of_another_layout_is_skipped_with_a_warning(tmp_path: Path) -> None:
     document = lif_v1(
-        layout("hall", [node("A", 0, 0), node("B", 5, 0)], [edge("e1", "A", "B"), edge("lift", "B", "Z")])
+        layout("hall", [node("A", 0, 0), node("B", 5, 0)], [edge("e1", "A", "B"), edge("lift", "B", "Z")]),
+        layout("roof", [node("Z", 0, 0), node("Y", 5, 0)], [edge("r1", "Z", "Y")]),
     )
-    site = load(tmp_path, document)
+    site = load(tmp_path, document, layout="hall")
     assert [s.names for s in site.segments] == [("e1",)]
-    assert site.warnings == (
+    assert (
         f"{tmp_path / 'site.lif.json'}: warning skipped-edge: an edge to a node of another layout "
-        "(once, first at /layouts/0/edges/1 ('lift')); no segment was made for it",
+        "(once, first at /layouts/0/edges/1 ('lift')); no segment was made for it"
+    ) in site.warnings
+
+
+@pytest.mark.parametrize("key", ["endNodeId", "startNodeId"])
+def test_an_edge_to_a_node_of_no_layout_is_a_located_error_naming_the_edge_and_the_node(
+    tmp_path: Path, key: str
+) -> None:
+    lift = edge("lift", "B", "Z") if key == "endNodeId" else edge("lift", "Z", "B")
+    document = lif_v1(
+        layout("hall", [node("A", 0, 0), node("B", 5, 0)], [edge("e1", "A", "B"), lift]),
+        layout("roof", [node("Y", 0, 0), node("X", 5, 0)], [edge("r1", "Y", "X")]),
     )
+    with pytest.raises(MapError) as caught:
+        load(tmp_path, document, layout="hall")
+    assert caught.value.location is not None and caught.value.location.field == "/layouts/0/edges/1"
+    assert caught.value.problem == f"edge 'lift': {key} 'Z' is not a node of any layout of this file"
+
+
+def test_an_edge_to_a_node_of_no_layout_is_refused_even_when_its_robot_type_is_not_chosen(tmp_path: Path) -> None:
+    document = lif_v1(
+        layout("hall", [node("A", 0, 0), node("B", 5, 0)], [edge("e1", "A", "B"), edge("e2", "B", "Q", "U")])
+    )
+    with pytest.raises(MapError, match="edge 'e2': endNodeId 'Q' is not a node of any layout"):
+        load(tmp_path, document, robot_type="T")
+
+
+def test_a_mistyped_node_id_gets_a_did_you_mean(tmp_path: Path) -> None:
+    document = lif_v1(layout("hall", [node("dock_1", 0, 0), node("dock_2", 5, 0)], [edge("e1", "dock_1", "dokc_2")]))
+    with pytest.raises(
+        MapError, match="endNodeId 'dokc_2' is not a node of any layout of this file; did you mean 'dock_2'"
+    ):
+        load(tmp_path, document)
+
+
+def test_an_edge_id_used_twice_in_a_layout_is_a_located_error_naming_both_edges(tmp_path: Path) -> None:
+    document = lif_v1(
+        layout(
+            "hall", [node("A", 0, 0), node("B", 5, 0), node("C", 5, 5)], [edge("e1", "A", "B"), edge("e1", "B", "C")]
+        )
+    )
+    with pytest.raises(MapError) as caught:
+        load(tmp_path, document)
+    assert caught.value.location is not None and caught.value.location.field == "/layouts/0/edges/1"
+    assert (
+        caught.value.problem
+        == "edgeId 'e1' is used twice in this layout: by /layouts/0/edges/0 and by /layouts/0/edges/1"
+    )
+
+
+def test_the_same_edge_id_in_two_layouts_is_not_a_duplicate(tmp_path: Path) -> None:
+    document = lif_v1(
+        layout("hall", [node("A", 0, 0), node("B", 5, 0)], [edge("e1", "A", "B")]),
+        layout("roof", [node("C", 0, 0), node("D", 5, 0)], [edge("e1", "C", "D")]),
+    )
+    assert [s.names for s in load(tmp_path, document, layout="roof").segments] == [("e1",)]
+
+
+def test_every_broken_edge_of_a_layout_is_reported_at_once(tmp_path: Path) -> None:
+    document = lif_v1(
+        layout(
+            "hall",
+            [node("A", 0, 0), node("B", 5, 0)],
+            [edge("e1", "A", "B"), edge("e2", "B", "Q"), edge("e1", "B", "A"), edge("e4", "R", "A")],
+        )
+    )
+    with pytest.raises(LoadErrors) as caught:
+        load(tmp_path, document)
+    assert [(e.location.field if e.location else None, e.problem) for e in caught.value.errors] == [
+        ("/layouts/0/edges/1", "edge 'e2': endNodeId 'Q' is not a node of any layout of this file"),
+        (
+            "/layouts/0/edges/2",
+            "edgeId 'e1' is used twice in this layout: by /layouts/0/edges/0 and by /layouts/0/edges/2",
+        ),
+        ("/layouts/0/edges/3", "edge 'e4': startNodeId 'R' is not a node of any layout of this file"),
+    ]
 
 
 # -- warnings: once per kind ----------------------------------------------------------------------
