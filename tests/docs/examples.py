@@ -3,7 +3,6 @@
 A page is read as a sequence of fenced code blocks, handled in order in a working folder of its own
 that holds a copy of the repository's `scenario_suites/`, `examples/` and `schemas/`:
 
-- a line `--8<-- "PATH"` in a block (pymdownx.snippets) stands for the repository's file at PATH;
 - a block with a title (```` ```python title="my_planner.py" ````, Material's code-block title) is
   written to that path; Python files are imported and suites loaded completely once the page's files
   are all written — unless a console command on the page names the suite, which then shows what
@@ -39,8 +38,6 @@ import yaml
 REPO = Path(__file__).resolve().parents[2]
 COPIED = ("scenario_suites", "examples", "schemas")
 _FENCE = re.compile(r"^(?P<indent> *)```(?P<info>[^\n`]*)\n(?P<body>.*?)^(?P=indent)```[ \t]*$", re.M | re.S)
-# pymdownx.snippets: a line `--8<-- "path"` in a block shows the repository's file at that path.
-_SNIPPET = re.compile(r'^--8<-- "([^"]+)"\n', re.M)
 _TITLE = re.compile(r'title="([^"]+)"')
 
 
@@ -66,7 +63,6 @@ def blocks(text: str) -> Iterator[Block]:
         title = _TITLE.search(info)
         indent = len(match.group("indent"))
         body = "".join(line[indent:] for line in match.group("body").splitlines(keepends=True))
-        body = _SNIPPET.sub(lambda m: (REPO / m.group(1)).read_text(encoding="utf-8"), body)
         line = text.count("\n", 0, match.start()) + 2  # the first line inside the fence
         yield Block(lang, title.group(1) if title else None, body, line)
 

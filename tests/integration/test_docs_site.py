@@ -61,12 +61,16 @@ def test_the_planner_reference_renders_every_attribute_a_planner_reads(site: Pat
     dom = chromium_run(chromium, page, tmp_path, "--dump-dom").stdout
     for identifier, attributes in PLANNER_FACING.items():
         assert f'id="{identifier}"' in dom, identifier
-        for attribute in attributes:  # a row of the class's attribute table
-            assert f'<td><code><span title="{identifier}.{attribute}">{attribute}</span></code></td>' in dom
+        # The entry runs from its heading to the next anchor (a member's or the next entry's); each
+        # attribute is an item of its Attributes list.
+        entry = dom.split(f'id="{identifier}"', 1)[1].split("</h", 1)[1].split('<a id="fleetsim.', 1)[0]
+        assert "<strong>Attributes</strong>" in entry, identifier
+        for attribute in attributes:
+            assert f"<li><code>{attribute}</code>" in entry, f"{identifier}.{attribute}"
     text = re.sub(r"<[^>]+>", "", dom)
-    # Every "Attributes:" is a parsed section's title; one mkdocstrings did not parse would show as text.
-    assert text.count("Attributes:") == dom.count('doc-section-title">Attributes:') > 0
-    assert ":class:" not in text and ":meth:" not in text  # Sphinx roles render raw under Google style
+    # Sphinx roles and unresolved cross-references ([`X`][path]) would show as raw text.
+    assert ":class:" not in text and ":meth:" not in text
+    assert not re.search(r"\]\[[\w.]*\]", text)
     assert {url for url in requested(netlog) if not url.startswith("file://")} == set()
 
 
