@@ -32,6 +32,7 @@ from typing import Any, Literal
 
 from fleetsim.errors import LoadError, Location, SuiteError
 from fleetsim.gating.generated import check_generate_block
+from fleetsim.load.scenario_files import did_you_mean
 from fleetsim.load.suite import (
     ScenarioSpec,
     Suite,
@@ -40,7 +41,7 @@ from fleetsim.load.suite import (
     parse_settings,
     parse_vehicle_types,
 )
-from fleetsim.load.suite_schema import check_against_schema
+from fleetsim.load.suite_schema import check_against_schema, suite_schema
 from fleetsim.load.yaml_source import Locate, YamlPath, load_yaml_with_marks
 from fleetsim.scenario import ScenarioSettings
 
@@ -71,6 +72,7 @@ _KEYS = {
     "disturbances",
 }
 _SOURCE_KEYS = ("count", "seed")  # what a generated source adds to a suite entry
+_DISTURBANCE_KEYS = ("seeds", "stop", "stops_per_vehicle_hour")
 
 
 class SweepSpecError(LoadError):
@@ -131,9 +133,7 @@ def load_sweep_spec(path: Path | str) -> SweepSpec:
             f"a sweep spec must be a mapping with 'fleetsim-sweep: {FORMAT}', 'planners' and 'sources'",
             Location(path, 1),
         )
-    for key in data:
-        if key not in _KEYS:
-            raise _error(f"unknown key {key!r}; known: {', '.join(sorted(_KEYS))}", locate, (key,), key=True)
+    _known_keys(data, sorted(_KEYS), locate, ())
     if data.get("fleetsim-sweep") != FORMAT:
         raise _error(
             f"fleetsim-sweep={data.get('fleetsim-sweep')!r} must be {FORMAT} (the sweep format version)",
@@ -171,6 +171,18 @@ def load_sweep_spec(path: Path | str) -> SweepSpec:
     )
 
 
+def _known_keys(
+    data: Mapping[Any, Any], known: list[str], locate: Locate, where: YamlPath, what: str = "", *, listed: bool = True
+) -> None:
+    """An unknown key is an error at the key, with the closest known one (as suites say it) and, when
+    ``listed``, all of them."""
+    for key in data:
+        if key not in known:
+            hint = did_you_mean(str(key), known)
+            every = f" (known: {', '.join(known)})" if listed else ""
+            raise _error(f"{what}unknown key {key!r}{hint}{every}", locate, (*where, key), key=True)
+
+
 def _number(value: Any) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool)
 
@@ -180,7 +192,9 @@ def _disturbances(raw: Any, locate: Locate) -> SweepDisturbances | None:
     if raw is None:
         return None
     where: YamlPath = ("disturbances",)
-    if not isinstance(raw, dict) or set(raw) - {"stops_per_vehicle_hour", "stop", "seeds"} or "seeds" not in raw:
+    if isinstance(raw, dict):
+        _known_keys(raw, list(_DISTURBANCE_KEYS), locate, where, "disturbances: ")
+    if not isinstance(raw, dict) or "seeds" not in raw:
         raise _error(
             f"disturbances={raw!r} must be {{stops_per_vehicle_hour: R, stop: [MIN, MAX], seeds: [S, ...]}}",
             locate,
@@ -239,6 +253,11 @@ def _sources(path: Path, data: Mapping[str, Any], locate: Locate) -> tuple[Suite
             locate,
             ("sources",),
         )
+    entry_keys = sorted([*suite_schema()["$defs"]["scenario"]["properties"], *_SOURCE_KEYS])
+    for index, source in enumerate(raw):
+        if isinstance(source, dict):  # a generated source, a suite source, or a typo of either
+            known = ["suite"] if "suite" in source else entry_keys if "generate" in source else ["suite", *entry_keys]
+            _known_keys(source, known, locate, ("sources", index), f"sources[{index}]: ", listed=known == ["suite"])
     generated = [index for index, source in enumerate(raw) if isinstance(source, dict) and "generate" in source]
     suite = _as_suite(path, data, generated, locate)
     sources: list[SuiteSource | GeneratedSource] = []

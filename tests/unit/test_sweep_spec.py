@@ -66,7 +66,7 @@ def _spec(tmp_path: Path, text: str) -> Path:
             3,
             "stops_per_vehicle_hour=0 must be a number > 0",
         ),
-        ("name: small", "name: small\ndisturbances: {rate: 6}", 3, "disturbances={'rate': 6} must be"),
+        ("name: small", "name: small\ndisturbances: {stop: [5, 10]}", 3, "disturbances={'stop': [5, 10]} must be"),
     ],
 )
 def test_bad_spec_value_is_a_located_error(tmp_path: Path, old: str, new: str, line: int, words: str) -> None:
@@ -76,6 +76,37 @@ def test_bad_spec_value_is_a_located_error(tmp_path: Path, old: str, new: str, l
     assert caught.value.location is not None and caught.value.location.path == path
     assert caught.value.location.line == line, str(caught.value)
     assert words in str(caught.value)
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "line", "column", "words"),
+    [
+        ("planners:", "planers:", 3, 1, "unknown key 'planers'; did you mean 'planners'? (known: baseline,"),
+        ("defaults:", "defualts:", 4, 1, "unknown key 'defualts'; did you mean 'defaults'?"),
+        ("    count: 4", "    cont: 4", 8, 5, "sources[0]: unknown key 'cont'; did you mean 'count'?"),
+        ("    generate:", "    generat:", 7, 5, "sources[0]: unknown key 'generat'; did you mean 'generate'?"),
+        ("  - name: warehouses", "  - suit: a.fleetsim.yaml\n  - name: warehouses", 6, 5,
+         "sources[0]: unknown key 'suit'; did you mean 'suite'?"),
+        ("name: small", "name: small\ndisturbances: {seed: [1]}", 3, 16,
+         "disturbances: unknown key 'seed'; did you mean 'seeds'? (known: seeds, stop, stops_per_vehicle_hour)"),
+    ],
+)  # fmt: skip
+def test_mistyped_spec_key_is_located_with_the_key_it_means(
+    tmp_path: Path, old: str, new: str, line: int, column: int, words: str
+) -> None:
+    with pytest.raises(SweepSpecError) as caught:
+        load_sweep_spec(_spec(tmp_path, GOOD.replace(old, new)))
+    assert caught.value.location is not None
+    assert (caught.value.location.line, caught.value.location.column) == (line, column), str(caught.value)
+    assert words in str(caught.value)
+
+
+def test_unknown_key_like_no_known_one_gets_no_suggestion(tmp_path: Path) -> None:
+    with pytest.raises(SweepSpecError) as caught:
+        load_sweep_spec(_spec(tmp_path, GOOD.replace("name: small", "name: small\nxyzzy: 1")))
+    assert "unknown key 'xyzzy' (known: baseline," in str(caught.value)
+    assert "did you mean" not in str(caught.value)
+    assert load_sweep_spec(_spec(tmp_path, GOOD)).name == "small"  # narrowly: the spec as written loads
 
 
 def test_bad_spec_on_the_command_line_is_one_located_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
