@@ -127,10 +127,7 @@ def _run_all(args: argparse.Namespace, stop: StopSignals) -> int:
             print(json.dumps(_document(outcome)), flush=True)
     _print_summary(outcomes, table)
     if record is not None and outcomes:
-        print(
-            f"artifacts: {record[0]}/<suite>/<scenario>/ (run.mcap with fleetsim.rviz, failure.svg, trace.jsonl, result.json)",
-            file=table,
-        )
+        print("", *artifact_lines(o.result for o in outcomes), sep="\n", file=table)
     if stop.signum is not None:
         left = len(targets) - len(outcomes)
         not_run = f"; {left} scenario(s) not run" if left else ""
@@ -309,6 +306,23 @@ def _document(outcome: _Outcome) -> dict[str, Any]:
     if outcome.hunt is not None:
         document.update(hunt_facts(outcome.hunt))
     return document
+
+
+def artifact_lines(results: Iterable[RunResult]) -> list[str]:
+    """The run folders written, in run order, each with the files it holds; a scenario that left none
+    (it did not load, or its hunt found nothing) is not listed. A saved counterexample's scenario is a
+    folder too (``counterexample/``)."""
+    lines = []
+    for result in results:
+        folder = result.artifacts.get("folder")
+        if folder is None:
+            continue
+        paths = (Path(path) for kind, path in result.artifacts.items() if kind != "folder")
+        files = sorted(path.name + ("/" if path.is_dir() else "") for path in paths)
+        lines.append(f"{Path(folder).as_posix()}/ ({', '.join(files)})")
+    if not lines:
+        return ["artifacts: none written (no scenario ran)"]
+    return [("artifacts: " if index == 0 else " " * len("artifacts: ")) + line for index, line in enumerate(lines)]
 
 
 class _Progress:

@@ -337,13 +337,42 @@ def test_record_writes_each_runs_artifacts_and_a_picture_for_a_failed_one(
         assert (folder / "failure.svg").exists() == (document["status"] == "failed")
 
 
+def test_record_prints_the_folders_it_wrote_with_their_files(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    argv = [f"{EXAMPLES}::crossing", f"{EXAMPLES}::loop-one-way", "--planner", "fleetsim.planners:BFSPlanner"]
+    status, out, _ = run(capsys, "run", *argv, "--record", "out")
+
+    assert status == 1
+    listed = out[out.index("\nartifacts: ") + 1 :].splitlines()
+    crossing, loop = (tmp_path / "out" / "examples" / name for name in ("crossing", "loop-one-way"))
+    expected = [
+        f"out/examples/crossing/ ({', '.join(sorted(p.name for p in crossing.iterdir()))})",
+        f"out/examples/loop-one-way/ ({', '.join(sorted(p.name for p in loop.iterdir()))})",
+    ]
+    assert listed == ["artifacts: " + expected[0], "           " + expected[1]]
+    assert "<suite>" not in out and "failure.svg" in listed[0]
+
+
+def test_record_with_nothing_run_says_no_folder_was_written(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "broken.fleetsim.yaml").write_text("fleetsim: 1\nname: broken\nscenarios: [\n")
+    status, out, _ = run(capsys, "run", "broken.fleetsim.yaml", "--planner", RESERVING, "--record", "out")
+    assert status == 1
+    assert out.endswith("\nartifacts: none written (no scenario ran)\n") and not (tmp_path / "out").exists()
+
+
 def test_without_record_no_artifacts_are_written(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
     monkeypatch.chdir(tmp_path)
-    status, out, _ = run(capsys, "run", f"{EXAMPLES}::crossing", "--planner", RESERVING, "--json")
+    status, out, err = run(capsys, "run", f"{EXAMPLES}::crossing", "--planner", RESERVING, "--json")
     assert status == 0 and json_lines(out)[0]["artifacts"] == {}
     assert list(tmp_path.iterdir()) == []
+    assert "artifacts:" not in err
 
 
 def test_a_record_rate_below_one_step_is_refused(capsys: pytest.CaptureFixture[str]) -> None:
