@@ -227,14 +227,23 @@ def _note_level(building: _Building, level: dict[Any, Any], where: YamlPath) -> 
 
 
 def _vertices(building: _Building, level: dict[Any, Any], where: YamlPath) -> list[tuple[Point, str] | None]:
-    """Each vertex's position (as written) and label; ``None`` for a broken vertex (its error collected)."""
+    """Each vertex's position (as written) and label; ``None`` for a broken vertex (its error collected).
+
+    A ``vertices`` that is no list at all is raised with what was collected before it: every lane and
+    measurement would otherwise be reported as naming a vertex that does not exist.
+    """
     where = (*where, "vertices")
+    try:
+        raw = building.items(level.get("vertices"), where, "vertices", _VERTEX)
+    except MapError as error:
+        building.errors.add(error)
+        building.errors.raise_if_any()
+        raise  # unreachable: the collector holds the error
     vertices: list[tuple[Point, str] | None] = []
-    with building.errors.collecting():
-        for index, vertex in enumerate(building.items(level.get("vertices"), where, "vertices", _VERTEX)):
-            vertices.append(None)
-            with building.errors.collecting():
-                vertices[-1] = _vertex(building, vertex, (*where, index), index)
+    for index, vertex in enumerate(raw):
+        vertices.append(None)
+        with building.errors.collecting():
+            vertices[-1] = _vertex(building, vertex, (*where, index), index)
     return vertices
 
 
@@ -339,9 +348,8 @@ def _ends(building: _Building, edge: object, at: YamlPath, count: int, what: str
     for position in (0, 1):
         index = edge[position]
         if isinstance(index, bool) or not isinstance(index, int) or not 0 <= index < count:
-            raise building.error(
-                (*at, position), f"{what} vertex {_shown(index)} is not a vertex index (0 to {count - 1})"
-            )
+            indexes = f"0 to {count - 1}" if count else "the level has no vertices"
+            raise building.error((*at, position), f"{what} vertex {_shown(index)} is not a vertex index ({indexes})")
         ends.append(index)
     return ends[0], ends[1], edge[2]
 
