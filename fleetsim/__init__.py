@@ -27,7 +27,7 @@ if TYPE_CHECKING:
         UnreachableTaskError,
     )
     from fleetsim.exec.spec import load_planner_factory
-    from fleetsim.layout import Connection, Layout, LintFinding, Segment, build_layout
+    from fleetsim.layout import Connection, Continuation, Layout, LintFinding, Segment, build_layout
     from fleetsim.load import (
         ScenarioSpec,
         Suite,
@@ -69,6 +69,7 @@ __all__ = [
     "CollisionAlert",
     "ConflictModel",
     "Connection",
+    "Continuation",
     "Direction",
     "Disturbed",
     "Divergence",
@@ -127,6 +128,7 @@ _HOMES: dict[str, str] = {
     "CollisionAlert": "fleetsim.planning",
     "ConflictModel": "fleetsim.enums",
     "Connection": "fleetsim.layout",
+    "Continuation": "fleetsim.layout",
     "DEFAULT_VEHICLE_TYPE": "fleetsim.scenario",
     "Direction": "fleetsim.enums",
     "Disturbed": "fleetsim.enums",

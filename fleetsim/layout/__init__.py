@@ -1,6 +1,7 @@
 """The layout (SPEC §4): segments, connections with joint kinds, the state graph, conflicts and lint."""
 
 from fleetsim.layout.conflicts import ConflictSets, all_pairs_conflicts
+from fleetsim.layout.continuations import Continuation
 from fleetsim.layout.layout import Connection, Layout, Step, build_layout
 from fleetsim.layout.lint import LintFinding, Severity
 from fleetsim.layout.segment import Point, Segment, polyline_length
@@ -8,6 +9,7 @@ from fleetsim.layout.segment import Point, Segment, polyline_length
 __all__ = [
     "ConflictSets",
     "Connection",
+    "Continuation",
     "Layout",
     "LintFinding",
     "Point",

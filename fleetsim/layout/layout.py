@@ -19,10 +19,11 @@ from types import MappingProxyType
 
 import networkx as nx
 
-from fleetsim.enums import ConflictModel, JointKind, Traverse
+from fleetsim.enums import ConflictModel, JointKind, Progress, Traverse, TurnCapability
 from fleetsim.errors import LayoutError
 from fleetsim.layout.conflicts import conflict_sets
 from fleetsim.layout.connections import Connection, find_connections
+from fleetsim.layout.continuations import Continuation, Turning, capability_of, progresses_after
 from fleetsim.layout.lint import LintFinding, StateGraph, lint_layout
 from fleetsim.layout.segment import Segment
 
@@ -50,8 +51,9 @@ class Layout:
         conflict_model: ``SWEPT`` (swept circles, the default) or ``BBOX`` (the thesis's bounding boxes).
         source: The map file the layout came from, if any.
 
-    Use ``successors`` / ``predecessors`` for where a vehicle may drive next, ``joint`` for how two legs
-    meet and ``conflicts`` for the segments a fixed leg reserves (its own included). Asking about a
+    Use ``continuations`` for the legs a vehicle may legally drive next (the progress rules applied),
+    ``successors`` / ``predecessors`` for the connections themselves, ``joint`` for how two legs meet
+    and ``conflicts`` for the segments a fixed leg reserves (its own included). Asking about a
     segment id the layout does not have raises [`LayoutError`][fleetsim.errors.LayoutError].
     """
 
@@ -102,6 +104,35 @@ class Layout:
             return found
         self._require(segment)
         return self._successors.get((segment, Traverse(traverse)), ())
+
+    def continuations(
+        self, vehicle_type: Turning | TurnCapability, segment: int, traverse: Traverse, progress: Progress
+    ) -> tuple[Continuation, ...]:
+        """The legs a vehicle may legally drive next after a leg on ``segment`` with ``traverse`` and
+        ``progress``: each a [`Continuation`][fleetsim.layout.continuations.Continuation] ``(segment,
+        traverse, progress, joint)``, in ``successors`` order, the progress kept before the progress
+        flipped.
+
+        ``vehicle_type`` is a [`VehicleType`][fleetsim.scenario.VehicleType] (``fleet.vehicles[v].type``)
+        or its ``TurnCapability``. A vehicle that turns in place may take every connection with either
+        progress; one that only follows curves keeps its progress at a smooth joint, flips it at a cusp
+        and takes no corner. These are exactly the rules of the ``illegal-progress-change`` check: a plan
+        whose every leg is a continuation of the leg before passes it.
+
+        Examples:
+            >>> from fleetsim import Progress, Traverse, TurnCapability, build_layout, load_map
+            >>> layout = build_layout(load_map("scenario_suites/examples/mixed/map.json").segments, vehicle_radius=0.4)
+            >>> for leg in layout.continuations(TurnCapability.CURVE, 1, Traverse.FORWARD, Progress.FORWARD):
+            ...     print(leg.segment, leg.traverse.value, leg.progress.value, leg.joint.value)
+            1 backward reverse opposite
+            2 forward forward same
+        """
+        capability = capability_of(vehicle_type)
+        return tuple(
+            Continuation(next_segment, next_traverse, next_progress, joint)
+            for next_segment, next_traverse, joint in self.successors(segment, traverse)
+            for next_progress in progresses_after(capability, joint, Progress(progress))
+        )
 
     def joint(self, segment: int, traverse: Traverse, next_segment: int, next_traverse: Traverse) -> JointKind | None:
         """The joint from driving ``segment`` with ``traverse`` into ``next_segment`` with ``next_traverse``;

@@ -5,7 +5,8 @@ and the progress rules for its turn capability: a vehicle that can only follow c
 at smooth joints, flips it at cusps and cannot take corners; a vehicle that turns in place may take any
 connection with either progress.
 
-:func:`next_steps` is the reference planners' version (:mod:`fleetsim.planners.routing`): it keeps an
+The rules themselves are :func:`~fleetsim.layout.continuations.progresses_after`, the one the plan check
+``illegal-progress-change`` judges by. :func:`next_steps` is the reference planners' version (:mod:`fleetsim.planners.routing`): it keeps an
 in-place turner's progress, because a planner sets the progress it arrives with on the last leg.
 :func:`moves` is the exact version the static task check of scenario loading asks (:class:`ReachIndex`,
 :func:`reach`); for a curve-only vehicle the two are the same, and for an in-place turner they reach the
@@ -18,6 +19,7 @@ from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 
 from fleetsim.enums import JointKind, Progress, Traverse, TurnCapability
+from fleetsim.layout.continuations import RULES, progresses_after
 from fleetsim.layout.layout import Layout
 
 __all__ = [
@@ -38,14 +40,15 @@ State = tuple[int, Traverse, Progress]
 
 
 def next_steps(layout: Layout, capability: TurnCapability, state: State) -> Iterator[tuple[State, JointKind]]:
-    """The states a vehicle may drive on to from ``state``, each with the joint it crosses."""
+    """The states a vehicle may drive on to from ``state``, each with the joint it crosses: per
+    connection, the first progress :func:`~fleetsim.layout.continuations.progresses_after` allows (an
+    in-place turner keeps its progress; a corner is no way on for a vehicle that only follows curves)."""
     segment, traverse, progress = state
+    rule = RULES[capability]  # hot in route searches: the rule as a table
     for next_segment, next_traverse, joint in layout.successors(segment, traverse):
-        if capability is TurnCapability.IN_PLACE or joint is JointKind.SAME:
-            yield (next_segment, next_traverse, progress), joint
-        elif joint is JointKind.OPPOSITE:
-            yield (next_segment, next_traverse, progress.flipped), joint
-        # a corner (turn_in_place) is no way on for a vehicle that only follows curves
+        allowed = rule[joint][progress]
+        if allowed:
+            yield (next_segment, next_traverse, allowed[0]), joint
 
 
 def next_states(layout: Layout, capability: TurnCapability, state: State) -> Iterator[State]:
@@ -66,12 +69,10 @@ def state_text(state: State) -> str:
 
 def moves(layout: Layout, capability: TurnCapability, state: State) -> Iterator[State]:
     """Every state a vehicle may be in on its next leg (an in-place turner chooses either progress)."""
-    if capability is TurnCapability.CURVE:
-        yield from next_states(layout, capability, state)
-        return
-    for segment, traverse, _ in layout.successors(state[0], state[1]):
-        yield segment, traverse, Progress.FORWARD
-        yield segment, traverse, Progress.REVERSE
+    segment, traverse, progress = state
+    for next_segment, next_traverse, joint in layout.successors(segment, traverse):
+        for next_progress in progresses_after(capability, joint, progress):
+            yield next_segment, next_traverse, next_progress
 
 
 @dataclass(frozen=True, slots=True)

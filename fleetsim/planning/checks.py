@@ -14,7 +14,8 @@ from dataclasses import dataclass, field
 from enum import Enum
 from itertools import pairwise
 
-from fleetsim.enums import JointKind, TurnCapability
+from fleetsim.enums import JointKind
+from fleetsim.layout.continuations import progresses_after
 from fleetsim.layout.layout import Layout
 from fleetsim.planning.plans import FleetLeg, FleetPlan
 from fleetsim.scenario import Task, VehicleType
@@ -273,21 +274,21 @@ def not_connected(plan: FleetPlan, ctx: CheckContext) -> Rejection | None:
 
 
 def illegal_progress_change(plan: FleetPlan, ctx: CheckContext) -> Rejection | None:
-    """Curve-only vehicles keep progress at smooth joints, flip it at cusps and cannot take corners."""
+    """Each leg's progress must be one :func:`~fleetsim.layout.continuations.progresses_after` allows
+    after the leg before: the rule ``Layout.continuations`` offers planners. Curve-only vehicles keep
+    progress at smooth joints, flip it at cusps and cannot take corners."""
     vehicle_type = ctx.vehicle_types[plan.vehicle_id]
-    if vehicle_type.turn_capability is TurnCapability.IN_PLACE:
-        return None  # it stops and turns on the spot wherever its heading changes
+    capability = vehicle_type.turn_capability
     for index, (before, after) in enumerate(pairwise(plan.legs), start=1):
         joint = _joint(ctx.layout, before, after)
-        flipped = after.progress is not before.progress
+        if joint is None or after.progress in progresses_after(capability, joint, before.progress):
+            continue
         if joint is JointKind.TURN_IN_PLACE:
             msg = f"the joint from segment {before.segment} is a corner, and a {vehicle_type.name!r} vehicle cannot turn in place"
-        elif joint is JointKind.SAME and flipped:
+        elif joint is JointKind.SAME:
             msg = f"progress changes from {before.progress.value} to {after.progress.value} at a smooth joint"
-        elif joint is JointKind.OPPOSITE and not flipped:
-            msg = f"the joint from segment {before.segment} is a cusp: progress must flip from {before.progress.value}"
         else:
-            continue
+            msg = f"the joint from segment {before.segment} is a cusp: progress must flip from {before.progress.value}"
         return _reject(RejectionCode.ILLEGAL_PROGRESS_CHANGE, plan, index, msg)
     return None
 

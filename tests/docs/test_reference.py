@@ -34,6 +34,7 @@ PLANNER_FACING = (
     "fleetsim.layout.layout.Layout",
     "fleetsim.layout.segment.Segment",
     "fleetsim.layout.connections.Connection",
+    "fleetsim.layout.continuations.Continuation",
     "fleetsim.enums.JointKind",
     "fleetsim.enums.Traverse",
     "fleetsim.enums.Progress",
@@ -45,8 +46,12 @@ PLANNER_FACING = (
     "fleetsim.planning.checks.RejectionCode",
     "fleetsim.planning.reservations.CollisionAlert",
 )
-# The shipped planners, and the route search they share with scenario loading (their `next_steps`).
-PLANNER_SOURCES = (*sorted((REPO / "fleetsim" / "planners").glob("*.py")), REPO / "fleetsim/layout/reachability.py")
+# The shipped planners, and the route search and progress rules they share with scenario loading and the checks.
+PLANNER_SOURCES = (
+    *sorted((REPO / "fleetsim" / "planners").glob("*.py")),
+    REPO / "fleetsim/layout/reachability.py",
+    REPO / "fleetsim/layout/continuations.py",
+)
 REFERENCE_PAGES = sorted((REPO / "docs" / "reference").glob("*.md"))
 # A number's docs must say what it is measured in.
 UNITS = re.compile(r"\b(metres?|seconds?|degrees?|radians?|m/s)\b", re.IGNORECASE)
@@ -170,7 +175,7 @@ def test_every_attribute_the_shipped_planners_read_is_documented(package: griffe
     assert {"plans", "vehicles", "tasks", "time"} <= set(checked["fleetsim.planning.snapshot.FleetSnapshot"])
     assert {"turn_capability", "max_speed", "acceleration"} <= set(checked["fleetsim.scenario.VehicleType"])
     assert {"length", "first", "last", "exit"} <= set(checked["fleetsim.layout.segment.Segment"])
-    assert {"flipped"} <= set(checked["fleetsim.enums.Progress"])
+    assert {"FORWARD", "REVERSE"} <= set(checked["fleetsim.enums.Progress"])
 
 
 def test_removing_an_attributes_entry_makes_it_undocumented(package: griffe.Module) -> None:
