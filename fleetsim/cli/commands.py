@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 from pathlib import Path
 from typing import Any
 
@@ -15,8 +16,9 @@ from fleetsim.exec.protocol import encode_layout
 from fleetsim.layout.layout import Layout, build_layout
 from fleetsim.load.map_options import MapOptions, SiteMap
 from fleetsim.load.scenario import load_scenario
+from fleetsim.load.scenario_files import MAP_FILE_NAMES, map_candidates
 from fleetsim.load.site_map import load_site_map
-from fleetsim.load.suite import discover_suites, load_suite
+from fleetsim.load.suite import SUITE_SUFFIX, discover_suites, load_suite
 from fleetsim.load.text import write_text_atomically
 from fleetsim.recording.svg import render_layout_svg
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE
@@ -153,13 +155,78 @@ def _print_layout(tiled_map: SiteMap, layout: Layout) -> None:
 
 
 def inspect(args: argparse.Namespace) -> int:
-    """Print a map's segments, connections with joint kinds, conflicts per segment and lint."""
+    """Print a map's segments, connections with joint kinds, conflicts per segment and lint.
+
+    MAP is a map file or a scenario folder holding one map (``map.json``, ...). A folder or a suite
+    file is a usage error that lists the maps below it (or that the suite's scenarios drive on), each
+    as the command that inspects it.
+    """
+    args.map = str(_map_file(Path(args.map)))
     tiled_map, layout = _layout_from_args(args)
     if args.json:
         print(json.dumps(layout_document(tiled_map, layout), indent=2))
     else:
         _print_layout(tiled_map, layout)
     return 0
+
+
+MAPS_LISTED = 10
+_MAP_KINDS = (
+    "a map file (Tiled .json, .tmj or .tmx; LIF .lif.json; RMF .building.yaml) or a scenario folder with one map"
+)
+
+
+def _map_file(path: Path) -> Path:
+    """The map ``inspect`` reads for ``path``: the file itself, or a scenario folder's one map file."""
+    if path.is_dir():
+        here = map_candidates(path)
+        if len(here) == 1:
+            return here[0]
+        if here:
+            listed = ", ".join(_shown(p) for p in here)
+            msg = f"{_shown(path)}: a scenario folder with {len(here)} maps ({listed}); inspect one of them"
+            raise UsageError(msg)
+        msg = f"{_shown(path)}: a folder, not a map; inspect reads {_MAP_KINDS}. {_maps_below(path)}"
+        raise UsageError(msg)
+    if path.name.endswith(SUITE_SUFFIX):
+        msg = f"{_shown(path)}: a suite, not a map; inspect reads {_MAP_KINDS}. {_maps_below(path)}"
+        raise UsageError(msg)
+    return path
+
+
+def _maps_below(path: Path) -> str:
+    """The maps of the scenario folders below ``path`` and of its suites' scenarios (those that load),
+    each as the command that inspects it."""
+    found: dict[Path, Path] = {}
+    folder = path if path.is_dir() else None
+    if folder is not None:  # scenario folders' maps, and files no other kind of file is named like
+        for pattern in (*MAP_FILE_NAMES, "*.tmx", "*.tmj", "*.lif.json", "*.building.yaml"):
+            for candidate in sorted(folder.rglob(pattern)):
+                if candidate.is_file() and not any(p.startswith(".") for p in candidate.relative_to(folder).parts):
+                    found.setdefault(candidate.resolve(), candidate)
+    for suite_path in discover_suites([path]):
+        try:
+            specs = load_suite(suite_path).scenarios
+        except LoadError:
+            continue  # fleetsim validate says what is wrong with it
+        for spec in specs:
+            if spec.generate is None and spec.map_path.is_file():
+                found.setdefault(spec.map_path.resolve(), spec.map_path)
+    if not found:
+        where = "below this folder" if folder is not None else "in this suite"
+        return f"There is no map {where}."
+    maps = sorted(_shown(p) for p in found.values())
+    lines = [f"The maps {'below it' if folder is not None else 'its scenarios drive on'} ({len(maps)}):"]
+    lines += [f"  fleetsim inspect {shown}" for shown in maps[:MAPS_LISTED]]
+    if len(maps) > MAPS_LISTED:
+        lines.append(f"  ... and {len(maps) - MAPS_LISTED} more")
+    return "\n".join(lines)
+
+
+def _shown(path: Path) -> str:
+    """``path`` as the reader should type it: relative to the working folder when below it."""
+    relative = os.path.relpath(path)
+    return Path(path if relative.startswith("..") else relative).as_posix()
 
 
 def convert(args: argparse.Namespace) -> int:

@@ -137,7 +137,8 @@ def build_parser() -> argparse.ArgumentParser:
     inspect.add_argument(
         "map",
         metavar="MAP",
-        help="a Tiled map (.json, .tmj, .tmx), LIF file (.lif.json) or RMF building map (.building.yaml)",
+        help="a Tiled map (.json, .tmj, .tmx), LIF file (.lif.json) or RMF building map (.building.yaml), "
+        "or a scenario folder holding one",
     )
     inspect.add_argument("--json", action="store_true", help="print one JSON document instead of text")
     _add_layout_options(inspect)
