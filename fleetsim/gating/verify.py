@@ -18,10 +18,10 @@ from typing import Literal
 from fleetsim.gating.lockfile import LockEntry, compare_run
 from fleetsim.planning.protocol import Planner
 from fleetsim.scenario import Scenario
+from fleetsim.sim.divergence import first_divergence
 from fleetsim.sim.interrupt import StopSignals
 from fleetsim.sim.loop import run_scenario
 from fleetsim.sim.result import Failure, RunResult
-from fleetsim.sim.trace import first_divergence
 
 __all__ = ["CheckedRun", "HashMode", "run_checked"]
 

@@ -31,12 +31,10 @@ from fleetsim.planning.snapshot import VehicleState
 
 __all__ = [
     "TRACE_FORMAT",
-    "Divergence",
     "Trace",
     "TraceFile",
     "complete_lines",
     "cruised_records",
-    "first_divergence",
     "plan_record",
     "vehicle_record",
     "vehicle_records",
@@ -329,62 +327,3 @@ class Trace:
     def digest(self) -> str:
         digest: str = self._hash.hexdigest()
         return digest
-
-
-@dataclass(frozen=True, slots=True)
-class Divergence:
-    """Where two traces first differ, and how."""
-
-    step: int
-    time: float
-    differences: tuple[str, ...]
-
-    def __str__(self) -> str:
-        return f"first divergence at step {self.step} (t = {self.time:.2f} s): " + "; ".join(self.differences)
-
-
-_FIELDS = ("segment", "traverse", "progress", "x mm", "y mm", "heading (0.01°)", "speed mm/s")
-
-
-def _describe_vehicles(a: dict[int, list[Any]], b: dict[int, list[Any]]) -> list[str]:
-    notes = []
-    for vid in sorted(set(a) | set(b)):
-        left, right = a.get(vid), b.get(vid)
-        if left == right:
-            continue
-        if left is None or right is None:
-            notes.append(f"vehicle {vid} present in only one trace")
-            continue
-        for name, x, y in zip(_FIELDS, left[1:], right[1:], strict=True):
-            if x != y:
-                notes.append(f"vehicle {vid} {name} {x} vs {y}")
-    return notes
-
-
-def first_divergence(a: Sequence[str], b: Sequence[str], time_step: float) -> Divergence | None:
-    """The first step at which two traces' lines differ (``None`` if identical), described field by field."""
-    if a and b and a[0] != b[0]:
-        return Divergence(-1, 0.0, ("the trace headers differ (different scenario, settings or format)",))
-    state_a: dict[int, list[Any]] = {}
-    state_b: dict[int, list[Any]] = {}
-    for line_a, line_b in zip(
-        a[1:], b[1:], strict=False
-    ):  # compared up to the shorter; the length check below reports the rest
-        step_a, vehicles_a, plans_a, events_a = json.loads(line_a)
-        _, vehicles_b, plans_b, events_b = json.loads(line_b)
-        state_a.update({record[0]: record for record in vehicles_a})
-        state_b.update({record[0]: record for record in vehicles_b})
-        if line_a == line_b:
-            continue
-        notes = _describe_vehicles(state_a, state_b)
-        if plans_a != plans_b:
-            notes.append(f"accepted plans {plans_a} vs {plans_b}")
-        if events_a != events_b:
-            notes.append(f"events {events_a} vs {events_b}")
-        return Divergence(step_a, (step_a + 1) * time_step, tuple(notes) or ("the step records differ",))
-    if len(a) != len(b):
-        step = min(len(a), len(b)) - 1
-        return Divergence(
-            step, step * time_step, (f"one run ended after {len(a) - 1} steps, the other after {len(b) - 1}",)
-        )
-    return None

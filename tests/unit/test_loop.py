@@ -16,8 +16,9 @@ from fleetsim.layout import Segment
 from fleetsim.planners import BFSPlanner, ReservingPlanner
 from fleetsim.planning.plans import FleetLeg, FleetPlan
 from fleetsim.scenario import Expectations, Scenario
+from fleetsim.sim.divergence import first_divergence
 from fleetsim.sim.loop import run_scenario
-from fleetsim.sim.trace import TRACE_FORMAT, first_divergence
+from fleetsim.sim.trace import TRACE_FORMAT
 
 SUITE = Path(__file__).resolve().parents[2] / "scenario_suites" / "examples.fleetsim.yaml"
 EXAMPLES = [spec.name for spec in load_suite(SUITE).scenarios]
@@ -171,7 +172,8 @@ def test_a_one_line_planner_change_changes_the_hash_and_the_divergence_is_locate
     assert base.trace is not None and changed.trace is not None
     divergence = first_divergence(base.trace.lines, changed.trace.lines, 0.1)
     assert divergence is not None and divergence.step == 1  # step 0 routes, step 1 fixes legs
-    assert "accepted plans" in str(divergence) and "t = 0.20 s" in str(divergence)
+    assert "vehicle 1's plan, leg " in str(divergence) and "t = 0.20 s" in str(divergence)
+    assert "[[" not in str(divergence)  # in words, not the trace's encoding
 
 
 def test_metrics_and_the_json_form() -> None:

@@ -89,6 +89,7 @@ def test_a_nondeterministic_planner_is_refused_and_nothing_is_recorded() -> None
     failure = checked.result.failures[-1]
     assert failure.kind == "nondeterministic"
     assert "first divergence at step" in failure.message and len(failure.details["hashes"]) == 2
+    assert "vehicle 1's plan" in failure.message and "[[" not in failure.message  # in words, not as encoded
 
 
 def test_ignore_mode_neither_checks_nor_records() -> None:
