@@ -18,9 +18,20 @@ from xml.sax.saxutils import escape
 
 from fleetsim.enums import Traverse
 from fleetsim.layout.segment import Point
-from fleetsim.recording.colours import svg_colour, vehicle_colours
+from fleetsim.recording.colours import (
+    ALERT,
+    CONTESTED,
+    CYCLE,
+    DISTURBED,
+    MAP,
+    REJECTED,
+    WAITS,
+    hex_colour,
+    svg_colour,
+    vehicle_colours,
+)
 from fleetsim.recording.replay import Frame, Pose, frame_at
-from fleetsim.recording.svg import _arrow, _document, _Frame, _frame, _label_svg, _point_at, _segment_svg
+from fleetsim.recording.svg import _arrow, _document, _Frame, _frame, _point_at, _segment_labels, _segment_svg
 from fleetsim.scenario import Scenario, Vehicle
 from fleetsim.sim.report import first_line
 from fleetsim.sim.result import MOMENTLESS, Failure, RunResult
@@ -34,16 +45,16 @@ __all__ = [
     "stuck_details",
 ]
 
-_MAP = "#a8a8a8"
-_ALERT = "#ff8c00"
+_MAP = hex_colour(MAP)
+_ALERT = hex_colour(ALERT)
 _INK = "#111111"
 _LEGEND = "thick: fixed legs \u00b7 dashed: planned legs \u00b7 orange: segments with a collision alert"
-_WAITS = "#2c3e50"
-_DISTURBED = "#e6007e"  # the outline and label of a vehicle a disturbance stops or slows
+_WAITS = hex_colour(WAITS)
+_DISTURBED = hex_colour(DISTURBED)  # the outline and label of a vehicle a disturbance stops or slows
 _DISTURBED_LEGEND = "magenta dashed outline: a disturbance stops (STOP) or slows (SLOW) the vehicle"
-_CYCLE = "#d0021b"
-_CONTESTED = "#8e44ad"
-_REJECTED = "#d6008f"
+_CYCLE = hex_colour(CYCLE)
+_CONTESTED = hex_colour(CONTESTED)
+_REJECTED = hex_colour(REJECTED)
 _REJECTED_LEGEND = "magenta, dashed: the rejected plan (red outline: the leg that failed the check)"
 _STUCK_KINDS = ("deadlock", "timeout", "interrupted")  # failures that explain who waits for whom
 _MIN_WIDTH = 480.0  # user units: room for a readable caption on the smallest maps
@@ -262,11 +273,10 @@ def _map_svg(scenario: Scenario, view: _Frame) -> list[str]:
 
 
 def _labels_svg(scenario: Scenario, view: _Frame) -> list[str]:
-    """Segment ids, drawn over the plans so an alert's segment can be read off the picture."""
-    layout = scenario.layout
+    """Segment labels (ids, and the site's names), drawn over the plans so an alert's segment can be read off."""
     return [
         '<g class="segment-labels" font-family="sans-serif" fill="#555555">',
-        *(_label_svg(view, layout.segments[sid], 0.3 * view.scale) for sid in sorted(layout.segments)),
+        *_segment_labels(view, scenario.layout, 0.3 * view.scale),
         "</g>",
     ]
 

@@ -7,30 +7,24 @@ legs change. What is written when, and to which topic, is :mod:`fleetsim.recordi
 
 from __future__ import annotations
 
-import math
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
 from fleetsim.enums import Traverse
-from fleetsim.layout.segment import Segment
 from fleetsim.planning.plans import FleetPlan
 from fleetsim.planning.reservations import CollisionAlert
 from fleetsim.recording import messages as m
-from fleetsim.recording.colours import vehicle_colours
+from fleetsim.recording.colours import ALERT, CONTESTED, CYCLE, DISTURBED, MAP_RVIZ, WAITS, vehicle_colours, with_alpha
+from fleetsim.recording.labels import LabelSpace, box_around, nearest_point, spots_beside
 from fleetsim.recording.rviz import framed_view
 from fleetsim.scenario import Scenario
 
 __all__ = ["Scene", "alert_label", "frame_name"]
 
-_MAP_GREY = (0.55, 0.58, 0.65, 1.0)
-_ORANGE = (1.0, 0.55, 0.0, 1.0)
 _WHITE = (1.0, 1.0, 1.0, 1.0)
-_WAITS = (0.17, 0.24, 0.31, 1.0)
-_CYCLE_RED = (0.82, 0.0, 0.11, 1.0)
-_ROOT_RED = (0.82, 0.0, 0.11, 0.45)
-_PURPLE = (0.56, 0.27, 0.68, 0.8)
-_MAGENTA = (0.9, 0.0, 0.5, 1.0)
-_FIXED_WIDTH, _PLANNED_WIDTH, _MAP_WIDTH, _ALERT_WIDTH = 0.18, 0.06, 0.05, 0.35
+_ROOT_RED = with_alpha(CYCLE, 0.45)
+_PURPLE = with_alpha(CONTESTED, 0.8)
+_FIXED_WIDTH, _PLANNED_WIDTH, _MAP_WIDTH, _ALERT_WIDTH, _LEADER_WIDTH = 0.18, 0.06, 0.05, 0.35, 0.04
 
 
 def frame_name(vehicle_id: int) -> str:
@@ -79,7 +73,7 @@ class Scene:
 
     def map_markers(self, time: m.Stamp) -> m.MarkerArray:
         pairs = self.points(sorted(self.scenario.layout.segments), 0.0)
-        return m.marker_array([m.line_list(time, "segments", 0, pairs, _MAP_WIDTH, _MAP_GREY)])
+        return m.marker_array([m.line_list(time, "segments", 0, pairs, _MAP_WIDTH, MAP_RVIZ)])
 
     def labels(self, time: m.Stamp) -> m.MarkerArray:
         markers = []
@@ -123,36 +117,35 @@ class Scene:
     def alerts(self, time: m.Stamp, alerts: Sequence[CollisionAlert]) -> m.MarkerArray:
         """The alert segments in orange and a short label each (``segment 7: 1 ⟂ 2``) beside its middle.
 
-        Labels are placed one by one, each at the first spot near its segment's middle where it does not
-        overlap a label placed before it (the full thesis text goes to ``/rosout``).
+        Labels are placed by :mod:`fleetsim.recording.labels`, each at the first spot beside its segment's
+        middle where it overlaps no label placed before it (every spot taken: the farthest). A label
+        pushed further out than the spots right beside the middle gets a thin orange leader line
+        (namespace ``alert_leaders``, same id) from its nearest edge to the segment's middle. The full
+        thesis text goes to ``/rosout``.
         """
         markers = [m.delete_all(time, "")]
-        placed: list[tuple[float, float, float, float]] = []
+        space = LabelSpace(4.0 * self.letter)
+        offsets = [k * 1.4 * self.letter for k in range(1, 12)]
         for number, alert in enumerate(alerts):
+            segment = self.scenario.layout.segments[alert.segment]
             markers.append(
-                m.line_list(time, "alert_segments", number, self.points([alert.segment], 0.05), _ALERT_WIDTH, _ORANGE)
+                m.line_list(time, "alert_segments", number, self.points([alert.segment], 0.05), _ALERT_WIDTH, ALERT)
             )
             text = alert_label(alert)
-            x, y = self._free_spot(self.scenario.layout.segments[alert.segment], text, placed)
-            markers.append(m.text_marker(time, "map", "alert_text", number, text, (x, y, 1.0), self.letter, _ORANGE))
+            spots = spots_beside(segment, offsets)
+            placed = space.place(spots, text, self.letter)
+            if placed is None:  # an alert is never left unlabelled: on top of another label, then
+                placed = len(spots) - 1, box_around(spots[-1], text, self.letter)
+                space.add(placed[1])
+            index, box = placed
+            x, y = (box[0] + box[2]) / 2, (box[1] + box[3]) / 2
+            markers.append(m.text_marker(time, "map", "alert_text", number, text, (x, y, 1.0), self.letter, ALERT))
+            if index >= 2:  # the first two spots are beside the middle, left and right
+                mx, my, _ = segment.pose_at(segment.length / 2, Traverse.FORWARD)
+                ex, ey = nearest_point(box, (mx, my))
+                ends = m.Points.of([(ex, ey, 1.0), (mx, my, 0.05)])
+                markers.append(m.line_list(time, "alert_leaders", number, ends, _LEADER_WIDTH, ALERT))
         return m.marker_array(markers)
-
-    def _free_spot(
-        self, segment: Segment, text: str, placed: list[tuple[float, float, float, float]]
-    ) -> tuple[float, float]:
-        """A spot beside ``segment``'s middle where ``text`` overlaps no box in ``placed`` (which it joins)."""
-        mx, my, heading = segment.pose_at(segment.length / 2, Traverse.FORWARD)
-        half_w, half_h = 0.3 * self.letter * len(text), 0.6 * self.letter
-        nx, ny = -math.sin(heading), math.cos(heading)  # left of the segment
-        step = 1.4 * self.letter
-        spots = [(mx + side * k * step * nx, my + side * k * step * ny) for k in range(1, 12) for side in (1, -1)]
-        box = (0.0, 0.0, 0.0, 0.0)
-        for x, y in spots:
-            box = (x - half_w, y - half_h, x + half_w, y + half_h)
-            if not any(box[0] < b[2] and b[0] < box[2] and box[1] < b[3] and b[1] < box[3] for b in placed):
-                break
-        placed.append(box)
-        return (box[0] + box[2]) / 2, (box[1] + box[3]) / 2
 
     def stuck(self, time: m.Stamp, poses: Mapping[int, Any], stuck: Mapping[str, Any]) -> m.MarkerArray:
         """Who waits for whom at the end of a stuck run (the failure's details, as in result.json)."""
@@ -178,7 +171,7 @@ class Scene:
                 numbers[namespace] = numbers.get(namespace, -1) + 1
                 a, b = poses[source], poses[target]
                 start, end = (a.x, a.y, 0.6), (b.x, b.y, 0.6)
-                colour = _CYCLE_RED if cycle else _WAITS
+                colour = CYCLE if cycle else WAITS
                 markers.append(
                     m.arrow(time, namespace, numbers[namespace], start, end, 0.12 if waits else 0.05, colour)
                 )
@@ -193,7 +186,7 @@ class Scene:
         if headline:
             markers.append(
                 m.text_marker(
-                    time, "map", "stuck_text", 0, headline, (x, y + 1.5 * self.letter, 0.0), self.letter, _CYCLE_RED
+                    time, "map", "stuck_text", 0, headline, (x, y + 1.5 * self.letter, 0.0), self.letter, CYCLE
                 )
             )
         return m.marker_array(markers)
@@ -211,10 +204,10 @@ class Scene:
                 (half_length, -half_width),
             ]
             outline = m.path_points([*corners, corners[0]], 0.05)
-            markers.append(m.line_strip(time, "disturbed", vid, outline, 0.08, _MAGENTA, frame=frame_name(vid)))
+            markers.append(m.line_strip(time, "disturbed", vid, outline, 0.08, DISTURBED, frame=frame_name(vid)))
             at = (0.0, 0.0, types[vid].height + 0.9)
             markers.append(
-                m.text_marker(time, frame_name(vid), "disturbed_label", vid, kind.upper(), at, 0.4, _MAGENTA, True)
+                m.text_marker(time, frame_name(vid), "disturbed_label", vid, kind.upper(), at, 0.4, DISTURBED, True)
             )
         return m.marker_array(markers)
 

@@ -17,6 +17,7 @@ from fleetsim.enums import Traverse
 from fleetsim.errors import LayoutError
 from fleetsim.layout.layout import Layout
 from fleetsim.layout.segment import Point, Segment
+from fleetsim.recording.labels import LabelSpace, spots_beside
 
 __all__ = ["render_layout_svg"]
 
@@ -24,6 +25,9 @@ _PLAIN = "#3b4a6b"
 _HIGHLIGHT = "#f2c200"
 _SUCCESSOR = "#2e9e3f"
 _CONFLICT = "#9a9a9a"
+# A label's candidate spots: offsets from its segment in letter heights, fractions of the way along it.
+_LABEL_OFFSETS = (0.9, 2.1, 3.3)
+_LABEL_FRACTIONS = (0.5, 0.3, 0.7, 0.15, 0.85)
 
 
 @dataclass(frozen=True, slots=True)
@@ -123,16 +127,30 @@ def _segment_svg(frame: _Frame, segment: Segment, colour: str, width: float, arr
     return parts
 
 
-def _label_svg(frame: _Frame, segment: Segment, font: float) -> str:
-    mid, heading = _point_at(segment, 0.5)
-    # Put the id beside the line, on its left-hand side, so it never sits on top of the stroke.
-    offset = 0.9 * font / frame.scale
-    anchor = (mid[0] - offset * math.sin(heading), mid[1] + offset * math.cos(heading))
-    x, y = frame.point(anchor)
-    return (
-        f'<text x="{x:.2f}" y="{y:.2f}" font-size="{font:.1f}" text-anchor="middle" '
-        f'dominant-baseline="middle">{segment.id}</text>'
-    )
+def _segment_labels(frame: _Frame, layout: Layout, font: float) -> list[str]:
+    """Each segment's label, its id and the site's name for it (when the map has one), beside it.
+
+    Placed in id order by :mod:`fleetsim.recording.labels`: first beside the middle on the left (where it
+    never sits on the stroke), else the first free spot further out or along the segment. On a dense map
+    a label with no free spot is left out rather than drawn over another one.
+    """
+    letter = font / frame.scale  # placement in world metres
+    offsets = [k * letter for k in _LABEL_OFFSETS]
+    space = LabelSpace(4.0 * letter)
+    parts = []
+    for sid in sorted(layout.segments):
+        segment = layout.segments[sid]
+        text = str(sid) if segment.name is None else f"{sid} ({segment.name})"
+        placed = space.place(spots_beside(segment, offsets, _LABEL_FRACTIONS), text, letter)
+        if placed is None:
+            continue
+        _, box = placed
+        x, y = frame.point(((box[0] + box[2]) / 2, (box[1] + box[3]) / 2))
+        parts.append(
+            f'<text class="segment-label" data-segment="{sid}" x="{x:.2f}" y="{y:.2f}" font-size="{font:.1f}" '
+            f'text-anchor="middle" dominant-baseline="middle">{escape(text)}</text>'
+        )
+    return parts
 
 
 def _colours(layout: Layout, highlight: int | None) -> dict[int, str]:
@@ -181,7 +199,7 @@ def render_layout_svg(layout: Layout, *, highlight: int | None = None, pixels_pe
         segment = layout.segments[sid]
         body.extend(_segment_svg(frame, segment, colours[sid], width * (1.6 if sid == highlight else 1.0), arrow))
     body.append('<g font-family="sans-serif" fill="#111">')
-    body.extend(_label_svg(frame, layout.segments[sid], font * 0.6) for sid in sorted(layout.segments))
+    body.extend(_segment_labels(frame, layout, font * 0.6))
     body.append("</g>")
     if highlight is not None:
         body.append('<g font-family="sans-serif" fill="#111">')
