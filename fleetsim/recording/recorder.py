@@ -16,7 +16,8 @@ Topics:
 - ``/fleetsim/map``: the segments (LINE_LIST); ``/fleetsim/labels``: vehicle ids, locked to their frames.
 - ``/fleetsim/plans``: each vehicle's plan in its colour, fixed legs thick, planned legs thin.
 - ``/fleetsim/alerts``: segments of the collision alerts in force, orange, each with a short label
-  (``segment 7: 1 ⟂ 2``) beside its middle, placed so that labels do not overlap.
+  (``segment 7: 1 ⟂ 2``) beside its middle, placed so that labels do not overlap; a label pushed further
+  out gets a leader line back to the segment's middle (namespace ``alert_leaders``).
 - ``/fleetsim/sim_time``: a text marker with the simulated time.
 - ``/fleetsim/disturbed``: a magenta outline and ``STOP``/``SLOW`` round each vehicle a disturbance
   stops or slows, locked to its frame, replaced whenever a disturbance begins or ends.
