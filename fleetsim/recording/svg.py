@@ -1,4 +1,4 @@
-"""SVG pictures of a layout: segment ids, direction arrows and a highlighted neighbourhood.
+"""SVG pictures of a layout: segment ids (and the site's names), direction arrows and a highlighted neighbourhood.
 
 With a highlighted segment the picture is the thesis's figure 24: the segment in yellow, the segments
 it leads to in green, and the segments it conflicts with (a vehicle on one could hit a vehicle on the
