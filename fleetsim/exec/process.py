@@ -174,6 +174,11 @@ class SubprocessPlanner:
             return f"stderr of {shlex.join(self.command)} (last {_STDERR_TAIL} characters):\n{text}" if text else ""
         return ""
 
+    def overrun_message(self, limit: str) -> str:
+        """What a call cut short by the run's timer (``limit``: the timeout, in words) was waiting for:
+        the message the process did not answer (the init message, a request, a round's requests)."""
+        return f"planner process {shlex.join(self.command)}: did not answer {self._request()} within {limit}"
+
     def close(self) -> None:
         """End the process: close its stdin, give it a moment, then terminate and kill its group."""
         process, self._process = self._process, None

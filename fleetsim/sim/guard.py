@@ -130,7 +130,7 @@ class PlannerGuard:
         except (_Overrun, Exception) as exc:
             self._account(start)
             where = f"{method}() for vehicle {vehicle_id}"
-            overrun = functools.partial(self._overrun, method, vehicle_id, call)
+            overrun = functools.partial(self._overrun, method, vehicle_id, call, timer=True)
             raise self._fault(exc, where, vehicle_id, overrun) from None
         elapsed = _clock() - start
         self._call_started = None
@@ -162,7 +162,7 @@ class PlannerGuard:
             raise
         except (_Overrun, Exception) as exc:
             self._account(start)
-            overrun = functools.partial(self._round_overrun, method, vehicle_id, count, call_round)
+            overrun = functools.partial(self._round_overrun, method, vehicle_id, count, call_round, timer=True)
             where = f"{method}() for vehicle {vehicle_id}" if count == 1 else _round_words(method, vehicle_id, count)
             raise self._fault(exc, where, vehicle_id, overrun) from None
         finally:
@@ -184,23 +184,43 @@ class PlannerGuard:
         """What a call (or a round) that ended in ``exc`` is reported as."""
         if isinstance(exc, _Overrun):
             return overrun()
-        if isinstance(exc, PlannerProcessError):  # a planner process failed: its stderr says more than our frames
-            return PlannerFault(f"{where}: {exc}", vehicle_id=vehicle_id, details=exc.details)
+        if isinstance(exc, PlannerProcessError):
+            # A planner process failed: its error names the message it failed on (the init message, a
+            # request, a round's requests) and its stderr says more than our frames.
+            return PlannerFault(str(exc), vehicle_id=vehicle_id, details=exc.details)
         msg = f"{where} raised {type(exc).__name__}: {exc}"
         return PlannerFault(msg, vehicle_id=vehicle_id, details=_planner_traceback(exc))
 
-    def _round_overrun(self, method: str, vehicle_id: int, count: int, call: Callable[..., object]) -> PlannerFault:
+    def _round_overrun(
+        self, method: str, vehicle_id: int, count: int, call: Callable[..., object], *, timer: bool = False
+    ) -> PlannerFault:
         if count == 1:
-            return self._overrun(method, vehicle_id, call)
+            return self._overrun(method, vehicle_id, call, timer=timer)
         what = f"{_round_words(method, vehicle_id, count)} did not return within {count} x the per-call timeout"
-        return self._overrun(method, vehicle_id, call, what)
+        return self._overrun(method, vehicle_id, call, what, count=count, timer=timer)
 
-    def _overrun(self, method: str, vehicle_id: int, call: Callable[..., object], what: str = "") -> PlannerFault:
+    def _overrun(
+        self,
+        method: str,
+        vehicle_id: int,
+        call: Callable[..., object],
+        what: str = "",
+        *,
+        count: int = 1,
+        timer: bool = False,
+    ) -> PlannerFault:
         what = what or f"{method}() for vehicle {vehicle_id} did not return within the per-call timeout"
         msg = f"{what} of {self.timeout:g} s"
-        # A planner may say more about itself (a planner process: the tail of its stderr).
-        diagnostics = getattr(getattr(call, "__self__", None), "diagnostics", None)
+        # A planner may say more about itself: the tail of a planner process's stderr, and (cut short by
+        # the timer) what it was waiting for: its init message, say, rather than the call that started it.
+        owner = getattr(call, "__self__", None)
+        diagnostics = getattr(owner, "diagnostics", None)
         details = diagnostics() if callable(diagnostics) else ""
+        overrun_message = getattr(owner, "overrun_message", None)
+        if timer and callable(overrun_message):
+            limit = f"{count} x the per-call timeout" if count > 1 else "the per-call timeout"
+            said = overrun_message(f"{limit} of {self.timeout:g} s")
+            msg = said if isinstance(said, str) and said else msg
         return PlannerFault(msg, vehicle_id=vehicle_id, details=details if isinstance(details, str) else "")
 
     def _account(self, start: float) -> None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import shlex
 import sys
 import textwrap
 import time
@@ -68,6 +69,13 @@ plans = {}
 for line in sys.stdin:
     message = json.loads(line)
     if message["type"] == "init":
+        if fault == "init-exit":
+            sys.exit(3)
+        if fault == "init-hang":
+            time.sleep(600)
+        if fault == "init-answer":
+            print(json.dumps({"type": "hello"}), flush=True)
+            continue
         print(json.dumps({"type": "ready", "rounds": True} if rounds else {"type": "ready"}), flush=True)
         continue
     for plan in message.get("fleet", {}).get("plans", []):
@@ -191,6 +199,39 @@ def test_each_fault_in_a_round_fails_the_run_with_a_planner_error_and_the_stderr
     assert planner._process is None  # closed
 
 
+# A planner that fails at its init message is told about the init message, never about the calls of the
+# round (or the request) that started it, whether it would have answered rounds or not.
+@pytest.mark.parametrize("mode", ["rounds", "one-call-at-a-time"])
+@pytest.mark.parametrize(
+    ("fault", "message"),
+    [
+        ("no-start", "exited with status 2 before answering the init message"),
+        ("init-exit", "exited with status 3 before answering the init message"),
+        ("init-answer", 'answered the init message with {"type": "hello"}, not {"type": "ready"}'),
+        ("init-hang", "did not answer the init message within 2 x the per-call timeout of 1 s"),
+    ],
+)
+def test_a_fault_at_init_names_the_init_message(faulty: Path, mode: str, fault: str, message: str) -> None:
+    result, planner = _run_faulty(faulty, fault, "1", *(["rounds"] if mode == "rounds" else []), timeout=1.0)
+
+    [failure] = result.failures
+    assert failure.kind == "planner-error"
+    said = failure.message.removeprefix(f"planner process {shlex.join(planner.command)}: ")
+    assert said.startswith(message), failure.message
+    assert "round" not in said and "vehicle" not in said
+    assert "faulty planner starting" in failure.details.get("traceback", "")
+
+
+def test_a_fault_after_init_names_the_request_its_kind_and_vehicle(faulty: Path) -> None:
+    """Narrowly: a planner that started well is told which request it failed, not the init message."""
+    result, _planner = _run_faulty(faulty, "exit", "2")
+    [failure] = result.failures
+    assert failure.message == (
+        f"planner process {sys.executable} {faulty} exit 2: exited with status 0 before answering request 2 "
+        "(plan_routes for vehicle 2)"
+    )
+
+
 def test_a_hanging_planner_in_a_round_is_stopped_at_the_rounds_timeout_and_killed(faulty: Path) -> None:
     started = time.monotonic()
     result, _planner = _run_faulty(faulty, "hang", "1", "rounds", timeout=1.0)
@@ -198,8 +239,11 @@ def test_a_hanging_planner_in_a_round_is_stopped_at_the_rounds_timeout_and_kille
     assert time.monotonic() - started < 10.0
     [failure] = result.failures
     assert failure.kind == "planner-error"
-    assert "a round of 2 planner calls (the first plan_routes() for vehicle 1)" in failure.message
-    assert "within 2 x the per-call timeout of 1 s" in failure.message  # the guard's or the process's, whichever first
+    # The run's timer or the process's own, whichever comes first, says the same.
+    assert failure.message == (
+        f"planner process {sys.executable} {faulty} hang 1 rounds: did not answer requests 1-2 in one round "
+        "(plan_routes for vehicle 1, plan_routes for vehicle 2) within 2 x the per-call timeout of 1 s"
+    )
     assert "planner: going wrong on request 1" in failure.details.get("traceback", "")
 
 
