@@ -104,9 +104,7 @@ def _layout_from_args(args: argparse.Namespace) -> tuple[SiteMap, Layout]:
 
 def layout_document(tiled_map: SiteMap, layout: Layout) -> dict[str, Any]:
     """The ``inspect --json`` document: segments, connections, conflicts per segment, lint (SPEC §14)."""
-    encoded = encode_layout(layout)  # the layout part of a planner process's init message, too
-    for segment in encoded["segments"]:  # plus what the site calls each segment
-        segment["names"] = list(layout.segments[segment["id"]].names)
+    encoded = encode_layout(layout)  # exactly a planner process's init layout
     return {
         "map": str(tiled_map.path),
         "format": tiled_map.format,

@@ -56,7 +56,13 @@ class ProtocolError(Exception):
 
 def _layout(data: Mapping[str, Any]) -> Layout:
     segments = [
-        Segment(s["id"], Shape(s["shape"]), Direction(s["direction"]), tuple((x, y) for x, y in s["waypoints"]))
+        Segment(
+            s["id"],
+            Shape(s["shape"]),
+            Direction(s["direction"]),
+            tuple((x, y) for x, y in s["waypoints"]),
+            tuple(s.get("names", ())),  # 1.3; before, segments came without names
+        )
         for s in data["segments"]
     ]
     settings = data["settings"]

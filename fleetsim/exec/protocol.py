@@ -8,11 +8,13 @@ are in ``schemas/planner-*.schema.json``.
 
 Versions: ``fleetsim-planner/MAJOR.MINOR`` (``fleetsim-planner/1`` is 1.0). A minor version only adds
 optional fields, so a client checks the major part; 1.1 added ``disturbed``; 1.2 planning rounds in one
-message, which a client opts into (``fleetsim/exec/rounds.py``).
+message, which a client opts into (``fleetsim/exec/rounds.py``); 1.3 the segments' ``names``.
 
-1. ``{"type": "init", "protocol": "fleetsim-planner/1.2", "layout": {...}, "scenario": {...}}``
-   - ``layout`` (the same document as ``fleetsim inspect --json`` gives, without lint):
-     ``segments`` (``id, shape, direction, length, waypoints`` in metres), ``connections``
+1. ``{"type": "init", "protocol": "fleetsim-planner/1.3", "layout": {...}, "scenario": {...}}``
+   - ``layout``: exactly the layout part of what ``fleetsim inspect --json`` prints for the map (which
+     adds the map file, its format and part, ``meters_per_pixel``, ``lint`` and ``warnings``):
+     ``segments`` (``id, shape, direction, length, waypoints`` in metres, ``names``: what the site
+     calls the segment, maybe nothing), ``connections``
      (``from: [segment, traverse], to: [segment, traverse], joint``; the successors of a state are its
      connections in this order), ``conflicts`` (``{segment, conflicts}``, each list sorted) and
      ``settings`` (``vehicle_radius, safety_margin, conflict_model, connection_tolerance,
@@ -90,7 +92,7 @@ __all__ = [
     "loads",
 ]
 
-PROTOCOL = "fleetsim-planner/1.2"
+PROTOCOL = "fleetsim-planner/1.3"
 PROTOCOL_FAMILY = "fleetsim-planner/1"  # what a client checks: the same major version
 
 # Both sides of every planner call encode and decode a message, so JSON is orjson's (compiled): a call's
@@ -111,6 +113,8 @@ _PROGRESS_WORD: Mapping[Progress, str] = {member: member.value for member in Pro
 
 
 def encode_layout(layout: Layout) -> dict[str, Any]:
+    """The layout document: the init message's ``layout`` and the layout part of ``fleetsim inspect
+    --json`` (which adds the map file's facts, lint and warnings around it)."""
     segments = [layout.segments[sid] for sid in sorted(layout.segments)]
     return {
         "segments": [
@@ -120,6 +124,7 @@ def encode_layout(layout: Layout) -> dict[str, Any]:
                 "direction": s.direction.value,
                 "length": s.length,
                 "waypoints": [[x, y] for x, y in s.waypoints],
+                "names": list(s.names),
             }
             for s in segments
         ],

@@ -82,6 +82,53 @@ def test_init_and_requests_match_their_schemas_and_updates_carry_only_changes() 
     assert update["plans"] == [] and update["tasks"] == [] and update["time"] == 0.1
 
 
+MAP_FILE_KEYS = {"map", "format", "part", "meters_per_pixel", "lint", "warnings"}  # what inspect adds around it
+
+
+@pytest.mark.parametrize(
+    ("suite", "name", "map_options"),
+    [
+        ("examples.fleetsim.yaml", "crossing", []),
+        ("sites.fleetsim.yaml", "packing-hall-lif", ["--layout", "hall-ground", "--robot-type", "Acme.Tug"]),
+        ("sites.fleetsim.yaml", "clinic-rmf", ["--level", "L1", "--graph", "0"]),
+    ],
+)
+def test_the_init_layout_is_exactly_the_layout_fleetsim_inspect_json_prints(
+    suite: str, name: str, map_options: list[str], capsys: pytest.CaptureFixture[str]
+) -> None:
+    from fleetsim.cli import main
+
+    loaded = load_suite(ROOT / "scenario_suites" / suite)
+    spec = next(spec for spec in loaded.scenarios if spec.name == name)
+    scenario = load_scenario(spec, loaded)
+    layout = scenario.layout
+    settings = [
+        "--radius", repr(layout.vehicle_radius), "--safety-margin", repr(layout.safety_margin),
+        "--conflict-model", layout.conflict_model.value, "--connection-tolerance", repr(layout.connection_tolerance),
+        "--joint-angle-tolerance", repr(layout.joint_angle_tolerance),
+    ]  # fmt: skip
+    assert main(["inspect", str(spec.map_path), "--json", *settings, *map_options]) == 0
+    inspected = json.loads(capsys.readouterr().out)
+    init = json.loads(dumps(encode_init(layout, FleetController(scenario).snapshot(0.0))))
+
+    assert set(inspected) - set(init["layout"]) == MAP_FILE_KEYS
+    assert init["layout"] == {key: value for key, value in inspected.items() if key not in MAP_FILE_KEYS}
+    assert all("names" in segment for segment in init["layout"]["segments"])
+    if name != "crossing":  # a LIF edge's id, an RMF lane's waypoints: sites name their segments
+        assert any(segment["names"] for segment in init["layout"]["segments"])
+
+
+def test_a_served_planner_gets_the_segments_names_and_a_1_2_init_without_them_still_loads() -> None:
+    loaded = load_suite(ROOT / "scenario_suites" / "sites.fleetsim.yaml")
+    scenario = load_scenario(next(s for s in loaded.scenarios if s.name == "packing-hall-lif"), loaded)
+    init = json.loads(dumps(encode_init(scenario.layout, FleetController(scenario).snapshot(0.0))))
+    assert _Session(init).layout.segments == scenario.layout.segments  # names included
+    for segment in init["layout"]["segments"]:
+        del segment["names"]
+    older = _Session({**init, "protocol": "fleetsim-planner/1.2"})
+    assert [s.names for s in older.layout.segments.values()] == [() for _ in scenario.layout.segments]
+
+
 def test_an_update_names_the_vehicles_that_changed_whatever_order_the_fleets_list_them_in() -> None:
     # Two snapshots of a run list the vehicles in the same order (compared value by value); fleets put
     # together otherwise are compared vehicle by vehicle, with the same result. A value replaced by an
@@ -174,7 +221,7 @@ def test_the_disturbed_field_travels_only_while_set_and_protocol_1_0_clients_are
     controller = FleetController(scenario)
     first = controller.snapshot(0.0)
     init = json.loads(json.dumps(encode_init(scenario.layout, first)))
-    assert init["protocol"] == "fleetsim-planner/1.2"
+    assert init["protocol"] == "fleetsim-planner/1.3"
     assert all("disturbed" not in v for v in encode_fleet(first)["vehicles"])  # as in 1.0 when undisturbed
     session = _Session(init)
     session.snapshot(json.loads(json.dumps(encode_fleet(first))))
