@@ -20,7 +20,7 @@ import sys
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any, Literal, TextIO
+from typing import Any, TextIO
 
 from fleetsim.errors import FleetsimError, LoadError
 from fleetsim.exec.spec import load_planner_factory
@@ -42,7 +42,7 @@ from fleetsim.sim.interrupt import StopSignals, signal_name
 from fleetsim.sim.loop import RunProgress, run_scenario
 from fleetsim.sim.planner_spec import PlannerFactory, PlannerSpecError
 from fleetsim.sim.report import failure_lines, format_table, summary_cells
-from fleetsim.sim.result import Ending, Failure, Metrics, RunResult
+from fleetsim.sim.result import Failure, RunResult
 
 __all__ = ["UsageError", "run"]
 
@@ -249,9 +249,8 @@ def _hunt_target(
         record_to=(folder, about),
     )
     if found.result is None:  # examples: 0
-        return _Outcome(
-            target, _unrun(target.spec.name, factory.spec, "passed", "no-counterexample", ()), loaded=True, hunt=found
-        )
+        unrun = RunResult.unrun(target.spec.name, factory.spec, status="passed", ended="no-counterexample")
+        return _Outcome(target, unrun, loaded=True, hunt=found)
     result = found.result
     if found.counterexample is not None:
         extra = {"suite": str(target.suite_path), "line": target.spec.line, **hunt_facts(found)}
@@ -269,38 +268,11 @@ def _load_failure(name: str, planner: str, error: LoadError | PlannerSpecError) 
     """A result for a scenario that never ran, shaped like any other (its JSON has the same keys)."""
     location = getattr(error, "location", None)
     details = {"location": str(location)} if location is not None else {}
-    return _unrun(name, planner, "failed", "load-error", (Failure("load-error", 0.0, str(error), details),))
-
-
-def _unrun(
-    name: str, planner: str, status: Literal["passed", "failed"], ended: Ending, failures: tuple[Failure, ...]
-) -> RunResult:
-    """A result without a run of its own (a load error, or a hunt that found nothing)."""
-    metrics = Metrics(None, {}, {}, planner_calls=0, planner_wall_time=0.0, wall_time=0.0, sim_time=0.0)
-    return RunResult(
-        scenario=name,
-        planner=planner,
-        status=status,
-        failures=failures,
-        trace_hash="",
-        sim_time=0.0,
-        steps=0,
-        tasks_total=0,
-        tasks_completed=0,
-        pending=(),
-        rejections=(),
-        collisions=(),
-        route_errors=(),
-        ended=ended,
-        deadlock=None,
-        metrics=metrics,
-    )
+    return RunResult.unrun(name, planner, (Failure("load-error", 0.0, str(error), details),))
 
 
 def _document(outcome: _Outcome) -> dict[str, Any]:
     document = outcome.result.to_dict()
-    if not outcome.loaded:
-        document["trace_hash"] = None  # nothing ran, so there is no hash to compare
     document["suite"] = str(outcome.target.suite_path)
     document["xfail"] = outcome.xfail
     if outcome.hunt is not None:

@@ -43,8 +43,11 @@ __all__ = [
 ]
 
 METRICS_FORMAT = "fleetsim-metrics/1"
-SWEEP_RESULTS_FORMAT = "fleetsim-sweep-results/1"  # fleetsim sweep's JSON lines: a header, then rows like ours
+# fleetsim sweep's JSON lines: a header, then a run's result (schemas/result.schema.json) per row. Format 1
+# held flat rows of our fields; 2 the run's ordinary result plus the sweep's keys.
+SWEEP_RESULTS_FORMAT = "fleetsim-sweep-results/2"
 Outcome = Literal["passed", "failed", "xfailed", "xpassed", "skipped"]  # pytest's words for a test's end
+_SWEEP_FAMILY = SWEEP_RESULTS_FORMAT.rpartition("/")[0] + "/"
 _SLACK = 1e-9  # relative; a value exactly at a limit written in decimal must not trip on binary rounding
 
 
@@ -98,6 +101,31 @@ class ScenarioMetrics:
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
+
+    @classmethod
+    def from_document(cls, id: str, outcome: Outcome, document: Mapping[str, Any]) -> ScenarioMetrics:
+        """The figures of a run's result document (``schemas/result.schema.json``: a sweep's record, a
+        ``result.json``), as :meth:`from_result` takes them from the run itself (the document's figures
+        are rounded already)."""
+        m = document["metrics"]
+        return cls(
+            id=id,
+            planner=document["planner"],
+            outcome=outcome,
+            tasks_total=document["tasks"]["total"],
+            tasks_completed=document["tasks"]["completed"],
+            makespan=_round(m["makespan"]),
+            distance=round(math.fsum(m["distance"].values()), 6),
+            waiting_time=round(math.fsum(m["waiting_time"].values()), 6),
+            alerts=len(document["collisions"]),
+            rejections=len(document["rejections"]),
+            planner_calls=m["planner_calls"],
+            planner_wall_time=float(m["planner_wall_time"]),
+            wall_time=float(m["wall_time"]),
+            sim_time=float(document["sim_time"]),
+            realtime_factor=_round(m["realtime_factor"]),
+            trace_hash=document["trace_hash"] or "",
+        )
 
     @classmethod
     def from_dict(cls, data: object, where: str) -> ScenarioMetrics:
@@ -171,8 +199,12 @@ def read_metrics(path: Path | str, planner: str | None = None) -> dict[str, Scen
     except (OSError, ValueError) as exc:  # ValueError: not UTF-8, or a NUL in the path
         msg = f"{path}: cannot read the metrics file: {exc}"
         raise BaselineError(msg) from None
-    if text.startswith('{"') and f'"format": "{SWEEP_RESULTS_FORMAT}"' in text.partition("\n")[0]:
+    first = text.partition("\n")[0]
+    if text.startswith('{"') and f'"format": "{SWEEP_RESULTS_FORMAT}"' in first:
         return _sweep_rows(path, text, planner)
+    if text.startswith('{"') and f'"format": "{_SWEEP_FAMILY}' in first:
+        msg = f"{Location(path, 1)}: a sweep results file of another fleetsim version (this one reads {SWEEP_RESULTS_FORMAT!r}); run the sweep again"
+        raise BaselineError(msg)
     try:
         document = json.loads(text)
     except json.JSONDecodeError as exc:
@@ -196,6 +228,8 @@ def read_metrics(path: Path | str, planner: str | None = None) -> dict[str, Scen
 
 
 def _sweep_rows(path: Path, text: str, planner: str | None) -> dict[str, ScenarioMetrics]:
+    from fleetsim.sim.result_schema import result_problem  # jsonschema only for a sweep's file
+
     rows: dict[str, dict[str, ScenarioMetrics]] = {}
     lines = text.split("\n")
     for number, line in enumerate(lines[1:-1], start=2):  # text after the last newline: a row cut short
@@ -204,9 +238,15 @@ def _sweep_rows(path: Path, text: str, planner: str | None) -> dict[str, Scenari
         except json.JSONDecodeError as exc:
             msg = f"{Location(path, number, exc.colno)}: {json_problem(exc)}"
             raise BaselineError(msg) from None
-        if not isinstance(data, dict) or data.get("source") != "suite" or data.get("repetition") != 1:
+        if data is None:
+            continue
+        problem = result_problem(data) or (None if isinstance(data.get("id"), str) else "its 'id' is missing")
+        if problem is not None:
+            msg = f"{Location(path, number)}: not a run's result: {problem}"
+            raise BaselineError(msg)
+        if data.get("source") != "suite" or data.get("repetition") != 1:
             continue  # generated scenarios have no pytest id to compare with
-        row = ScenarioMetrics.from_dict(data, where=f"{path}:{number}")
+        row = ScenarioMetrics.from_document(data["id"], data["status"], data)
         rows.setdefault(row.planner, {}).setdefault(row.id, row)
     if planner in rows:
         return rows[planner]

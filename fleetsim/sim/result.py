@@ -203,7 +203,8 @@ class Metrics:
 
 @dataclass(frozen=True, slots=True)
 class RunResult:
-    """Everything a run produced; ``to_dict`` is the JSON object of ``fleetsim run --json``.
+    """Everything a run produced; ``to_dict`` is its JSON document (``schemas/result.schema.json``): a
+    line of ``fleetsim run --json``, a run's ``result.json``, a sweep's record.
 
     Attributes:
         scenario: The scenario's name.
@@ -258,13 +259,34 @@ class RunResult:
         """Whether ``status`` is ``"passed"``."""
         return self.status == "passed"
 
+    @classmethod
+    def unrun(
+        cls,
+        scenario: str,
+        planner: str,
+        failures: tuple[Failure, ...] = (),
+        *,
+        status: Literal["passed", "failed"] = "failed",
+        ended: Ending = "load-error",
+    ) -> RunResult:
+        """The result of a scenario that never ran (it did not load, its planner did not start, a hunt
+        ran no example): shaped like any other, with no steps, tasks or hash."""
+        metrics = Metrics(None, {}, {}, planner_calls=0, planner_wall_time=0.0, wall_time=0.0, sim_time=0.0)
+        return cls(
+            scenario=scenario, planner=planner, status=status, failures=failures, trace_hash="", sim_time=0.0,
+            steps=0, tasks_total=0, tasks_completed=0, pending=(), rejections=(), collisions=(), route_errors=(),
+            ended=ended, deadlock=None, metrics=metrics,
+        )  # fmt: skip
+
     def to_dict(self) -> dict[str, Any]:
+        """The run's JSON document, as ``schemas/result.schema.json`` describes it (``trace_hash`` is
+        ``None`` for a run that never ran)."""
         return {
             "scenario": self.scenario,
             "planner": self.planner,
             "status": self.status,
             "failures": [f.to_dict() for f in self.failures],
-            "trace_hash": self.trace_hash,
+            "trace_hash": self.trace_hash or None,  # None: nothing ran
             "sim_time": round(self.sim_time, 6),
             "steps": self.steps,
             "tasks": {"total": self.tasks_total, "completed": self.tasks_completed},

@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from fleetsim.sweep.gate import Verdict
-from fleetsim.sweep.stats import METRICS, Paired, PlannerSummary, paired, summarise
+from fleetsim.sweep.stats import METRICS, Paired, PlannerSummary, paired, summarise, throughput
 
 __all__ = ["COMPARED", "Report", "Worst", "build_report", "markdown"]
 
@@ -76,7 +76,7 @@ def _worst(rows: Sequence[Mapping[str, Any]], candidate: str, baseline: str, whe
         if row["planner"] != candidate or other is None:
             continue
         lost_pass = other["status"] == "passed" and row["status"] != "passed"
-        difference = (row.get("throughput") or 0.0) - (other.get("throughput") or 0.0)
+        difference = (throughput(row) or 0.0) - (throughput(other) or 0.0)
         ranked.append((not lost_pass, difference, str(row["id"]), row))
     ranked.sort(key=lambda entry: entry[:3])
     shown = [entry for entry in ranked if not entry[0] or entry[1] < 0][:WORST_SHOWN]
@@ -86,11 +86,16 @@ def _worst(rows: Sequence[Mapping[str, Any]], candidate: str, baseline: str, whe
             candidate,
             difference,
             str(row["status"]),
-            (row.get("failures") or [""])[0],
+            _first_failure(row),
             _links(row, where),
         )
         for _, difference, _, row in shown
     )
+
+
+def _first_failure(row: Mapping[str, Any]) -> str:
+    failures = row["failures"]
+    return f"{failures[0]['kind']}: {failures[0]['message']}" if failures else ""
 
 
 def _links(row: Mapping[str, Any], where: Path) -> dict[str, str]:

@@ -2,8 +2,10 @@
 
 Rows are appended (and flushed) as runs finish, so a sweep killed at any moment leaves every finished
 run on disk; ``--resume`` reads the file, drops a last line cut short, and runs only the keys missing.
-Each row carries the fields of a metrics file row (:class:`fleetsim.gating.baseline.ScenarioMetrics`),
-so the same file feeds ``pytest --fleetsim-compare``.
+Each row is a record: the run's ordinary result (``schemas/result.schema.json``, what ``fleetsim run
+--json`` prints) plus the sweep's own keys (``key``, ``id``, ``source``, ``seed``, ``repetition``,
+``vehicles``, ``error``); ``pytest --fleetsim-compare`` reads the same file. Reading checks every row
+against the schema, so a file that is not what this fleetsim writes fails at its line.
 """
 
 from __future__ import annotations
@@ -16,8 +18,20 @@ from typing import IO, Any
 
 from fleetsim.errors import FleetsimError, Location
 from fleetsim.gating.baseline import SWEEP_RESULTS_FORMAT as RESULTS_FORMAT
+from fleetsim.sim.result_schema import result_problem
 
-__all__ = ["RESULTS_FORMAT", "ResultsError", "ResultsFile", "read_results", "rows_by_key"]
+__all__ = [
+    "RESULTS_FORMAT",
+    "SWEEP_KEYS",
+    "ResultsError",
+    "ResultsFile",
+    "read_results",
+    "record_problem",
+    "rows_by_key",
+]
+
+_FAMILY = RESULTS_FORMAT.rpartition("/")[0] + "/"
+SWEEP_KEYS = ("key", "id", "source", "seed", "repetition", "vehicles", "error")  # a record's own, besides the run's
 
 
 class ResultsError(FleetsimError, ValueError):
@@ -37,7 +51,11 @@ def read_results(path: Path | str) -> tuple[dict[str, Any], list[dict[str, Any]]
     except (OSError, UnicodeDecodeError) as error:
         raise ResultsError(f"{path}: cannot read the results file: {error}") from None
     header = _parse(lines[0], path, 1) if lines and lines[0] else None
-    if not isinstance(header, dict) or header.get("format") != RESULTS_FORMAT:
+    found = header.get("format") if isinstance(header, dict) else None
+    if isinstance(found, str) and found != RESULTS_FORMAT and found.startswith(_FAMILY):
+        msg = f"{Location(path, 1)}: format={found!r}: written by another fleetsim version (this one reads {RESULTS_FORMAT!r}); run the sweep again into a new results file"
+        raise ResultsError(msg)
+    if not isinstance(header, dict) or found != RESULTS_FORMAT:
         raise ResultsError(
             f'{Location(path, 1)}: not a sweep results file (its first line must be the header with "format": {RESULTS_FORMAT!r})'
         )
@@ -49,8 +67,20 @@ def read_results(path: Path | str) -> tuple[dict[str, Any], list[dict[str, Any]]
         row = _parse(line, path, number)
         if not isinstance(row, dict) or not isinstance(row.get("key"), str):
             raise ResultsError(f'{Location(path, number)}: row={line[:80]!r} must be a JSON object with a "key"')
+        problem = record_problem(row)
+        if problem is not None:
+            raise ResultsError(f"{Location(path, number)}: not a sweep record: {problem}")
         rows.setdefault(row["key"], row)
     return header, list(rows.values())
+
+
+def record_problem(row: Any) -> str | None:
+    """``None`` for a sweep record (a run's result with the sweep's keys), else what is wrong with it."""
+    problem = result_problem(row)
+    if problem is not None:
+        return problem
+    missing = [key for key in SWEEP_KEYS if key not in row]
+    return f"the sweep's key {missing[0]!r} is missing" if missing else None
 
 
 def _parse(line: str, path: Path, number: int) -> Any:

@@ -1,5 +1,8 @@
 """Statistics of a sweep: per-planner figures and paired comparisons with bootstrap confidence intervals.
 
+Each figure is read from a sweep's records (a run's result plus the sweep's keys): throughput, waiting
+share and planner time per call are worked out from the result's tasks, times and metrics.
+
 A comparison pairs each candidate run with the baseline planner's run of the same scenario (same id),
 takes the per-scenario differences and resamples them (a paired bootstrap, percentile interval, 95 %,
 2000 resamples) from a generator with a fixed seed: the same results give the same intervals on any
@@ -16,7 +19,18 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["BOOTSTRAP_SEED", "METRICS", "Paired", "PlannerSummary", "SweepMetric", "paired", "summarise"]
+__all__ = [
+    "BOOTSTRAP_SEED",
+    "METRICS",
+    "Paired",
+    "PlannerSummary",
+    "SweepMetric",
+    "paired",
+    "planner_time_per_call",
+    "summarise",
+    "throughput",
+    "waiting_share",
+]
 
 BOOTSTRAP_SEED = 20260521
 RESAMPLES = 2000
@@ -32,36 +46,60 @@ class SweepMetric:
     read: Callable[[Mapping[str, Any]], float | None]
 
 
-def _field(name: str) -> Callable[[Mapping[str, Any]], float | None]:
-    def read(row: Mapping[str, Any]) -> float | None:
-        value = row.get(name)
-        return None if value is None or isinstance(value, bool) else float(value)
+# What a record (a run's result plus the sweep's keys, schemas/result.schema.json) says, per metric; None
+# where the run has no such figure (a run that never ran has none of them).
 
-    return read
+
+def _number(value: Any) -> float | None:
+    return None if value is None else float(value)
+
+
+def _ran(record: Mapping[str, Any]) -> bool:
+    return record.get("error") is None and record["sim_time"] > 0
+
+
+def throughput(record: Mapping[str, Any]) -> float | None:
+    """Tasks completed per simulated hour."""
+    return int(record["tasks"]["completed"]) / (float(record["sim_time"]) / 3600) if _ran(record) else None
+
+
+def waiting_share(record: Mapping[str, Any]) -> float | None:
+    """The share of the fleet's time spent standing with tasks pending (0..1)."""
+    if not _ran(record):
+        return None
+    waited = math.fsum(record["metrics"]["waiting_time"].values())
+    return waited / (max(int(record.get("vehicles") or 0), 1) * float(record["sim_time"]))
+
+
+def planner_time_per_call(record: Mapping[str, Any]) -> float | None:
+    """Wall-clock seconds per planner call."""
+    metrics = record["metrics"]
+    calls = int(metrics["planner_calls"])
+    return float(metrics["planner_wall_time"]) / calls if calls else None
+
+
+def _scaled(
+    read: Callable[[Mapping[str, Any]], float | None], by: float
+) -> Callable[[Mapping[str, Any]], float | None]:
+    def scaled(record: Mapping[str, Any]) -> float | None:
+        value = read(record)
+        return None if value is None else by * value
+
+    return scaled
 
 
 METRICS: Mapping[str, SweepMetric] = {
     m.name: m
     for m in (
-        SweepMetric("success", "success rate", "%", "higher", lambda r: 100.0 if r.get("status") == "passed" else 0.0),
-        SweepMetric("throughput", "throughput", "tasks/h", "higher", _field("throughput")),
-        SweepMetric("makespan", "makespan", "s", "lower", _field("makespan")),
+        SweepMetric("success", "success rate", "%", "higher", lambda r: 100.0 if r["status"] == "passed" else 0.0),
+        SweepMetric("throughput", "throughput", "tasks/h", "higher", throughput),
+        SweepMetric("makespan", "makespan", "s", "lower", lambda r: _number(r["metrics"]["makespan"])),
+        SweepMetric("waiting_share", "waiting share", "%", "lower", _scaled(waiting_share, 100)),
+        SweepMetric("alerts", "alerts", "", "lower", lambda r: float(len(r["collisions"]))),
+        SweepMetric("rejections", "rejections", "", "lower", lambda r: float(len(r["rejections"]))),
+        SweepMetric("deadlocks", "deadlocks", "", "lower", lambda r: 0.0 if r["deadlock"] is None else 1.0),
         SweepMetric(
-            "waiting_share",
-            "waiting share",
-            "%",
-            "lower",
-            lambda r: None if r.get("waiting_share") is None else 100 * float(r["waiting_share"]),
-        ),
-        SweepMetric("alerts", "alerts", "", "lower", _field("alerts")),
-        SweepMetric("rejections", "rejections", "", "lower", _field("rejections")),
-        SweepMetric("deadlocks", "deadlocks", "", "lower", lambda r: 1.0 if r.get("deadlock") else 0.0),
-        SweepMetric(
-            "planner_time_per_call",
-            "planner time per call",
-            "ms",
-            "lower",
-            lambda r: None if r.get("planner_time_per_call") is None else 1000 * float(r["planner_time_per_call"]),
+            "planner_time_per_call", "planner time per call", "ms", "lower", _scaled(planner_time_per_call, 1000)
         ),
     )
 }

@@ -1,28 +1,29 @@
-"""One sweep run on a worker: plain data in, one results row out; nothing a run does stops the sweep.
+"""One sweep run on a worker: plain data in, one results record out; nothing a run does stops the sweep.
 
-A planner that does not import on the worker, a scenario that does not load, a planner that raises or
-hangs up: each fails its own run with a message saying what happened, in the row's ``error``.
+A record is the run's ordinary result (``schemas/result.schema.json``) plus the sweep's own keys. A
+planner that does not import on the worker, a scenario that does not load, a planner that raises or
+hangs up: each fails its own run with a message saying what happened, in the record's ``error``.
 """
 
 from __future__ import annotations
 
+import re
 import traceback
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 from fleetsim.exec.spec import load_planner_factory
-from fleetsim.gating.baseline import ScenarioMetrics
 from fleetsim.recording.artifacts import artifact_folder, discard_run_folder, start_run_folder, write_run_artifacts
 from fleetsim.sim.loop import run_scenario
 from fleetsim.sim.planner_spec import PlannerSpecError
-from fleetsim.sim.result import RunResult
+from fleetsim.sim.result import Ending, Failure, RunResult
 from fleetsim.sweep.items import RunItem
 from fleetsim.sweep.payload import scenario_from_payload
 
 __all__ = ["failed_row", "result_row", "run_item"]
 
-FAILURES_KEPT = 3
+_NAME = re.compile(r"(~d\d+)?(@\d+)?$")
 
 
 def run_item(item: RunItem) -> dict[str, Any]:
@@ -60,50 +61,21 @@ def _folder(item: RunItem) -> Path | None:
     return artifact_folder(Path(item["artifacts"]) / planner, Path(suite), name)
 
 
-def _common(item: RunItem) -> dict[str, Any]:
-    return {k: item[k] for k in ("key", "id", "planner", "source", "seed", "repetition", "vehicles")}
+def _sweep_keys(item: RunItem, error: str | None) -> dict[str, Any]:
+    keys = {"key": item["key"], "id": item["id"], "source": item["source"], "seed": item["seed"]}
+    return {**keys, "repetition": item["repetition"], "vehicles": item["vehicles"], "error": error}
 
 
 def result_row(item: RunItem, result: RunResult) -> dict[str, Any]:
-    """The row of a run: the metrics-file fields (so ``--fleetsim-compare`` reads it) and the sweep's own."""
-    metrics = ScenarioMetrics.from_result(item["id"], result.status, result).to_dict()
-    hours = result.sim_time / 3600
-    vehicles = max(item["vehicles"], 1)
-    calls = result.metrics.planner_calls
-    return {
-        **metrics,
-        **_common(item),
-        "status": result.status,
-        "ended": result.ended,
-        "deadlock": result.deadlock is not None,
-        "throughput": round(result.tasks_completed / hours, 6) if hours > 0 else 0.0,
-        "waiting_share": round(metrics["waiting_time"] / (vehicles * result.sim_time), 6)
-        if result.sim_time > 0
-        else 0.0,
-        "planner_time_per_call": round(result.metrics.planner_wall_time / calls, 9) if calls else None,
-        "failures": [f"{f.kind}: {f.message}" for f in result.failures[:FAILURES_KEPT]],
-        "error": None,
-        "artifacts": {k: v for k, v in result.artifacts.items() if k in ("folder", "picture", "mcap", "result")},
-    }
+    """The record of a run: the run's ordinary result (``schemas/result.schema.json``, as ``fleetsim run
+    --json`` gives it) and the sweep's own keys (key, id, source, seed, repetition, vehicles, error)."""
+    return {**result.to_dict(), **_sweep_keys(item, None)}
 
 
-def failed_row(item: RunItem, error: str, ended: str = "planner-error") -> dict[str, Any]:
-    """The row of a run that never ran (or broke down): failed, with no figures but the error."""
-    zero: dict[str, Any] = {
-        "outcome": "failed", "tasks_total": 0, "tasks_completed": 0, "makespan": None, "distance": 0.0,
-        "waiting_time": 0.0, "alerts": 0, "rejections": 0, "planner_calls": 0, "planner_wall_time": 0.0,
-        "wall_time": 0.0, "sim_time": 0.0, "realtime_factor": None, "trace_hash": "",
-    }  # fmt: skip
-    return {
-        **zero,
-        **_common(item),
-        "status": "failed",
-        "ended": ended,
-        "deadlock": False,
-        "throughput": None,
-        "waiting_share": None,
-        "planner_time_per_call": None,
-        "failures": [error],
-        "error": error,
-        "artifacts": {},
-    }
+def failed_row(item: RunItem, error: str, ended: Ending = "planner-error") -> dict[str, Any]:
+    """The record of a run that never ran (or broke down on its worker): a result without a run, failed
+    with ``error`` (a ``load-error`` or a ``planner-error``), which ``error`` repeats."""
+    # A scenario that did not load is named by its id: SUITE::NAME, with ~dSEED and @REPETITION after it.
+    name = item["scenario"]["name"] if item["scenario"] is not None else _NAME.sub("", item["id"].rpartition("::")[2])
+    failure = Failure("load-error" if ended == "load-error" else "planner-error", 0.0, error)
+    return {**RunResult.unrun(name, item["planner"], (failure,), ended=ended).to_dict(), **_sweep_keys(item, error)}

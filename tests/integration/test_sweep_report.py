@@ -89,7 +89,7 @@ def test_report_is_the_same_whatever_order_the_rows_finished_in(report: Path, tm
         == 0
     )
     assert (tmp_path / "summary.md").read_text() == (report / "summary.md").read_text()
-    assert json.loads(lines[0])["format"] == "fleetsim-sweep-results/1"
+    assert json.loads(lines[0])["format"] == "fleetsim-sweep-results/2"
 
 
 def test_fail_if_gates_on_the_interval_with_exit_codes(report: Path, capsys: pytest.CaptureFixture[str]) -> None:

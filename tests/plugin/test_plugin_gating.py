@@ -24,7 +24,7 @@ from xml.etree import ElementTree
 import pytest
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
-from result_document import RESULT_KEYS
+from result_document import RESULT_KEYS, schema_errors
 
 from fleetsim.gating.lockfile import HashLock, LockEntry, lock_path_for
 from fleetsim.load.scenario import load_scenario
@@ -499,6 +499,7 @@ def test_result_json_and_junit_xml_describe_every_recorded_run(
         folder = f"fleetsim-results/gating/{name}"
         document = json.loads((project.path / folder / "result.json").read_text(encoding="utf-8"))
         assert set(document) >= RESULT_KEYS
+        assert schema_errors(document) == []  # the result.json the plugin writes
         assert (document["scenario"], document["planner"], document["status"]) == (name, RESERVING, status)
         assert [failure["kind"] for failure in document["failures"]] == kinds
         assert document["trace_hash"] == recorded[name].hash

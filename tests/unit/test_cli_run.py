@@ -15,7 +15,7 @@ from typing import Any
 
 import pytest
 from mcap.reader import make_reader
-from result_document import RESULT_KEYS
+from result_document import RESULT_KEYS, schema_errors
 
 import fleetsim
 from fleetsim.cli import main
@@ -155,6 +155,7 @@ def test_json_prints_one_result_per_scenario_per_line_with_the_direct_runs_hash(
     suite = fleetsim.load_suite(EXAMPLES)
     for result, spec in zip(results, suite.scenarios, strict=True):
         assert result.keys() >= RESULT_KEYS
+        assert schema_errors(result) == []
         assert result["status"] == "passed" and result["planner"] == RESERVING
         direct = run_scenario(fleetsim.load_scenario(spec, suite), ReservingPlanner())
         assert result["trace_hash"] == direct.trace_hash

@@ -7,7 +7,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
-from result_document import RESULT_KEYS
+from result_document import RESULT_KEYS, schema_errors
 from scenario_factory import make_scenario
 
 from fleetsim import load_scenario, load_suite
@@ -72,6 +72,7 @@ def test_head_on_with_reserving_planner_ends_in_a_reported_deadlock(tmp_path: Pa
     assert failure.message == "vehicles 1 and 2 wait for each other (1 -> 2 -> 1) over segments 1 and 3"
     # Each vehicle first drives its start segment to the end (it is fixed), then nothing moves for 3 s.
     assert failure.time == pytest.approx(6.0 + 3.0, abs=0.11)
+    assert schema_errors(result.to_dict()) == []  # a deadlock and its findings, as the schema says
 
 
 def test_an_expected_deadlock_passes(tmp_path: Path) -> None:
@@ -180,6 +181,7 @@ def test_metrics_and_the_json_form() -> None:
     result = run_scenario(example("corridor-passing-bay"), ReservingPlanner())
     data = json.loads(json.dumps(result.to_dict()))
     assert set(data) >= RESULT_KEYS
+    assert schema_errors(data) == []
     assert data["planner"] == "ReservingPlanner" and data["tasks"] == {"total": 2, "completed": 2}
     metrics = data["metrics"]
     assert metrics["distance"]["1"] == pytest.approx(36.0, abs=0.01)  # the corridor's main line end to end
