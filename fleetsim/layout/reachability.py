@@ -5,9 +5,9 @@ and the progress rules for its turn capability: a vehicle that can only follow c
 at smooth joints, flips it at cusps and cannot take corners; a vehicle that turns in place may take any
 connection with either progress.
 
-The rules themselves are :func:`~fleetsim.layout.continuations.progresses_after`, the one the plan check
-``illegal-progress-change`` judges by. :func:`next_steps` is the reference planners' version (:mod:`fleetsim.planners.routing`): it keeps an
-in-place turner's progress, because a planner sets the progress it arrives with on the last leg.
+The rules themselves are :func:`~fleetsim.layout.continuations.progresses_after` (as the table
+``RULES``), the one the plan check ``illegal-progress-change`` judges by. :func:`next_steps` is the
+reference planners' version (:mod:`fleetsim.planners.routing`): it keeps an in-place turner's progress, because a planner sets the progress it arrives with on the last leg.
 :func:`moves` is the exact version the static task check of scenario loading asks (:class:`ReachIndex`,
 :func:`reach`); for a curve-only vehicle the two are the same, and for an in-place turner they reach the
 same segments, so a goal the check accepts is one the planners' searches can find.
@@ -19,7 +19,7 @@ from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 
 from fleetsim.enums import JointKind, Progress, Traverse, TurnCapability
-from fleetsim.layout.continuations import RULES, progresses_after
+from fleetsim.layout.continuations import RULES
 from fleetsim.layout.layout import Layout
 
 __all__ = [
@@ -70,8 +70,9 @@ def state_text(state: State) -> str:
 def moves(layout: Layout, capability: TurnCapability, state: State) -> Iterator[State]:
     """Every state a vehicle may be in on its next leg (an in-place turner chooses either progress)."""
     segment, traverse, progress = state
+    rule = RULES[capability]
     for next_segment, next_traverse, joint in layout.successors(segment, traverse):
-        for next_progress in progresses_after(capability, joint, progress):
+        for next_progress in rule[joint][progress]:
             yield next_segment, next_traverse, next_progress
 
 
