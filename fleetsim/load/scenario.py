@@ -2,7 +2,14 @@
 
 The order is forced by the data: the vehicle rows are checked against the map's segments, the layout's
 conflict radius depends on the vehicle types those rows use, and the start-conflict check and the task
-check (every goal reachable, :mod:`.task_reach`) need the layout. Nothing is returned half loaded: either a whole scenario or one located error.
+check (every goal reachable, :mod:`.task_reach`) need the layout.
+
+Errors are collected stage by stage (:class:`~fleetsim.load.collect.ErrorCollector`): the map's; then
+every row error of ``vehicles.csv`` and of ``tasks.csv`` together (a task naming a vehicle whose row is
+bad is not also called unknown); then the layout checks (start conflicts, reachability), which only run
+on clean files. When the map cannot be loaded, the CSV files' structure (header, row widths) is still
+checked. Nothing is returned half loaded: either a whole scenario, or its errors — one raised as itself,
+several as one :class:`~fleetsim.errors.LoadErrors`.
 """
 
 from __future__ import annotations
@@ -15,15 +22,19 @@ from types import MappingProxyType
 from fleetsim.enums import ConflictModel
 from fleetsim.errors import Location, ScenarioFileError, SuiteError, UnreachableTaskError
 from fleetsim.layout.layout import Layout, build_layout
+from fleetsim.load.collect import ErrorCollector
+from fleetsim.load.csv_table import read_table
 from fleetsim.load.disturbances import check_disturbances
-from fleetsim.load.map_options import MapOptions
+from fleetsim.load.map_options import MapOptions, SiteMap
 from fleetsim.load.scenario_files import (
     MAP_FILE_NAMES,
+    TASK_COLUMNS,
     TASKS_FILE_NAME,
+    VEHICLE_COLUMNS,
     VEHICLES_FILE_NAME,
+    collect_tasks,
+    collect_vehicles,
     map_candidates,
-    read_tasks_with_lines,
-    read_vehicles_with_lines,
 )
 from fleetsim.load.site_map import load_site_map
 from fleetsim.load.suite import ScenarioSpec, Suite
@@ -117,22 +128,40 @@ def _assemble(
     map_options: MapOptions,
 ) -> Scenario:
     map_path, vehicles_path, tasks_path = paths
-    tiled = load_site_map(map_path, map_options)
-    segments = {segment.id: segment for segment in tiled.segments}
-    default_type = default_vehicle_type(vehicle_types, settings, origin)
-    located = read_vehicles_with_lines(vehicles_path, segments, vehicle_types, default_type, map_name=map_path.name)
+    errors = ErrorCollector()
+    site: SiteMap | None = None
+    with errors.collecting():
+        site = load_site_map(map_path, map_options)
+    typed = False  # the default vehicle type is known (None is a valid answer: there is none)
+    default_type: VehicleType | None = None
+    with errors.collecting():
+        default_type = default_vehicle_type(vehicle_types, settings, origin)
+        typed = True
+    if site is None or not typed:
+        # The rows cannot be checked without segments and types; their files' structure can.
+        read_table(vehicles_path, VEHICLE_COLUMNS, errors)
+        read_table(tasks_path, TASK_COLUMNS, errors)
+        errors.raise_if_any()
+    assert site is not None  # raise_if_any raised the error that left it None
+    segments = {segment.id: segment for segment in site.segments}
+    vehicle_rows = collect_vehicles(
+        vehicles_path, segments, vehicle_types, default_type, errors, map_name=map_path.name
+    )
+    # Tasks are checked against every vehicle id vehicles.csv names, bad rows' included.
+    located_tasks = collect_tasks(
+        tasks_path, segments, vehicle_rows.ids, errors, map_name=map_path.name, vehicles_name=vehicles_path.name
+    )
+    errors.raise_if_any()
+    located = vehicle_rows.located
     vehicles = tuple(vehicle for vehicle, _ in located)
     layout = build_layout(
-        tiled.segments,
+        site.segments,
         vehicle_radius=_vehicle_radius(vehicles, default_type, vehicle_types, settings.conflict_model),
         connection_tolerance=settings.connection_tolerance,
         joint_angle_tolerance=settings.joint_angle_tolerance,
         safety_margin=settings.safety_margin,
         conflict_model=settings.conflict_model,
         source=map_path,
-    )
-    located_tasks = read_tasks_with_lines(
-        tasks_path, segments, vehicles, map_name=map_path.name, vehicles_name=vehicles_path.name
     )
     tasks = tuple(task for task, _ in located_tasks)
     if not settings.allow_start_conflicts:
@@ -142,7 +171,7 @@ def _assemble(
     except UnreachableTaskError as error:
         # The map's lint often shows the cause (a gap between two ends): hand it to whoever reports.
         length = longest_vehicle(vehicles, vehicle_types.values())
-        error.notes = (*tiled.warnings, *(f"{f.severity} {f.code}: {f.message}" for f in layout.lint(length)))
+        error.notes = (*site.warnings, *(f"{f.severity} {f.code}: {f.message}" for f in layout.lint(length)))
         raise
     _check_expected_collisions(name, expect, layout, map_path, origin)
     return Scenario(
@@ -156,7 +185,7 @@ def _assemble(
         map_path=map_path,
         vehicles_path=vehicles_path,
         tasks_path=tasks_path,
-        warnings=tiled.warnings,
+        warnings=site.warnings,
     )
 
 

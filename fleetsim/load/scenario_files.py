@@ -9,24 +9,25 @@ Conventions shared by both files:
   rows, so task ids count data rows only (first data row = task 1).
 - An unknown column is an error (a typo would otherwise be silently ignored); so is a row with more or
   fewer cells than the header.
+- Every row is read and every bad cell reported, all at once (:mod:`fleetsim.load.collect`): fixing a
+  file takes one pass, not one run per row. Reading itself is :mod:`fleetsim.load.csv_table`.
 """
 
 from __future__ import annotations
 
-import csv
-import difflib
-import io
 import re
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from enum import Enum
 from pathlib import Path
-from typing import TypeVar
+from typing import ParamSpec, TypeVar
 
 from fleetsim.enums import Progress, Traverse
-from fleetsim.errors import Location, ScenarioFileError
+from fleetsim.errors import ScenarioFileError
 from fleetsim.layout.segment import Segment
-from fleetsim.load.text import read_text_file
+from fleetsim.load.closest import did_you_mean
+from fleetsim.load.collect import ErrorCollector
+from fleetsim.load.csv_table import Columns, Row, read_table
 from fleetsim.scenario import Task, Vehicle, VehicleType
 
 __all__ = [
@@ -35,6 +36,9 @@ __all__ = [
     "TASK_COLUMNS",
     "VEHICLES_FILE_NAME",
     "VEHICLE_COLUMNS",
+    "VehicleRows",
+    "collect_tasks",
+    "collect_vehicles",
     "did_you_mean",
     "map_candidates",
     "read_tasks",
@@ -48,46 +52,13 @@ VEHICLES_FILE_NAME = "vehicles.csv"
 TASKS_FILE_NAME = "tasks.csv"
 
 E = TypeVar("E", bound=Enum)
+T = TypeVar("T")
+P = ParamSpec("P")
 
-
-@dataclass(frozen=True, slots=True)
-class _Columns:
-    required: tuple[str, ...]
-    optional: tuple[str, ...]
-
-    @property
-    def all(self) -> tuple[str, ...]:
-        return self.required + self.optional
-
-    @property
-    def header(self) -> str:
-        """The header as documented, optional columns in brackets."""
-        return ",".join(self.required) + "".join(f"[,{name}]" for name in self.optional)
-
-
-VEHICLE_COLUMNS = _Columns(("vehicle_id", "start_segment_id", "segment_orientation"), ("progress_direction", "type"))
-TASK_COLUMNS = _Columns(("vehicle_id", "goal_segment_id"), ("goal_progress_direction",))
+VEHICLE_COLUMNS = Columns(("vehicle_id", "start_segment_id", "segment_orientation"), ("progress_direction", "type"))
+TASK_COLUMNS = Columns(("vehicle_id", "goal_segment_id"), ("goal_progress_direction",))
 
 _WHOLE_NUMBER = re.compile(r"[0-9]+")
-
-
-@dataclass(frozen=True, slots=True)
-class _Row:
-    path: Path
-    line: int
-    cells: Mapping[str, str]  # column → trimmed value; absent optional columns read as ""
-
-    def get(self, column: str) -> str:
-        return self.cells.get(column, "")
-
-    def error(self, column: str, problem: str) -> ScenarioFileError:
-        return ScenarioFileError(problem, Location(self.path, line=self.line, field=column))
-
-
-def did_you_mean(word: str, choices: Iterable[str]) -> str:
-    """``"; did you mean 'x'?"`` for the closest choice, or ``""`` when nothing is close."""
-    close = difflib.get_close_matches(word, list(choices), n=1)
-    return f"; did you mean {close[0]!r}?" if close else ""
 
 
 def map_candidates(directory: Path) -> tuple[Path, ...]:
@@ -95,77 +66,34 @@ def map_candidates(directory: Path) -> tuple[Path, ...]:
     return tuple(directory / name for name in MAP_FILE_NAMES if (directory / name).is_file())
 
 
-# -- reading a table ------------------------------------------------------------------------------
+class _Cells:
+    """Reads the cells of one row, each on its own: a bad cell is collected and reads as ``None``, so
+    the row's other cells are still checked; ``ok`` stays true while every cell was good."""
 
+    def __init__(self, errors: ErrorCollector) -> None:
+        self.errors = errors
+        self.ok = True
 
-def _records(path: Path) -> list[tuple[int, list[str]]]:
-    """(first file line, trimmed cells) of every row that is neither blank nor a comment."""
-    text = read_text_file(path, ScenarioFileError)
-    reader = csv.reader(io.StringIO(text, newline=""), strict=True)
-    records: list[tuple[int, list[str]]] = []
-    line = 1
-    try:
-        for cells in reader:
-            trimmed = [cell.strip() for cell in cells]
-            if any(trimmed) and not trimmed[0].startswith("#"):
-                records.append((line, trimmed))
-            line = reader.line_num + 1  # a quoted cell may span lines: the next row starts after it
-    except csv.Error as exc:
-        # Point at the row that started it: an unclosed quote only fails at the end of the file.
-        raise ScenarioFileError(f"malformed CSV row: {exc}", Location(path, line=line)) from None
-    return records
-
-
-def _header(path: Path, line: int, cells: list[str], columns: _Columns) -> tuple[str, ...]:
-    if cells[0].isdigit():
-        # A data row where the header belongs: say that, not "unknown column '1'".
-        msg = f"missing header: the first row must be {columns.header}, found data {','.join(cells)!r}"
-        raise ScenarioFileError(msg, Location(path, line=line))
-    names = tuple(cell.lower() for cell in cells)
-    for index, name in enumerate(names):
-        where = Location(path, line=line, field=name or None)
-        if not name:
-            msg = f"header column {index + 1} has no name (a stray comma?); the header is {columns.header}"
-            raise ScenarioFileError(msg, where)
-        if name not in columns.all:
-            msg = f"unknown column {name!r}{did_you_mean(name, columns.all)} (the header is {columns.header})"
-            raise ScenarioFileError(msg, where)
-        if name in names[:index]:
-            raise ScenarioFileError(f"column {name!r} appears twice in the header", where)
-    for name in columns.required:
-        if name not in names:
-            msg = f"missing required column {name!r} (the header is {columns.header})"
-            raise ScenarioFileError(msg, Location(path, line=line, field=name))
-    return names
-
-
-def _read_rows(path: Path, columns: _Columns) -> tuple[_Row, ...]:
-    records = _records(path)
-    if not records:
-        msg = f"no header: the first row must be {columns.header} (required even with no data rows)"
-        raise ScenarioFileError(msg, Location(path, line=1))
-    header_line, header_cells = records[0]
-    names = _header(path, header_line, header_cells, columns)
-    rows = []
-    for line, cells in records[1:]:
-        if len(cells) != len(names):
-            msg = f"row has {len(cells)} values but the header has {len(names)} columns: {cells!r}"
-            raise ScenarioFileError(msg, Location(path, line=line))
-        rows.append(_Row(path, line, dict(zip(names, cells, strict=True))))
-    return tuple(rows)
+    def read(self, read: Callable[P, T], *args: P.args, **kwargs: P.kwargs) -> T | None:
+        try:
+            return read(*args, **kwargs)
+        except ScenarioFileError as error:
+            self.errors.add(error)
+            self.ok = False
+            return None
 
 
 # -- values ---------------------------------------------------------------------------------------
 
 
-def _whole_number(row: _Row, column: str) -> int:
+def _whole_number(row: Row, column: str) -> int:
     value = row.get(column)
     if not _WHOLE_NUMBER.fullmatch(value):
         raise row.error(column, f"{value!r} is not a whole number >= 0")
     return int(value)
 
 
-def _choice(row: _Row, column: str, enum: type[E]) -> E | None:
+def _choice(row: Row, column: str, enum: type[E]) -> E | None:
     """The enum member a cell names, or ``None`` for an empty cell."""
     value = row.get(column).lower()
     if not value:
@@ -202,14 +130,14 @@ class _SegmentCells:
         for name, ids in self.names.items():
             self.folded.setdefault(name.casefold(), set()).update(ids)
 
-    def _by_name(self, row: _Row, column: str, name: str) -> Segment | None:
+    def _by_name(self, row: Row, column: str, name: str) -> Segment | None:
         ids = self.names.get(name) or tuple(sorted(self.folded.get(name.casefold(), ())))
         if len(ids) > 1:
             listed = ", ".join(map(str, ids))
             raise row.error(column, f"{name!r} names segments {listed} of {self.map_name}; use the segment id instead")
         return self.segments[ids[0]] if ids else None
 
-    def read(self, row: _Row, column: str) -> Segment:
+    def read(self, row: Row, column: str) -> Segment:
         value = row.get(column)
         if value.startswith("id:"):
             digits = value[3:].strip()
@@ -241,7 +169,7 @@ class _SegmentCells:
             raise row.error(column, f"segment {value!r} is not in {self.map_name} (neither an id nor a name){hint}")
         return named
 
-    def _by_id(self, row: _Row, column: str, segment_id: int) -> Segment:
+    def _by_id(self, row: Row, column: str, segment_id: int) -> Segment:
         if segment_id not in self.segments:
             raise row.error(column, f"segment {segment_id} is not in {self.map_name}")
         return self.segments[segment_id]
@@ -250,7 +178,17 @@ class _SegmentCells:
 # -- vehicles.csv ---------------------------------------------------------------------------------
 
 
-def _vehicle_type(row: _Row, types_by_key: Mapping[str, VehicleType], default_type: VehicleType | None) -> VehicleType:
+@dataclass(frozen=True, slots=True)
+class VehicleRows:
+    """What :func:`collect_vehicles` read: the good rows' vehicles with their lines, and every vehicle
+    id a row named (bad rows included), which tasks are checked against; ``None`` when the file could
+    not be read as a table (then nothing can be said about which vehicles exist)."""
+
+    located: tuple[tuple[Vehicle, int], ...]
+    ids: frozenset[int] | None
+
+
+def _vehicle_type(row: Row, types_by_key: Mapping[str, VehicleType], default_type: VehicleType | None) -> VehicleType:
     name = row.get("type")
     if not name:
         if default_type is None:
@@ -268,26 +206,67 @@ def _vehicle_type(row: _Row, types_by_key: Mapping[str, VehicleType], default_ty
     return types_by_key[name.casefold()]
 
 
-def _vehicle(
-    row: _Row,
-    segments: _SegmentCells,
-    types_by_key: Mapping[str, VehicleType],
-    default_type: VehicleType | None,
-) -> Vehicle:
-    vehicle_id = _whole_number(row, "vehicle_id")
-    segment = segments.read(row, "start_segment_id")
+def _orientation(row: Row) -> Traverse:
     traverse = _choice(row, "segment_orientation", Traverse)
     if traverse is None:
         raise row.error("segment_orientation", "missing: must be 'forward' or 'backward'")
+    return traverse
+
+
+def _check_way(row: Row, segment: Segment, traverse: Traverse) -> None:
     if not segment.allows(traverse):
         msg = (
             f"wrong-way start: segment {segment.id} is one-way {segment.direction.value!r}, "
             f"so orientation {traverse.value!r} drives against it"
         )
         raise row.error("segment_orientation", msg)
-    progress = _choice(row, "progress_direction", Progress) or Progress.FORWARD
-    vehicle_type = _vehicle_type(row, types_by_key, default_type)
-    return Vehicle(vehicle_id, segment.id, traverse, progress, vehicle_type)
+
+
+def collect_vehicles(
+    path: Path,
+    segments: Mapping[int, Segment],
+    vehicle_types: Mapping[str, VehicleType],
+    default_type: VehicleType | None,
+    errors: ErrorCollector,
+    *,
+    map_name: str = "the map",
+) -> VehicleRows:
+    """Every row of ``vehicles.csv`` checked, each bad cell's error added to ``errors`` (see
+    :func:`read_vehicles`); the vehicles of the rows without one."""
+    rows = read_table(path, VEHICLE_COLUMNS, errors)
+    if rows is None:
+        return VehicleRows((), None)
+    types_by_key = {name.casefold(): vehicle_type for name, vehicle_type in vehicle_types.items()}
+    segment_cells = _SegmentCells(segments, map_name)
+    lines: dict[int, int] = {}  # vehicle id → the line of the first row naming it
+    located = []
+    for row in rows:
+        cells = _Cells(errors)
+        vehicle_id = cells.read(_whole_number, row, "vehicle_id")
+        if vehicle_id is not None and vehicle_id in lines:
+            cells.read(_already_used, row, vehicle_id, lines[vehicle_id])
+        elif vehicle_id is not None:
+            lines[vehicle_id] = row.line
+        segment = cells.read(segment_cells.read, row, "start_segment_id")
+        traverse = cells.read(_orientation, row)
+        if segment is not None and traverse is not None:
+            cells.read(_check_way, row, segment, traverse)
+        progress = cells.read(_choice, row, "progress_direction", Progress)
+        vehicle_type = cells.read(_vehicle_type, row, types_by_key, default_type)
+        if (
+            cells.ok
+            and vehicle_id is not None
+            and segment is not None
+            and traverse is not None
+            and vehicle_type is not None
+        ):
+            vehicle = Vehicle(vehicle_id, segment.id, traverse, progress or Progress.FORWARD, vehicle_type)
+            located.append((vehicle, row.line))
+    return VehicleRows(tuple(located), frozenset(lines))
+
+
+def _already_used(row: Row, vehicle_id: int, first_line: int) -> None:
+    raise row.error("vehicle_id", f"vehicle id {vehicle_id} is already used on line {first_line}")
 
 
 def read_vehicles_with_lines(
@@ -299,19 +278,10 @@ def read_vehicles_with_lines(
     map_name: str = "the map",
 ) -> tuple[tuple[Vehicle, int], ...]:
     """Like :func:`read_vehicles`, each vehicle paired with its line in the file (for later errors)."""
-    path = Path(path)
-    types_by_key = {name.casefold(): vehicle_type for name, vehicle_type in vehicle_types.items()}
-    lines: dict[int, int] = {}
-    result = []
-    cells = _SegmentCells(segments, map_name)
-    for row in _read_rows(path, VEHICLE_COLUMNS):
-        vehicle = _vehicle(row, cells, types_by_key, default_type)
-        if vehicle.id in lines:
-            msg = f"vehicle id {vehicle.id} is already used on line {lines[vehicle.id]}"
-            raise row.error("vehicle_id", msg)
-        lines[vehicle.id] = row.line
-        result.append((vehicle, row.line))
-    return tuple(result)
+    errors = ErrorCollector()
+    rows = collect_vehicles(Path(path), segments, vehicle_types, default_type, errors, map_name=map_name)
+    errors.raise_if_any()
+    return rows.located
 
 
 def read_vehicles(
@@ -326,12 +296,50 @@ def read_vehicles(
 
     ``default_type`` is the type of rows without one; ``None`` (a suite with several types and no
     ``vehicle_type`` default) makes such rows an error. ``map_name`` names the map in messages.
+
+    Every row is checked: one bad cell raises its :class:`~fleetsim.errors.ScenarioFileError`, several
+    (in one row or many) raise one :class:`~fleetsim.errors.LoadErrors` listing each, at most
+    :data:`~fleetsim.load.collect.CAP_PER_FILE` of them. A broken header stops the file (rows mean
+    nothing without it), but all of the header's own problems are reported.
     """
     rows = read_vehicles_with_lines(path, segments, vehicle_types, default_type, map_name=map_name)
     return tuple(vehicle for vehicle, _ in rows)
 
 
 # -- tasks.csv ------------------------------------------------------------------------------------
+
+
+def collect_tasks(
+    path: Path,
+    segments: Mapping[int, Segment],
+    vehicle_ids: frozenset[int] | None,
+    errors: ErrorCollector,
+    *,
+    map_name: str = "the map",
+    vehicles_name: str = VEHICLES_FILE_NAME,
+) -> tuple[tuple[Task, int], ...]:
+    """Every row of ``tasks.csv`` checked, each bad cell's error added to ``errors`` (see
+    :func:`read_tasks`); the tasks of the rows without one. ``vehicle_ids`` are the ids a task may
+    name; ``None`` (``vehicles.csv`` unreadable) skips that check rather than flag every row."""
+    rows = read_table(path, TASK_COLUMNS, errors)
+    if rows is None:
+        return ()
+    segment_cells = _SegmentCells(segments, map_name)
+    tasks = []
+    for number, row in enumerate(rows, start=1):
+        cells = _Cells(errors)
+        vehicle_id = cells.read(_whole_number, row, "vehicle_id")
+        if vehicle_id is not None and vehicle_ids is not None and vehicle_id not in vehicle_ids:
+            cells.read(_unknown_vehicle, row, vehicle_id, vehicles_name)
+        segment = cells.read(segment_cells.read, row, "goal_segment_id")
+        progress = cells.read(_choice, row, "goal_progress_direction", Progress)
+        if cells.ok and vehicle_id is not None and segment is not None:
+            tasks.append((Task(number, vehicle_id, segment.id, progress), row.line))
+    return tuple(tasks)
+
+
+def _unknown_vehicle(row: Row, vehicle_id: int, vehicles_name: str) -> None:
+    raise row.error("vehicle_id", f"vehicle {vehicle_id} is not in {vehicles_name}")
 
 
 def read_tasks_with_lines(
@@ -343,18 +351,11 @@ def read_tasks_with_lines(
     vehicles_name: str = VEHICLES_FILE_NAME,
 ) -> tuple[tuple[Task, int], ...]:
     """Like :func:`read_tasks`, each task paired with its line in the file (for later errors)."""
-    path = Path(path)
-    known = set(vehicles) if isinstance(vehicles, Mapping) else {vehicle.id for vehicle in vehicles}
-    tasks = []
-    cells = _SegmentCells(segments, map_name)
-    for number, row in enumerate(_read_rows(path, TASK_COLUMNS), start=1):
-        vehicle_id = _whole_number(row, "vehicle_id")
-        if vehicle_id not in known:
-            raise row.error("vehicle_id", f"vehicle {vehicle_id} is not in {vehicles_name}")
-        segment = cells.read(row, "goal_segment_id")
-        progress = _choice(row, "goal_progress_direction", Progress)
-        tasks.append((Task(number, vehicle_id, segment.id, progress), row.line))
-    return tuple(tasks)
+    known = frozenset(vehicles) if isinstance(vehicles, Mapping) else frozenset(v.id for v in vehicles)
+    errors = ErrorCollector()
+    tasks = collect_tasks(Path(path), segments, known, errors, map_name=map_name, vehicles_name=vehicles_name)
+    errors.raise_if_any()
+    return tasks
 
 
 def read_tasks(
@@ -365,6 +366,10 @@ def read_tasks(
     map_name: str = "the map",
     vehicles_name: str = VEHICLES_FILE_NAME,
 ) -> tuple[Task, ...]:
-    """The tasks of ``tasks.csv`` in file order; task id = 1-based data-row number."""
+    """The tasks of ``tasks.csv`` in file order; task id = 1-based data-row number.
+
+    Every row is checked, as :func:`read_vehicles` does: one error is raised as itself, several as one
+    :class:`~fleetsim.errors.LoadErrors`.
+    """
     rows = read_tasks_with_lines(path, segments, vehicles, map_name=map_name, vehicles_name=vehicles_name)
     return tuple(task for task, _ in rows)

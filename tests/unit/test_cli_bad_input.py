@@ -71,7 +71,12 @@ CASES = [
     ),
     ("infinite map", _edit(MAP, '"infinite":false', '"infinite":true'), ["map.json", "infinite"]),
     ("no segments", _edit(MAP, '"objects":[', '"objects":[],"unused":['), ["map.json", "no segments"]),
-    ("duplicate vehicle id", _edit(VEHICLES, "2,5,forward", "1,5,forward"), ["vehicles.csv:3", "vehicle_id", "1"]),
+    (
+        # Its task moved to vehicle 1 too: a task of vehicle 2 would be a second error (vehicle 2 is gone).
+        "duplicate vehicle id",
+        _both(_edit(VEHICLES, "2,5,forward", "1,5,forward"), _edit(TASKS, "2,8,", "1,8,")),
+        ["vehicles.csv:3", "vehicle_id", "1"],
+    ),
     ("unknown segment in vehicles.csv", _edit(VEHICLES, "2,5,forward", "2,55,forward"), ["vehicles.csv:3", "55"]),
     (
         "wrong-way start",
