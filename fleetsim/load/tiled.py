@@ -15,13 +15,14 @@ from __future__ import annotations
 import math
 import os
 import xml.etree.ElementTree as ET
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
 from fleetsim.enums import Direction, Shape
 from fleetsim.errors import Location, MapError
 from fleetsim.layout.segment import Point, Segment
+from fleetsim.load.collect import ErrorCollector
 from fleetsim.load.scenario_files import did_you_mean
 from fleetsim.load.text import read_text_file
 from fleetsim.load.tiled_templates import (
@@ -118,18 +119,24 @@ def parse_direction(raw: PropertyValue, where: Location) -> Direction:
 
 
 def load_map(path: str | os.PathLike[str]) -> TiledMap:
-    """Load a Tiled map; every problem with the file is a [`MapError`][fleetsim.errors.MapError]."""
+    """Load a Tiled map; every problem with the file is a [`MapError`][fleetsim.errors.MapError].
+
+    The problems of every object are reported together (with those of the map's header and layers):
+    one is raised as itself, several as one [`LoadErrors`][fleetsim.errors.LoadErrors], at most 50 per
+    file. A file that cannot be read as a map at all stops at that one error.
+    """
     map_path = Path(path)
     suffix = map_path.suffix.lower()
     if suffix not in MAP_SUFFIXES:
         msg = f"this is not a Tiled map file: a map is saved as {', '.join(MAP_SUFFIXES[:-1])} or {MAP_SUFFIXES[-1]}, and this file ends in {map_path.suffix or 'no suffix'!r}"
         raise MapError(msg, Location(map_path))
     text = read_text_file(map_path, MapError)
+    errors = ErrorCollector()
     if suffix == ".tmx":
-        header, placed = _read_tmx(text, map_path)
+        header, placed = _read_tmx(text, map_path, errors)
     else:
-        header, placed = _read_json(text, map_path)
-    segments, warnings = _segments(placed, header, map_path)
+        header, placed = _read_json(text, map_path, errors)
+    segments, warnings = _segments(placed, header, map_path, errors)
     return TiledMap(
         path=map_path,
         segments=segments,
@@ -152,37 +159,64 @@ def _positive_int(raw: object, name: str, where: Location) -> int:
     return value
 
 
-def _header(attrs: Mapping[str, object], properties: Mapping[str, PropertyValue], path: Path) -> _Header:
-    where = Location(path)
+def _check_orientation(attrs: Mapping[str, object], where: Location) -> None:
     orientation = attrs.get("orientation")
     if orientation != "orthogonal":
         msg = f"the map's orientation is {orientation!r}; fleetsim reads orthogonal maps only"
         raise MapError(msg, where)
+
+
+def _check_finite(attrs: Mapping[str, object], where: Location) -> None:
     infinite = attrs.get("infinite", False)
     if as_bool(infinite, "infinite", where):
         msg = f"the map is infinite (infinite = {infinite!r}); fleetsim reads fixed-size maps only (untick Infinite in Tiled's map properties)"
         raise MapError(msg, where)
-    width, height, tile_width, tile_height = (
-        _positive_int(attrs.get(name), name, where) for name in ("width", "height", "tilewidth", "tileheight")
-    )
-    scale = 1.0 / tile_width  # default: one tile is one metre
+
+
+def _scale(properties: Mapping[str, PropertyValue], tile_width: int, where: Location) -> float:
     raw_scale = properties.get("meters_per_pixel")
-    if raw_scale is not None:
-        scale = as_number(raw_scale, "meters_per_pixel", where)
-        if scale <= 0:
-            raise MapError(f"the map property meters_per_pixel is {raw_scale!r}; it must be a positive number", where)
+    if raw_scale is None:
+        return 1.0 / tile_width  # default: one tile is one metre
+    scale = as_number(raw_scale, "meters_per_pixel", where)
+    if scale <= 0:
+        raise MapError(f"the map property meters_per_pixel is {raw_scale!r}; it must be a positive number", where)
+    return scale
+
+
+def _header(
+    attrs: Mapping[str, object], properties: Mapping[str, PropertyValue], path: Path, errors: ErrorCollector
+) -> _Header:
+    """The header; each bad attribute is collected and a stand-in value used, so objects still get checked."""
+    where = Location(path)
+    with errors.collecting():
+        _check_orientation(attrs, where)
+    with errors.collecting():
+        _check_finite(attrs, where)
+    sizes = [1, 1, 1, 1]  # stand-ins for a bad value (the load fails anyway)
+    for index, name in enumerate(("width", "height", "tilewidth", "tileheight")):
+        with errors.collecting():
+            sizes[index] = _positive_int(attrs.get(name), name, where)
+    width, height, tile_width, tile_height = sizes
+    scale = 1.0
+    with errors.collecting():
+        scale = _scale(properties, tile_width, where)
     return _Header(float(width * tile_width), float(height * tile_height), scale)
 
 
 # --- documents -----------------------------------------------------------------------------------
+# The layer walkers are generators that _segments consumes, so the errors of layers and of objects
+# are collected in the order of the file.
 
 
-def _read_tmx(text: str, path: Path) -> tuple[_Header, list[_Placed]]:
+def _read_tmx(text: str, path: Path, errors: ErrorCollector) -> tuple[_Header, Iterator[_Placed]]:
     root = parse_xml(text, path)
     if root.tag != "map":
         raise MapError(f"root element <{root.tag}> must be <map>", Location(path))
-    header = _header(root.attrib, xml_properties(root, Location(path)), path)
-    return header, list(_tmx_layers(root, (0.0, 0.0), "", path))
+    properties: dict[str, PropertyValue] = {}
+    with errors.collecting():
+        properties = xml_properties(root, Location(path))
+    header = _header(root.attrib, properties, path, errors)
+    return header, _tmx_layers(root, (0.0, 0.0), "", path, errors)
 
 
 def _layer_offset(attrs: Mapping[str, object], offset: Point, name: str, where: Location) -> Point:
@@ -191,57 +225,87 @@ def _layer_offset(attrs: Mapping[str, object], offset: Point, name: str, where: 
     return (offset[0] + dx, offset[1] + dy)
 
 
-def _tmx_layers(parent: ET.Element, offset: Point, prefix: str, path: Path) -> Iterator[_Placed]:
+def _visible_offset(
+    attrs: Mapping[str, object], default_visible: object, offset: Point, name: str, where: Location
+) -> Point | None:
+    """The layer's summed offset, or ``None`` for a hidden layer."""
+    if not as_bool(attrs.get("visible", default_visible), f"layer {name!r} visible", where):
+        return None
+    return _layer_offset(attrs, offset, name, where)
+
+
+def _tmx_layers(
+    parent: ET.Element, offset: Point, prefix: str, path: Path, errors: ErrorCollector
+) -> Iterator[_Placed]:
     where = Location(path)
     for layer in parent:
         if layer.tag not in ("group", "objectgroup"):
             continue  # tile and image layers carry no segments
         name = prefix + layer.get("name", "")
-        if not as_bool(layer.get("visible", "1"), f"layer {name!r} visible", where):
+        inner: Point | None = None
+        with errors.collecting():  # a bad layer attribute skips the layer, not the map
+            inner = _visible_offset(layer.attrib, "1", offset, name, where)
+        if inner is None:
             continue
-        inner = _layer_offset(layer.attrib, offset, name, where)
         if layer.tag == "group":
-            yield from _tmx_layers(layer, inner, name + "/", path)
+            yield from _tmx_layers(layer, inner, name + "/", path, errors)
             continue
         for index, element in enumerate(layer.findall("object")):
-            yield _Placed(read_xml_object(element, path), inner, name, index)
+            fields: ObjectFields | None = None
+            with errors.collecting():
+                fields = read_xml_object(element, path)
+            if fields is not None:
+                yield _Placed(fields, inner, name, index)
 
 
-def _read_json(text: str, path: Path) -> tuple[_Header, list[_Placed]]:
+def _read_json(text: str, path: Path, errors: ErrorCollector) -> tuple[_Header, Iterator[_Placed]]:
     document = parse_json(text, path)
     where = Location(path)
     if not isinstance(document, dict):
         raise MapError("a JSON map must be an object", where)
     if document.get("type", "map") != "map":
         raise MapError(f"this JSON file is not a Tiled map: its type is {document.get('type')!r}, not 'map'", where)
-    header = _header(document, json_properties(document.get("properties"), where), path)
-    return header, list(_json_layers(document, (0.0, 0.0), "", path))
+    properties: dict[str, PropertyValue] = {}
+    with errors.collecting():
+        properties = json_properties(document.get("properties"), where)
+    header = _header(document, properties, path, errors)
+    return header, _json_layers(document, (0.0, 0.0), "", path, errors)
 
 
-def _json_list(container: Mapping[str, object], key: str, where: Location) -> list[object]:
+def _json_list(container: Mapping[str, object], key: str, where: Location, errors: ErrorCollector) -> list[object]:
     value = container.get(key, [])
     if not isinstance(value, list):
-        raise MapError(f"{key} is {value!r}; it must be a list", where)
+        errors.add(MapError(f"{key} is {value!r}; it must be a list", where))
+        return []
     return value
 
 
-def _json_layers(parent: Mapping[str, object], offset: Point, prefix: str, path: Path) -> Iterator[_Placed]:
+def _json_layers(
+    parent: Mapping[str, object], offset: Point, prefix: str, path: Path, errors: ErrorCollector
+) -> Iterator[_Placed]:
     where = Location(path)
-    for layer in _json_list(parent, "layers", where):
+    for layer in _json_list(parent, "layers", where, errors):
         if not isinstance(layer, dict):
-            raise MapError(f"layer {layer!r} must be a JSON object", where)
+            errors.add(MapError(f"layer {layer!r} must be a JSON object", where))
+            continue
         kind = layer.get("type")
         if kind not in ("group", "objectgroup"):
             continue  # tile and image layers carry no segments
         name = prefix + str(layer.get("name", ""))
-        if not as_bool(layer.get("visible", True), f"layer {name!r} visible", where):
+        inner: Point | None = None
+        with errors.collecting():  # a bad layer attribute skips the layer, not the map
+            inner = _visible_offset(layer, True, offset, name, where)
+        if inner is None:
             continue
-        inner = _layer_offset(layer, offset, name, where)
         if kind == "group":
-            yield from _json_layers(layer, inner, name + "/", path)
+            yield from _json_layers(layer, inner, name + "/", path, errors)
             continue
-        for index, obj in enumerate(_json_list(layer, "objects", where)):
-            yield _Placed(read_json_object(obj, path), inner, name, index)
+        for index, obj in enumerate(_json_list(layer, "objects", where, errors)):
+            fields: ObjectFields | None = None
+            with errors.collecting():
+                fields = read_json_object(obj, path)
+            if fields is not None:
+                yield _Placed(fields, inner, name, index)
 
 
 # --- segments ------------------------------------------------------------------------------------
@@ -251,19 +315,18 @@ def _describe(placed: _Placed) -> str:
     return f"object #{placed.index + 1} in layer {placed.layer!r}"
 
 
-def _check_unique_ids(placed: list[_Placed], path: Path) -> None:
-    first_with: dict[int, _Placed] = {}
-    for item in placed:
-        object_id = item.fields.id
-        if object_id is None:
-            continue
-        if object_id in first_with:
-            msg = (
-                f"id={object_id!r} is used by two objects ({_describe(first_with[object_id])} and "
-                f"{_describe(item)}); object ids must be unique"
-            )
-            raise MapError(msg, Location(path, object_id=object_id))
-        first_with[object_id] = item
+def _check_unique_id(item: _Placed, first_with: dict[int, _Placed], path: Path) -> None:
+    """``item``'s id is not one an earlier object has (all objects count, hidden ones and non-segments too)."""
+    object_id = item.fields.id
+    if object_id is None:
+        return
+    if object_id in first_with:
+        msg = (
+            f"id={object_id!r} is used by two objects ({_describe(first_with[object_id])} and "
+            f"{_describe(item)}); object ids must be unique"
+        )
+        raise MapError(msg, Location(path, object_id=object_id))
+    first_with[object_id] = item
 
 
 def _world_points(
@@ -325,29 +388,42 @@ def _unknown_class(fields: ObjectFields, placed: _Placed, path: Path) -> MapErro
     return MapError(msg, Location(path, object_id=fields.id))
 
 
-def _segments(placed: list[_Placed], header: _Header, path: Path) -> tuple[tuple[Segment, ...], tuple[str, ...]]:
-    _check_unique_ids(placed, path)
+def _segments(
+    placed: Iterable[_Placed], header: _Header, path: Path, errors: ErrorCollector
+) -> tuple[tuple[Segment, ...], tuple[str, ...]]:
+    """Every object's segment, or every object's error: nothing is returned for a map with any error."""
     templates = TemplateCache(path)
+    first_with: dict[int, _Placed] = {}
     segments: list[Segment] = []
     warnings: list[str] = []
     for item in placed:
-        fields = templates.resolve(item.fields)
-        if fields.visible is False:
-            continue
-        shape = parse_shape(fields.shape_class) if fields.shape_class else None
-        name = f"{path}: object {fields.id}"
-        if fields.geometry != "polyline":
-            if shape is not None:
-                geometry = fields.geometry or "rectangle"
-                warnings.append(f"{name}: class {fields.shape_class!r} on a {geometry}, not a polyline; ignored")
-            continue
-        if shape is None:
-            if fields.shape_class:
-                raise _unknown_class(fields, item, path)
-            continue  # a polyline without a class is a drawing aid, not a segment
-        segments.append(_segment(fields, shape, item, header, path))
+        with errors.collecting():  # each object is reported once, by its first problem
+            _check_unique_id(item, first_with, path)
+            _take(item, templates, header, path, segments, warnings)
+    errors.raise_if_any()
     if not segments:
         msg = "the map has no segments (visible polyline objects of class straight, curve, s_curve or path)"
         raise MapError(msg, Location(path))
     segments.sort(key=lambda segment: segment.id)
     return tuple(segments), tuple(warnings)
+
+
+def _take(
+    item: _Placed, templates: TemplateCache, header: _Header, path: Path, segments: list[Segment], warnings: list[str]
+) -> None:
+    """Add ``item``'s segment (or a warning about it); a broken object raises its MapError."""
+    fields = templates.resolve(item.fields)
+    if fields is None or fields.visible is False:
+        return  # None: its template is broken, which was reported at its first instance
+    shape = parse_shape(fields.shape_class) if fields.shape_class else None
+    if fields.geometry != "polyline":
+        if shape is not None:
+            geometry = fields.geometry or "rectangle"
+            name = f"{path}: object {fields.id}"
+            warnings.append(f"{name}: class {fields.shape_class!r} on a {geometry}, not a polyline; ignored")
+        return
+    if shape is None:
+        if fields.shape_class:
+            raise _unknown_class(fields, item, path)
+        return  # a polyline without a class is a drawing aid, not a segment
+    segments.append(_segment(fields, shape, item, header, path))

@@ -332,17 +332,26 @@ def read_json_object(obj: object, path: Path, owner_id: int | None = None) -> Ob
 
 
 class TemplateCache:
-    """Object templates read during one map load; a map may reference one template thousands of times."""
+    """Object templates read during one map load; a map may reference one template thousands of times.
 
-    __slots__ = ("_base", "_map_path", "_parsed")
+    A template that cannot be read is reported once, at the first object that uses it: the one fix
+    repairs every other instance, so repeating its error for each of them would only bury other errors.
+    """
+
+    __slots__ = ("_base", "_broken", "_map_path", "_parsed")
 
     def __init__(self, map_path: Path) -> None:
         self._map_path = map_path
         self._base = map_path.parent
         self._parsed: dict[str, ObjectFields] = {}
+        self._broken: set[str] = set()
 
-    def resolve(self, instance: ObjectFields) -> ObjectFields:
-        """``instance`` with its template's keys filled in (unchanged when it names no template)."""
+    def resolve(self, instance: ObjectFields) -> ObjectFields | None:
+        """``instance`` with its template's keys filled in (unchanged when it names no template).
+
+        A template that cannot be read raises its :class:`~fleetsim.errors.MapError` for the first
+        instance; later instances of it resolve to ``None`` (already reported).
+        """
         if instance.template is None:
             return instance
         # Tiled writes "/" but maps made on Windows by hand may hold "\"; both are relative to the map.
@@ -350,7 +359,13 @@ class TemplateCache:
         key = os.path.normpath(template_path)
         template = self._parsed.get(key)
         if template is None:
-            template = self._load(template_path, instance)
+            if key in self._broken:
+                return None
+            try:
+                template = self._load(template_path, instance)
+            except MapError:
+                self._broken.add(key)
+                raise
             self._parsed[key] = template
         return instance.over(template)
 
