@@ -37,7 +37,7 @@ def validate(args: argparse.Namespace) -> int:
         try:
             suite = load_suite(path)
         except LoadError as error:
-            print(f"FAIL {path}\n     {error}")
+            print(f"FAIL {path}\n{_indent(error, 5)}")
             failed += 1
             continue
         print(f"{path}: suite {suite.name!r}, {len(suite.scenarios)} scenario(s)")
@@ -49,7 +49,7 @@ def validate(args: argparse.Namespace) -> int:
                 try:
                     check_generate_block(spec, suite)
                 except LoadError as error:
-                    print(f"  FAIL {spec.name}\n       {error}")
+                    print(f"  FAIL {spec.name}\n{_indent(error, 7)}")
                     failed += 1
                     continue
                 loaded += 1
@@ -61,7 +61,7 @@ def validate(args: argparse.Namespace) -> int:
             try:
                 scenario = load_scenario(spec, suite)
             except LoadError as error:
-                print(f"  FAIL {spec.name}\n       {error}")
+                print(f"  FAIL {spec.name}\n{_indent(error, 7)}")
                 failed += 1
                 notes = list(error.notes) if isinstance(error, UnreachableTaskError) else []
             else:
@@ -77,6 +77,11 @@ def validate(args: argparse.Namespace) -> int:
                 print(f"       {note}")
     print(f"{len(paths)} suite(s): {loaded} scenario(s) valid, {failed} failed, {warnings} lint warning(s)")
     return 1 if failed else 0
+
+
+def _indent(error: LoadError, width: int) -> str:
+    """The error's text indented by ``width``, every line of it (several errors are a list)."""
+    return "\n".join(" " * width + line for line in str(error).splitlines())
 
 
 def _lint_notes(layout: Layout, vehicle_length: float) -> list[str]:

@@ -16,7 +16,7 @@ from __future__ import annotations
 import csv
 import difflib
 import io
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -25,7 +25,7 @@ from fleetsim.load.closest import did_you_mean
 from fleetsim.load.collect import ErrorCollector
 from fleetsim.load.text import read_text_file
 
-__all__ = ["Columns", "Row", "read_table"]
+__all__ = ["Columns", "Row", "check_table", "read_table"]
 
 # Separators a spreadsheet may have written instead of commas, and how a message names each.
 _OTHER_SEPARATORS = {";": "';'", "\t": "tabs"}
@@ -63,9 +63,13 @@ class Row:
         return ScenarioFileError(problem, Location(self.path, line=self.line, field=column))
 
 
-def read_table(path: Path, columns: Columns, errors: ErrorCollector) -> tuple[Row, ...] | None:
+def read_table(path: Path, columns: Columns, errors: ErrorCollector) -> Iterator[Row] | None:
     """The data rows of the right width in the CSV file at ``path``, or ``None`` when the file is
-    unreadable as a table; every problem is added to ``errors``."""
+    unreadable as a table; every problem is added to ``errors``.
+
+    The rows come one by one and a row of the wrong width is added to ``errors`` when its turn comes,
+    so errors the caller finds in the rows stay in file order among them.
+    """
     try:
         records = _records(path)
         if not records:
@@ -76,14 +80,24 @@ def read_table(path: Path, columns: Columns, errors: ErrorCollector) -> tuple[Ro
     except ScenarioFileError as error:  # a LoadErrors when the header has several problems
         errors.add(error)
         return None
-    rows = []
-    for line, cells in records[1:]:
+    return _rows(path, records[1:], names, errors)
+
+
+def check_table(path: Path, columns: Columns, errors: ErrorCollector) -> None:
+    """Add the problems of the file's structure (readable, header, row widths) to ``errors``."""
+    for _ in read_table(path, columns, errors) or ():
+        pass
+
+
+def _rows(
+    path: Path, records: list[tuple[int, list[str]]], names: tuple[str, ...], errors: ErrorCollector
+) -> Iterator[Row]:
+    for line, cells in records:
         if len(cells) != len(names):
             msg = f"row has {len(cells)} values but the header has {len(names)} columns: {cells!r}"
             errors.add(ScenarioFileError(msg, Location(path, line=line)))
             continue
-        rows.append(Row(path, line, dict(zip(names, cells, strict=True))))
-    return tuple(rows)
+        yield Row(path, line, dict(zip(names, cells, strict=True)))
 
 
 def _records(path: Path) -> list[tuple[int, list[str]]]:

@@ -23,7 +23,7 @@ from fleetsim.enums import ConflictModel
 from fleetsim.errors import Location, ScenarioFileError, SuiteError, UnreachableTaskError
 from fleetsim.layout.layout import Layout, build_layout
 from fleetsim.load.collect import ErrorCollector
-from fleetsim.load.csv_table import read_table
+from fleetsim.load.csv_table import check_table
 from fleetsim.load.disturbances import check_disturbances
 from fleetsim.load.map_options import MapOptions, SiteMap
 from fleetsim.load.scenario_files import (
@@ -139,8 +139,8 @@ def _assemble(
         typed = True
     if site is None or not typed:
         # The rows cannot be checked without segments and types; their files' structure can.
-        read_table(vehicles_path, VEHICLE_COLUMNS, errors)
-        read_table(tasks_path, TASK_COLUMNS, errors)
+        check_table(vehicles_path, VEHICLE_COLUMNS, errors)
+        check_table(tasks_path, TASK_COLUMNS, errors)
         errors.raise_if_any()
     assert site is not None  # raise_if_any raised the error that left it None
     segments = {segment.id: segment for segment in site.segments}
