@@ -20,7 +20,7 @@ from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
-from fleetsim.errors import Location, ScenarioFileError
+from fleetsim.errors import LoadError, Location, ScenarioFileError
 from fleetsim.load.closest import did_you_mean
 from fleetsim.load.collect import ErrorCollector
 from fleetsim.load.text import read_text_file
@@ -77,7 +77,7 @@ def read_table(path: Path, columns: Columns, errors: ErrorCollector) -> Iterator
             raise ScenarioFileError(msg, Location(path, line=1))
         header_line, header_cells = records[0]
         names = _header(path, header_line, header_cells, columns)
-    except ScenarioFileError as error:  # a LoadErrors when the header has several problems
+    except LoadError as error:  # a LoadErrors when the header has several problems
         errors.add(error)
         return None
     return _rows(path, records[1:], names, errors)

@@ -165,7 +165,8 @@ def _assemble(
     )
     tasks = tuple(task for task, _ in located_tasks)
     if not settings.allow_start_conflicts:
-        _reject_start_conflicts(located, layout, vehicles_path)
+        _reject_start_conflicts(located, layout, vehicles_path, errors)
+        errors.raise_if_any()
     try:
         check_tasks_reachable(layout, vehicles, located_tasks, tasks_path)
     except UnreachableTaskError as error:
@@ -210,8 +211,12 @@ def _vehicle_radius(
     return max(vehicle_type.swept_radius for vehicle_type in used)
 
 
-def _reject_start_conflicts(located: tuple[tuple[Vehicle, int], ...], layout: Layout, vehicles_path: Path) -> None:
-    """Two vehicles may not start on conflicting segments: their very first plans would collide."""
+def _reject_start_conflicts(
+    located: tuple[tuple[Vehicle, int], ...], layout: Layout, vehicles_path: Path, errors: ErrorCollector
+) -> None:
+    """Two vehicles may not start on conflicting segments: their very first plans would collide.
+
+    Each vehicle that starts in conflict with one above it is an error at its row."""
     placed: dict[int, tuple[Vehicle, int]] = {}  # start segment → first vehicle on it, with its line
     for vehicle, line in located:
         hits = [placed[segment] for segment in layout.conflicts(vehicle.start_segment) if segment in placed]
@@ -222,7 +227,7 @@ def _reject_start_conflicts(located: tuple[tuple[Vehicle, int], ...], layout: La
                 f"{vehicle.id} (line {line}, segment {vehicle.start_segment}) start on conflicting "
                 "segments; move one, or set allow_start_conflicts: true for this scenario"
             )
-            raise ScenarioFileError(msg, Location(vehicles_path, line=line, field="start_segment_id"))
+            errors.add(ScenarioFileError(msg, Location(vehicles_path, line=line, field="start_segment_id")))
         placed.setdefault(vehicle.start_segment, (vehicle, line))
 
 

@@ -15,7 +15,7 @@ from fleetsim.load.collect import CAP_PER_FILE
 from fleetsim.load.scenario import load_scenario_dir
 from fleetsim.load.scenario_files import read_tasks, read_vehicles
 from fleetsim.load.tiled_writer import write_map
-from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Vehicle
+from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, ScenarioSettings, Vehicle
 
 SEGMENTS = {
     1: Segment(1, Shape.STRAIGHT, Direction.BOTH, ((0.0, 0.0), (5.0, 0.0))),
@@ -226,3 +226,39 @@ def test_validate_prints_every_error_of_a_scenario(tmp_path: Path, capsys: pytes
         assert any(f"tasks.csv:{line}: field {field!r}" in entry for entry in listed), out
     assert "       3 errors:" in out
     assert "0 scenario(s) valid, 1 failed" in out
+
+
+def test_every_vehicle_starting_in_conflict_is_reported(tmp_path: Path) -> None:
+    folder = scenario_folder(tmp_path, "1,1,forward\n2,2,forward\n3,4,forward\n4,3,forward\n", "")
+    error = scenario_error(folder)
+    assert isinstance(error, LoadErrors)
+    assert [e.location.line for e in error.errors if e.location] == [3, 5]
+    assert all("start on conflicting segments" in e.problem for e in error.errors)
+
+
+def test_one_start_conflict_is_its_own_error(tmp_path: Path) -> None:
+    folder = scenario_folder(tmp_path, "1,1,forward\n2,2,forward\n3,4,forward\n", "")
+    assert type(scenario_error(folder)) is ScenarioFileError
+
+
+def test_an_unknown_default_type_is_reported_with_the_files_structure(tmp_path: Path) -> None:
+    folder = scenario_folder(tmp_path, "1,1,forward\n", "1,2,\n")
+    settings = ScenarioSettings(vehicle_type="nope")
+    with pytest.raises(ScenarioFileError, match="vehicle_type='nope' is not one of the vehicle types"):
+        load_scenario_dir(folder, settings=settings)
+    write(folder / "tasks.csv", "vehicle_id,goal\n")
+    with pytest.raises(LoadErrors) as caught:
+        load_scenario_dir(folder, settings=settings)
+    assert [e.location.field for e in caught.value.errors if e.location] == [None, "goal", "goal_segment_id"]
+
+
+def test_a_header_with_several_problems_is_collected_with_the_other_files_rows(tmp_path: Path) -> None:
+    folder = scenario_folder(tmp_path, "1,1,sideways\n", "")
+    write(folder / "tasks.csv", "vehicle_id,goal\n1,2\n")
+    error = scenario_error(folder)
+    assert isinstance(error, LoadErrors)
+    assert [(Path(e.location.path).name, e.location.field) for e in error.errors if e.location] == [
+        ("vehicles.csv", "segment_orientation"),
+        ("tasks.csv", "goal"),
+        ("tasks.csv", "goal_segment_id"),
+    ]
