@@ -53,7 +53,12 @@ __all__ = ["default_vehicle_type", "load_scenario", "load_scenario_dir"]
 
 
 def load_scenario(spec: ScenarioSpec, suite: Suite) -> Scenario:
-    """Load the files of one suite entry into a complete scenario."""
+    """Load the files of one suite entry into a complete scenario.
+
+    Every error of its files is reported at once (see the module docstring): one is raised as itself, a
+    :class:`~fleetsim.errors.ScenarioFileError` for example; several as one
+    :class:`~fleetsim.errors.LoadErrors`.
+    """
     scenario = _assemble(
         spec.name,
         (spec.map_path, spec.vehicles_path, spec.tasks_path),
