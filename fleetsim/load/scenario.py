@@ -55,9 +55,9 @@ __all__ = ["default_vehicle_type", "load_scenario", "load_scenario_dir"]
 def load_scenario(spec: ScenarioSpec, suite: Suite) -> Scenario:
     """Load the files of one suite entry into a complete scenario.
 
-    Every error of its files is reported at once (see the module docstring): one is raised as itself, a
-    :class:`~fleetsim.errors.ScenarioFileError` for example; several as one
-    :class:`~fleetsim.errors.LoadErrors`.
+    Every error of its files is reported at once: one is raised as itself (a
+    [`ScenarioFileError`][fleetsim.errors.ScenarioFileError], say), several as one
+    [`LoadErrors`][fleetsim.errors.LoadErrors], at most 50 per file.
     """
     scenario = _assemble(
         spec.name,

@@ -297,10 +297,10 @@ def read_vehicles(
     ``default_type`` is the type of rows without one; ``None`` (a suite with several types and no
     ``vehicle_type`` default) makes such rows an error. ``map_name`` names the map in messages.
 
-    Every row is checked: one bad cell raises its :class:`~fleetsim.errors.ScenarioFileError`, several
-    (in one row or many) raise one :class:`~fleetsim.errors.LoadErrors` listing each, at most
-    :data:`~fleetsim.load.collect.CAP_PER_FILE` of them. A broken header stops the file (rows mean
-    nothing without it), but all of the header's own problems are reported.
+    Every row is checked: one bad cell raises its [`ScenarioFileError`][fleetsim.errors.ScenarioFileError],
+    several (in one row or many) raise one [`LoadErrors`][fleetsim.errors.LoadErrors] listing each, at
+    most 50 of them. A broken header stops the file (rows mean nothing without it), but all of the
+    header's own problems are reported.
     """
     rows = read_vehicles_with_lines(path, segments, vehicle_types, default_type, map_name=map_name)
     return tuple(vehicle for vehicle, _ in rows)
@@ -368,8 +368,8 @@ def read_tasks(
 ) -> tuple[Task, ...]:
     """The tasks of ``tasks.csv`` in file order; task id = 1-based data-row number.
 
-    Every row is checked, as :func:`read_vehicles` does: one error is raised as itself, several as one
-    :class:`~fleetsim.errors.LoadErrors`.
+    Every row is checked, as [`read_vehicles`][fleetsim.load.read_vehicles] does: one error is raised as
+    itself, several as one [`LoadErrors`][fleetsim.errors.LoadErrors].
     """
     rows = read_tasks_with_lines(path, segments, vehicles, map_name=map_name, vehicles_name=vehicles_name)
     return tuple(task for task, _ in rows)
