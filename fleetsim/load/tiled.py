@@ -251,11 +251,12 @@ def _tmx_layers(
             yield from _tmx_layers(layer, inner, name + "/", path, errors)
             continue
         for index, element in enumerate(layer.findall("object")):
-            fields: ObjectFields | None = None
-            with errors.collecting():
+            try:  # not errors.collecting(): this loop runs once per object of a map
                 fields = read_xml_object(element, path)
-            if fields is not None:
-                yield _Placed(fields, inner, name, index)
+            except MapError as error:
+                errors.add(error)
+                continue
+            yield _Placed(fields, inner, name, index)
 
 
 def _read_json(text: str, path: Path, errors: ErrorCollector) -> tuple[_Header, Iterator[_Placed]]:
@@ -301,11 +302,12 @@ def _json_layers(
             yield from _json_layers(layer, inner, name + "/", path, errors)
             continue
         for index, obj in enumerate(_json_list(layer, "objects", where, errors)):
-            fields: ObjectFields | None = None
-            with errors.collecting():
+            try:  # not errors.collecting(): this loop runs once per object of a map
                 fields = read_json_object(obj, path)
-            if fields is not None:
-                yield _Placed(fields, inner, name, index)
+            except MapError as error:
+                errors.add(error)
+                continue
+            yield _Placed(fields, inner, name, index)
 
 
 # --- segments ------------------------------------------------------------------------------------
@@ -397,9 +399,11 @@ def _segments(
     segments: list[Segment] = []
     warnings: list[str] = []
     for item in placed:
-        with errors.collecting():  # each object is reported once, by its first problem
+        try:  # each object is reported once, by its first problem
             _check_unique_id(item, first_with, path)
             _take(item, templates, header, path, segments, warnings)
+        except MapError as error:
+            errors.add(error)
     errors.raise_if_any()
     if not segments:
         msg = "the map has no segments (visible polyline objects of class straight, curve, s_curve or path)"
