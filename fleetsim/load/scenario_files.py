@@ -201,7 +201,11 @@ def _vehicle_type(row: Row, types_by_key: Mapping[str, VehicleType], default_typ
         return default_type
     if name.casefold() not in types_by_key:
         names = [t.name for t in types_by_key.values()]
-        msg = f"vehicle type {name!r} is not defined{did_you_mean(name, names)} (known: {', '.join(names)})"
+        msg = (
+            f"vehicle type {name!r} is not defined{did_you_mean(name, names)} (known: {', '.join(names)}); "
+            "a folder's vehicles.csv only names types: the suite that uses the folder defines them under "
+            "vehicle_types"
+        )
         raise row.error("type", msg)
     return types_by_key[name.casefold()]
 
