@@ -3,7 +3,8 @@
 The format follows the file: ``*.tmx``/``*.tmj`` are Tiled; ``*.lif.json`` and any JSON whose top level
 has ``metaInformation`` plus ``layouts`` or ``origins`` are LIF; other ``*.json`` files are Tiled; a
 ``*.building.yaml`` (or ``.yaml``/``.yml``) is an Open-RMF building map. Every problem is a located
-:class:`~fleetsim.errors.MapError`; nothing is returned half loaded.
+:class:`~fleetsim.errors.MapError` (several found in one pass: a :class:`~fleetsim.errors.LoadErrors` of
+them); nothing is returned half loaded.
 """
 
 from __future__ import annotations

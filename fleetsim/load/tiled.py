@@ -8,6 +8,10 @@ frame (origin at the map centre, y up, so RViz shows what Tiled shows).
 A polyline of class ``path`` is a free-form segment of any number of points. A polyline whose class
 names no shape is an error (with a "did you mean"): a typo must not silently drop
 a segment. A polyline with no class at all, and every other object, is ignored.
+
+Every broken object is reported, each by its first problem, together with the header's and the layers'
+problems, in the order of the file (a :class:`~fleetsim.load.collect.ErrorCollector`); a map with any
+error gives no segments at all.
 """
 
 from __future__ import annotations
@@ -25,12 +29,12 @@ from fleetsim.layout.segment import Point, Segment
 from fleetsim.load.collect import ErrorCollector
 from fleetsim.load.scenario_files import did_you_mean
 from fleetsim.load.text import read_text_file
+from fleetsim.load.tiled_header import MapHeader, read_header
 from fleetsim.load.tiled_templates import (
     ObjectFields,
     PropertyValue,
     TemplateCache,
     as_bool,
-    as_int,
     as_number,
     json_properties,
     parse_json,
@@ -72,15 +76,6 @@ class TiledMap:
     width_px: float
     height_px: float
     warnings: tuple[str, ...]
-
-
-@dataclass(frozen=True, slots=True)
-class _Header:
-    """The map-level facts the world transform needs."""
-
-    width_px: float
-    height_px: float
-    meters_per_pixel: float
 
 
 @dataclass(frozen=True, slots=True)
@@ -147,75 +142,19 @@ def load_map(path: str | os.PathLike[str]) -> TiledMap:
     )
 
 
-# --- map header ----------------------------------------------------------------------------------
-
-
-def _positive_int(raw: object, name: str, where: Location) -> int:
-    if raw is None:
-        raise MapError(f"map attribute {name!r} is missing", where)
-    value = as_int(raw, name, where)
-    if value <= 0:
-        raise MapError(f"{name} is {raw!r}; it must be a positive integer", where)
-    return value
-
-
-def _check_orientation(attrs: Mapping[str, object], where: Location) -> None:
-    orientation = attrs.get("orientation")
-    if orientation != "orthogonal":
-        msg = f"the map's orientation is {orientation!r}; fleetsim reads orthogonal maps only"
-        raise MapError(msg, where)
-
-
-def _check_finite(attrs: Mapping[str, object], where: Location) -> None:
-    infinite = attrs.get("infinite", False)
-    if as_bool(infinite, "infinite", where):
-        msg = f"the map is infinite (infinite = {infinite!r}); fleetsim reads fixed-size maps only (untick Infinite in Tiled's map properties)"
-        raise MapError(msg, where)
-
-
-def _scale(properties: Mapping[str, PropertyValue], tile_width: int, where: Location) -> float:
-    raw_scale = properties.get("meters_per_pixel")
-    if raw_scale is None:
-        return 1.0 / tile_width  # default: one tile is one metre
-    scale = as_number(raw_scale, "meters_per_pixel", where)
-    if scale <= 0:
-        raise MapError(f"the map property meters_per_pixel is {raw_scale!r}; it must be a positive number", where)
-    return scale
-
-
-def _header(
-    attrs: Mapping[str, object], properties: Mapping[str, PropertyValue], path: Path, errors: ErrorCollector
-) -> _Header:
-    """The header; each bad attribute is collected and a stand-in value used, so objects still get checked."""
-    where = Location(path)
-    with errors.collecting():
-        _check_orientation(attrs, where)
-    with errors.collecting():
-        _check_finite(attrs, where)
-    sizes = [1, 1, 1, 1]  # stand-ins for a bad value (the load fails anyway)
-    for index, name in enumerate(("width", "height", "tilewidth", "tileheight")):
-        with errors.collecting():
-            sizes[index] = _positive_int(attrs.get(name), name, where)
-    width, height, tile_width, tile_height = sizes
-    scale = 1.0
-    with errors.collecting():
-        scale = _scale(properties, tile_width, where)
-    return _Header(float(width * tile_width), float(height * tile_height), scale)
-
-
 # --- documents -----------------------------------------------------------------------------------
 # The layer walkers are generators that _segments consumes, so the errors of layers and of objects
 # are collected in the order of the file.
 
 
-def _read_tmx(text: str, path: Path, errors: ErrorCollector) -> tuple[_Header, Iterator[_Placed]]:
+def _read_tmx(text: str, path: Path, errors: ErrorCollector) -> tuple[MapHeader, Iterator[_Placed]]:
     root = parse_xml(text, path)
     if root.tag != "map":
         raise MapError(f"root element <{root.tag}> must be <map>", Location(path))
     properties: dict[str, PropertyValue] = {}
     with errors.collecting():
         properties = xml_properties(root, Location(path))
-    header = _header(root.attrib, properties, path, errors)
+    header = read_header(root.attrib, properties, path, errors)
     return header, _tmx_layers(root, (0.0, 0.0), "", path, errors)
 
 
@@ -259,7 +198,7 @@ def _tmx_layers(
             yield _Placed(fields, inner, name, index)
 
 
-def _read_json(text: str, path: Path, errors: ErrorCollector) -> tuple[_Header, Iterator[_Placed]]:
+def _read_json(text: str, path: Path, errors: ErrorCollector) -> tuple[MapHeader, Iterator[_Placed]]:
     document = parse_json(text, path)
     where = Location(path)
     if not isinstance(document, dict):
@@ -269,7 +208,7 @@ def _read_json(text: str, path: Path, errors: ErrorCollector) -> tuple[_Header, 
     properties: dict[str, PropertyValue] = {}
     with errors.collecting():
         properties = json_properties(document.get("properties"), where)
-    header = _header(document, properties, path, errors)
+    header = read_header(document, properties, path, errors)
     return header, _json_layers(document, (0.0, 0.0), "", path, errors)
 
 
@@ -332,7 +271,7 @@ def _check_unique_id(item: _Placed, first_with: dict[int, _Placed], path: Path) 
 
 
 def _world_points(
-    polyline: tuple[Point, ...], fields: ObjectFields, offset: Point, header: _Header
+    polyline: tuple[Point, ...], fields: ObjectFields, offset: Point, header: MapHeader
 ) -> tuple[Point, ...]:
     """Rotate the polyline about the object's origin (clockwise on screen), shift, scale, flip y."""
     x = (fields.x or 0.0) + offset[0]
@@ -357,7 +296,7 @@ def _cos_sin(degrees: float) -> tuple[float, float]:
     return math.cos(radians), math.sin(radians)
 
 
-def _segment(fields: ObjectFields, shape: Shape, placed: _Placed, header: _Header, path: Path) -> Segment:
+def _segment(fields: ObjectFields, shape: Shape, placed: _Placed, header: MapHeader, path: Path) -> Segment:
     if fields.id is None:
         raise MapError(f"{_describe(placed)} is a {shape.value} polyline without an id", Location(path))
     where = Location(path, object_id=fields.id)
@@ -391,7 +330,7 @@ def _unknown_class(fields: ObjectFields, placed: _Placed, path: Path) -> MapErro
 
 
 def _segments(
-    placed: Iterable[_Placed], header: _Header, path: Path, errors: ErrorCollector
+    placed: Iterable[_Placed], header: MapHeader, path: Path, errors: ErrorCollector
 ) -> tuple[tuple[Segment, ...], tuple[str, ...]]:
     """Every object's segment, or every object's error: nothing is returned for a map with any error."""
     templates = TemplateCache(path)
@@ -413,7 +352,7 @@ def _segments(
 
 
 def _take(
-    item: _Placed, templates: TemplateCache, header: _Header, path: Path, segments: list[Segment], warnings: list[str]
+    item: _Placed, templates: TemplateCache, header: MapHeader, path: Path, segments: list[Segment], warnings: list[str]
 ) -> None:
     """Add ``item``'s segment (or a warning about it); a broken object raises its MapError."""
     fields = templates.resolve(item.fields)

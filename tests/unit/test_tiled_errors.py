@@ -1,4 +1,4 @@
-"""Every bad Tiled map gives exactly one MapError naming the file, the object and the bad value."""
+"""A Tiled map with one mistake gives exactly one MapError naming the file, the object and the bad value."""
 
 from __future__ import annotations
 
