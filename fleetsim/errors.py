@@ -21,6 +21,7 @@ __all__ = [
     "PlannerProcessError",
     "ScenarioFileError",
     "SuiteError",
+    "SuiteErrors",
     "UnreachableTaskError",
 ]
 
@@ -64,10 +65,10 @@ class LoadError(FleetsimError, ValueError):
 class LoadErrors(LoadError):
     """Several load errors found in one pass over a scenario's or suite's files, reported together.
 
-    ``errors`` are the located errors in the order they were found (file by file, row by row);
-    ``omitted`` counts, per file, the further errors left out after the cap (see
-    :class:`fleetsim.load.collect.ErrorCollector`). ``location`` is the first error's. A scenario or
-    suite with a ``LoadErrors`` is not loaded at all. Catch ``LoadError`` to handle one or many.
+    `errors` are the located errors in the order they were found (file by file, row by row);
+    `omitted` counts, per file, the further errors left out after the cap of 50 per file.
+    `location` is the first error's. A scenario or suite with a `LoadErrors` is not loaded at all;
+    a single error is raised as itself, never wrapped. Catch `LoadError` to handle one or many.
     """
 
     def __init__(self, errors: Sequence[LoadError], omitted: Mapping[str, int] | None = None) -> None:
@@ -124,6 +125,11 @@ class UnreachableTaskError(ScenarioFileError):
 
 class SuiteError(LoadError):
     """A ``*.fleetsim.yaml`` suite is malformed or violates the suite schema."""
+
+
+class SuiteErrors(LoadErrors, SuiteError):
+    """Several mistakes in one ``*.fleetsim.yaml`` suite, reported together: a :class:`LoadErrors` that
+    is also a :class:`SuiteError`, so code that catches either keeps working."""
 
 
 class LayoutError(FleetsimError, ValueError):
