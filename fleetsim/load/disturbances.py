@@ -1,8 +1,10 @@
 """The disturbance keys of a suite entry (issue 20): ``disturbances``, ``random_disturbances`` and
 ``hunt_disturbances``, checked beyond what the schema says, each problem located at its value.
 
-What needs the scenario's files (a vehicle or segment that does not exist) is checked when the
-scenario is loaded (:func:`check_disturbances`), located at the disturbance's line in the suite.
+Every mistake of a block is reported (each disturbance of a list by its first problem), several as one
+:class:`~fleetsim.errors.SuiteErrors`. What needs the scenario's files (a vehicle or segment that does
+not exist) is checked when the scenario is loaded (:func:`check_disturbances`), located at the
+disturbance's line in the suite.
 """
 
 from __future__ import annotations
@@ -13,7 +15,8 @@ from pathlib import Path
 from typing import Any
 
 from fleetsim.errors import Location, SuiteError
-from fleetsim.load.suite_schema import suite_error
+from fleetsim.load.collect import ErrorCollector
+from fleetsim.load.suite_schema import raise_suite_errors, suite_error
 from fleetsim.load.yaml_source import Locate
 from fleetsim.scenario import Disturbance, RandomDisturbances, Scenario
 
@@ -46,34 +49,35 @@ def declared_disturbances(
     raw: Sequence[Mapping[str, Any]], where: tuple[Any, ...], locate: Locate
 ) -> tuple[Disturbance, ...]:
     """The ``disturbances`` list of an entry (the schema has checked types and bounds)."""
+    errors = ErrorCollector()
     found = []
     for index, item in enumerate(raw):
-        here = (*where, index)
-        line = locate(here).line
-        if ("at" in item) == ("on_segment" in item):
-            what = "both 'at' and 'on_segment'" if "at" in item else "neither 'at' nor 'on_segment'"
-            msg = f"{item!r} has {what}: give exactly one (when it begins)"
-            raise suite_error(msg, here, locate(here))
-        if ("stop" in item) == ("slow" in item):
-            what = "both 'stop' and 'slow'" if "stop" in item else "neither 'stop' nor 'slow'"
-            msg = f"{item!r} has {what}: give exactly one (what happens)"
-            raise suite_error(msg, here, locate(here))
-        if ("slow" in item) != ("for" in item):
-            key = "slow" if "slow" in item else "for"
-            msg = f"{key}={item[key]!r} needs {'for' if key == 'slow' else 'slow'}: a slow is 'slow: FACTOR, for: SECONDS'"
-            raise suite_error(msg, (*here, key), locate((*here, key)))
-        at = float(item["at"]) if "at" in item else None
-        if "stop" in item:
-            found.append(
-                Disturbance(item["vehicle"], "stop", float(item["stop"]), at, item.get("on_segment"), line=line)
-            )
-        else:
-            found.append(
-                Disturbance(
-                    item["vehicle"], "slow", float(item["for"]), at, item.get("on_segment"), float(item["slow"]), line
-                )
-            )
+        with errors.collecting():
+            found.append(_declared(item, (*where, index), locate))
+    raise_suite_errors(errors)
     return tuple(found)
+
+
+def _declared(item: Mapping[str, Any], here: tuple[Any, ...], locate: Locate) -> Disturbance:
+    line = locate(here).line
+    if ("at" in item) == ("on_segment" in item):
+        what = "both 'at' and 'on_segment'" if "at" in item else "neither 'at' nor 'on_segment'"
+        msg = f"{item!r} has {what}: give exactly one (when it begins)"
+        raise suite_error(msg, here, locate(here))
+    if ("stop" in item) == ("slow" in item):
+        what = "both 'stop' and 'slow'" if "stop" in item else "neither 'stop' nor 'slow'"
+        msg = f"{item!r} has {what}: give exactly one (what happens)"
+        raise suite_error(msg, here, locate(here))
+    if ("slow" in item) != ("for" in item):
+        key = "slow" if "slow" in item else "for"
+        msg = f"{key}={item[key]!r} needs {'for' if key == 'slow' else 'slow'}: a slow is 'slow: FACTOR, for: SECONDS'"
+        raise suite_error(msg, (*here, key), locate((*here, key)))
+    at = float(item["at"]) if "at" in item else None
+    if "stop" in item:
+        return Disturbance(item["vehicle"], "stop", float(item["stop"]), at, item.get("on_segment"), line=line)
+    return Disturbance(
+        item["vehicle"], "slow", float(item["for"]), at, item.get("on_segment"), float(item["slow"]), line
+    )
 
 
 def random_block(raw: Mapping[str, Any], where: tuple[Any, ...], locate: Locate) -> RandomDisturbances:
@@ -83,9 +87,14 @@ def random_block(raw: Mapping[str, Any], where: tuple[Any, ...], locate: Locate)
 
 
 def hunt_block(raw: Mapping[str, Any], where: tuple[Any, ...], locate: Locate) -> HuntDisturbances:
-    count = _range(raw, "count", where, locate)
-    stop = _range(raw, "stop", where, locate)
-    at = _range(raw, "at", where, locate)
+    errors = ErrorCollector()
+    ranges: dict[str, tuple[float, float] | None] = {}
+    for key in ("count", "stop", "at"):
+        ranges[key] = None
+        with errors.collecting():
+            ranges[key] = _range(raw, key, where, locate)
+    raise_suite_errors(errors)
+    count, stop, at = ranges["count"], ranges["stop"], ranges["at"]
     defaults = HuntDisturbances()
     return HuntDisturbances(
         count=(int(count[0]), int(count[1])) if count else defaults.count,

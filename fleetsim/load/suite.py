@@ -1,13 +1,15 @@
 """Suites: ``*.fleetsim.yaml`` files that declare vehicle types, default settings and scenarios (SPEC §13).
 
 Loading a suite checks the YAML against ``schemas/suite.schema.json`` and then what a schema cannot
-say (unique names, known vehicle types, files that exist). It does not open the maps or CSV files:
+say (unique names, known vehicle types, files that exist). Every mistake of the file is reported at
+once, each at its line; a suite with any mistake is not loaded. It does not open the maps or CSV files:
 that is :func:`fleetsim.load.scenario.load_scenario`, one scenario at a time.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+import sys
+from collections.abc import Callable, Collection, Iterable, Mapping
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from types import MappingProxyType
@@ -15,6 +17,7 @@ from typing import Any
 
 from fleetsim.enums import ConflictModel, TurnCapability
 from fleetsim.errors import Location, SuiteError
+from fleetsim.load.collect import ErrorCollector
 from fleetsim.load.disturbances import HuntDisturbances, declared_disturbances, hunt_block, random_block
 from fleetsim.load.map_options import MapOptions
 from fleetsim.load.scenario_files import (
@@ -24,7 +27,7 @@ from fleetsim.load.scenario_files import (
     did_you_mean,
     map_candidates,
 )
-from fleetsim.load.suite_schema import check_against_schema, suite_error
+from fleetsim.load.suite_schema import SchemaCheck, raise_suite_errors, schema_check, suite_error, suite_schema
 from fleetsim.load.yaml_source import Locate, load_yaml_with_marks
 from fleetsim.scenario import (
     DEFAULT_VEHICLE_TYPE,
@@ -166,29 +169,63 @@ def discover_suites(paths: Iterable[Path | str]) -> list[Path]:
 def load_suite(path: Path | str) -> Suite:
     """Load and check a suite file.
 
-    Every problem is one [`SuiteError`][fleetsim.errors.SuiteError] at its ``file:line:column``.
+    One problem is a [`SuiteError`][fleetsim.errors.SuiteError] at its ``file:line:column``; several
+    (every unknown key, every bad value, every missing folder, ...) are one
+    [`SuiteErrors`][fleetsim.errors.SuiteErrors] listing each, in file order (at most 50, then "... and N
+    more"). A suite with any problem is not loaded.
     """
     path = Path(path)
     data, locate = load_yaml_with_marks(path, error_type=SuiteError)
     if data is None:
         msg = "empty file: a suite needs at least 'fleetsim: 1', 'name' and 'scenarios'"
         raise SuiteError(msg, Location(path))
-    check_against_schema(data, locate)
-    vehicle_types = parse_vehicle_types(data.get("vehicle_types"), locate)
-    defaults = data.get("defaults", {})
-    base = parse_settings(ScenarioSettings(), defaults, vehicle_types, locate, ("defaults",))
-    _check_unique_names(data["scenarios"], locate)
-    base_options = defaults.get("map_options", {})
-    scenarios = tuple(
-        parse_scenario_entry(path, index, entry, base, vehicle_types, locate, base_options)
-        for index, entry in enumerate(data["scenarios"])
-    )
+    check = schema_check(data, locate)
+    found = ErrorCollector(cap=sys.maxsize)  # every error, sorted into file order before the cap
+    for error in check.errors:
+        found.add(error)
+    suite = _read_suite(path, data, locate, check, found) if isinstance(data, dict) else None
+    errors = ErrorCollector()
+    for each in sorted(found.errors, key=_position):
+        errors.add(each)
+    raise_suite_errors(errors)
+    assert suite is not None  # no error, so every part was read
+    return suite
+
+
+def _position(error: SuiteError | Exception) -> tuple[int, int]:
+    location = getattr(error, "location", None)
+    return (0, 0) if location is None else (location.line or 0, location.column or 0)
+
+
+_ALL_CLEAN = SchemaCheck()  # for data the schema has passed
+
+
+def _read_suite(
+    path: Path, data: Mapping[str, Any], locate: Locate, check: SchemaCheck, errors: ErrorCollector
+) -> Suite | None:
+    """The suite, or ``None`` when a part of it could not be read; each problem goes to ``errors``."""
+    names = _type_names(data, check)
+    vehicle_types = _vehicle_types(data.get("vehicle_types"), locate, check, errors)
+    raw_defaults = data.get("defaults", {})
+    defaults = raw_defaults if isinstance(raw_defaults, dict) else {}
+    base = _settings(ScenarioSettings(), defaults, names, locate, ("defaults",), check, errors)
+    entries = data.get("scenarios")
+    if not isinstance(entries, list):
+        return None
+    _check_unique_names(entries, locate, errors)
+    base_options = defaults.get("map_options", {}) if check.clean(("defaults", "map_options")) else None
+    scenarios = [
+        _scenario_entry(path, index, entry, base, names, locate, base_options, check, errors)
+        for index, entry in enumerate(entries)
+    ]
+    if errors or vehicle_types is None or any(spec is None for spec in scenarios):
+        return None
     return Suite(
         path=path,
         name=data["name"],
         description=data.get("description", ""),
         vehicle_types=MappingProxyType(vehicle_types),
-        scenarios=scenarios,
+        scenarios=tuple(spec for spec in scenarios if spec is not None),
         planner=data.get("planner"),
     )
 
@@ -207,31 +244,74 @@ def _color(raw: str | list[float] | None) -> tuple[float, float, float, float] |
 
 
 def parse_vehicle_types(raw: Mapping[str, Any] | None, locate: Locate) -> dict[str, VehicleType]:
-    if raw is None:
-        return {DEFAULT_VEHICLE_TYPE.name: DEFAULT_VEHICLE_TYPE}
-    seen: dict[str, str] = {}
-    types = {}
-    for name, spec in raw.items():
-        # vehicles.csv names types case-insensitively, so names differing only in case are ambiguous.
-        if name.casefold() in seen:
-            msg = f"{name!r} differs from vehicle type {seen[name.casefold()]!r} only in case"
-            raise suite_error(msg, ("vehicle_types",), locate(("vehicle_types", name), key=True))
-        seen[name.casefold()] = name
-        types[name] = VehicleType(
-            name=name,
-            length=float(spec["length"]),
-            width=float(spec["width"]),
-            height=float(spec["height"]),
-            max_speed=float(spec["max_speed"]),
-            acceleration=float(spec["acceleration"]),
-            turn_capability=TurnCapability(spec["turn_capability"]),
-            turn_rate=float(spec.get("turn_rate", 90.0)),
-            color=_color(spec.get("color")),
-        )
+    """The ``vehicle_types`` of schema-checked data; the first problem is raised."""
+    errors = ErrorCollector()
+    types = _vehicle_types(raw, locate, _ALL_CLEAN, errors)
+    _raise_first(errors)
+    assert types is not None
     return types
 
 
-def _type_name(name: str, types: Mapping[str, VehicleType], locate: Locate, where: tuple[Any, ...]) -> str:
+def _raise_first(errors: ErrorCollector) -> None:
+    if errors:
+        raise errors.errors[0]
+
+
+def _type_names(data: Mapping[str, Any], check: SchemaCheck) -> tuple[str, ...] | None:
+    """The suite's vehicle type names (also those whose description is broken), or ``None`` when they
+    cannot be known: ``vehicle_types`` is no mapping, or seems misspelt (an unknown key close to it)."""
+    raw = data.get("vehicle_types")
+    if raw is None:
+        unknown = [key for key in data if isinstance(key, str) and key not in suite_schema()["properties"]]
+        misspelt = any(did_you_mean(key, ["vehicle_types"]) for key in unknown)
+        return None if misspelt else (DEFAULT_VEHICLE_TYPE.name,)
+    if not isinstance(raw, dict):
+        return None
+    folded: set[str] = set()
+    names = []
+    for name in raw:
+        if isinstance(name, str) and name.casefold() not in folded:
+            folded.add(name.casefold())
+            names.append(name)
+    return tuple(names)
+
+
+def _vehicle_types(
+    raw: Any, locate: Locate, check: SchemaCheck, errors: ErrorCollector
+) -> dict[str, VehicleType] | None:
+    """The vehicle types by name, or ``None`` when one could not be read."""
+    if raw is None:
+        return {DEFAULT_VEHICLE_TYPE.name: DEFAULT_VEHICLE_TYPE}
+    if not isinstance(raw, dict):
+        return None
+    seen: dict[str, str] = {}
+    types: dict[str, VehicleType] | None = {}
+    for name, spec in raw.items():
+        if not isinstance(name, str) or not check.clean(("vehicle_types", name)):
+            types = None
+            continue
+        # vehicles.csv names types case-insensitively, so names differing only in case are ambiguous.
+        if name.casefold() in seen:
+            msg = f"{name!r} differs from vehicle type {seen[name.casefold()]!r} only in case"
+            errors.add(suite_error(msg, ("vehicle_types",), locate(("vehicle_types", name), key=True)))
+            continue
+        seen[name.casefold()] = name
+        if types is not None:
+            types[name] = VehicleType(
+                name=name,
+                length=float(spec["length"]),
+                width=float(spec["width"]),
+                height=float(spec["height"]),
+                max_speed=float(spec["max_speed"]),
+                acceleration=float(spec["acceleration"]),
+                turn_capability=TurnCapability(spec["turn_capability"]),
+                turn_rate=float(spec.get("turn_rate", 90.0)),
+                color=_color(spec.get("color")),
+            )
+    return types
+
+
+def _type_name(name: str, types: Collection[str], locate: Locate, where: tuple[Any, ...]) -> str:
     """The canonical spelling of a vehicle type name (matched case-insensitively, as in vehicles.csv)."""
     for known in types:
         if known.casefold() == name.casefold():
@@ -250,14 +330,38 @@ def parse_settings(
     locate: Locate,
     where: tuple[Any, ...],
 ) -> ScenarioSettings:
-    """``base`` with the setting keys of ``raw`` applied (values already checked by the schema)."""
+    """``base`` with the setting keys of ``raw`` applied (values already checked by the schema); the
+    first problem is raised."""
+    errors = ErrorCollector()
+    settings = _settings(base, raw, tuple(types), locate, where, _ALL_CLEAN, errors)
+    _raise_first(errors)
+    return settings
+
+
+def _settings(
+    base: ScenarioSettings,
+    raw: Mapping[str, Any],
+    types: Collection[str] | None,
+    locate: Locate,
+    where: tuple[Any, ...],
+    check: SchemaCheck,
+    errors: ErrorCollector,
+) -> ScenarioSettings:
+    """``base`` with the setting keys of ``raw`` applied; a value the schema refused is left out, and a
+    vehicle type is looked up only when the suite's types are known (``types`` is not ``None``)."""
     changes: dict[str, Any] = {}
     for key in SETTING_KEYS:
-        if key not in raw:
+        if key not in raw or not check.clean((*where, key)):
             continue
         value = raw[key]
         if key == "vehicle_type":
-            value = _type_name(value, types, locate, (*where, key))
+            if types is None:
+                continue
+            try:
+                value = _type_name(value, types, locate, (*where, key))
+            except SuiteError as error:
+                errors.add(error)
+                continue
         elif key == "stop_on":
             value = tuple(value)
         elif key == "conflict_model":
@@ -265,7 +369,7 @@ def parse_settings(
         elif isinstance(value, (int, float)) and not isinstance(value, bool):
             value = float(value)
         changes[key] = value
-    if base.vehicle_type is None and "vehicle_type" not in changes and len(types) == 1:
+    if base.vehicle_type is None and "vehicle_type" not in changes and types is not None and len(types) == 1:
         changes["vehicle_type"] = next(iter(types))  # a suite's only vehicle type is its default
     return replace(base, **changes)
 
@@ -289,18 +393,22 @@ def _expectations(raw: Mapping[str, Any]) -> Expectations:
 # -- scenarios ------------------------------------------------------------------------------------
 
 
-def _check_unique_names(entries: list[Mapping[str, Any]], locate: Locate) -> None:
+def _check_unique_names(entries: list[Any], locate: Locate, errors: ErrorCollector) -> None:
+    """Each entry whose name is already used (entries without a name are the schema's to report)."""
     # Case-insensitive: scenario names become artifact file names, and some file systems fold case.
     first: dict[str, tuple[str, int]] = {}
     for index, entry in enumerate(entries):
-        name = entry["name"]
+        name = entry.get("name") if isinstance(entry, dict) else None
+        if not isinstance(name, str):
+            continue
         if name.casefold() in first:
             other, other_index = first[name.casefold()]
             line = locate(("scenarios", other_index, "name")).line
             same = "" if other == name else f" (as {other!r}: names may not differ only in case)"
             msg = f"scenario name {name!r} is already used on line {line}{same}"
             where = ("scenarios", index, "name")
-            raise suite_error(msg, where, locate(where))
+            errors.add(suite_error(msg, where, locate(where)))
+            continue
         first[name.casefold()] = (name, index)
 
 
@@ -313,70 +421,135 @@ def parse_scenario_entry(
     locate: Locate,
     base_options: Mapping[str, Any],
 ) -> ScenarioSpec:
+    """One schema-checked scenario entry; the first problem is raised."""
+    errors = ErrorCollector()
+    spec = _scenario_entry(suite_path, index, entry, base, tuple(types), locate, base_options, _ALL_CLEAN, errors)
+    _raise_first(errors)
+    assert spec is not None
+    return spec
+
+
+def _scenario_entry(
+    suite_path: Path,
+    index: int,
+    entry: Any,
+    base: ScenarioSettings,
+    types: Collection[str] | None,
+    locate: Locate,
+    base_options: Mapping[str, Any] | None,
+    check: SchemaCheck,
+    errors: ErrorCollector,
+) -> ScenarioSpec | None:
+    """The entry, or ``None`` when a part of it could not be read; each problem goes to ``errors``.
+
+    A part the schema refused is not looked at further (it is reported already); the files are checked
+    when the entry is whole (a misspelt ``dir`` leaves it without one, which is the same mistake).
+    """
     where = ("scenarios", index)
+    if not isinstance(entry, dict) or not isinstance(entry.get("name"), str):
+        return None
+    complete = True
     generate = None
+    paths: tuple[Path, Path, Path] | None = None
     if "generate" in entry:
-        generate = _generation(entry["generate"], types, locate, (*where, "generate"))
-        map_path = vehicles_path = tasks_path = suite_path.parent
-    else:
-        map_path, vehicles_path, tasks_path = _scenario_files(suite_path.parent, entry, locate, where)
+        paths = (suite_path.parent,) * 3
+        if check.clean((*where, "generate")) and types is not None:
+            with errors.collecting():
+                generate = _generation(entry["generate"], types, locate, (*where, "generate"))
+        complete = generate is not None
+    elif check.intact(where) and all(check.clean((*where, key)) for key in ("dir", "map", "vehicles", "tasks")):
+        with errors.collecting():
+            paths = _scenario_files(suite_path.parent, entry, locate, where)
+    settings = _settings(base, entry, types, locate, where, check, errors)
+    disturbances = _disturbance_keys(entry, "generate" in entry, locate, where, check, errors)
+    expect = entry.get("expect", {})
+    options = entry.get("map_options", {})
+    if (
+        not complete
+        or paths is None
+        or disturbances is None
+        or base_options is None
+        or not check.clean(where)
+        or not isinstance(expect, dict)
+        or not isinstance(options, dict)
+    ):
+        return None
     return ScenarioSpec(
         name=entry["name"],
         suite_path=suite_path,
         line=locate(where).line or 1,
-        map_path=map_path,
-        vehicles_path=vehicles_path,
-        tasks_path=tasks_path,
-        settings=parse_settings(base, entry, types, locate, where),
-        expect=_expectations(entry.get("expect", {})),
+        map_path=paths[0],
+        vehicles_path=paths[1],
+        tasks_path=paths[2],
+        settings=settings,
+        expect=_expectations(expect),
         tags=tuple(entry.get("tags", ())),
         xfail=entry.get("xfail"),
         description=entry.get("description", ""),
         generate=generate,
-        map_options=MapOptions(**{**base_options, **entry.get("map_options", {})}),
-        **_disturbance_keys(entry, generate is not None, locate, where),
+        map_options=MapOptions(**{**base_options, **options}),
+        **disturbances,
     )
 
 
 def _disturbance_keys(
-    entry: Mapping[str, Any], generated: bool, locate: Locate, where: tuple[Any, ...]
-) -> dict[str, Any]:
+    entry: Mapping[str, Any],
+    generated: bool,
+    locate: Locate,
+    where: tuple[Any, ...],
+    check: SchemaCheck,
+    errors: ErrorCollector,
+) -> dict[str, Any] | None:
+    """The entry's disturbance keys as ScenarioSpec fields, or ``None`` when one could not be read."""
     keys: dict[str, Any] = {}
-    if "disturbances" in entry:
-        if generated:
+    complete = True
+    readers: dict[str, Callable[[Any, tuple[Any, ...], Locate], object]] = {
+        "disturbances": declared_disturbances,
+        "random_disturbances": random_block,
+        "hunt_disturbances": hunt_block,
+    }
+    for key, read in readers.items():
+        if key not in entry:
+            continue
+        here = (*where, key)
+        if key == "disturbances" and generated:
             msg = (
                 "a generated scenario's vehicles are not known in advance: use random_disturbances or hunt_disturbances"
             )
-            raise suite_error(msg, (*where, "disturbances"), locate((*where, "disturbances"), key=True))
-        keys["disturbances"] = declared_disturbances(entry["disturbances"], (*where, "disturbances"), locate)
-    if "random_disturbances" in entry:
-        keys["random_disturbances"] = random_block(
-            entry["random_disturbances"], (*where, "random_disturbances"), locate
-        )
-    if "hunt_disturbances" in entry:
-        keys["hunt_disturbances"] = hunt_block(entry["hunt_disturbances"], (*where, "hunt_disturbances"), locate)
-    return keys
+            errors.add(suite_error(msg, here, locate(here, key=True)))
+            complete = False
+            continue
+        if not check.clean(here):
+            complete = False
+            continue
+        try:
+            keys[key] = read(entry[key], here, locate)
+        except SuiteError as error:
+            errors.add(error)
+            complete = False
+    return keys if complete else None
 
 
-def _generation(
-    raw: Mapping[str, Any], types: Mapping[str, VehicleType], locate: Locate, where: tuple[Any, ...]
-) -> Generation:
+def _generation(raw: Mapping[str, Any], types: Collection[str], locate: Locate, where: tuple[Any, ...]) -> Generation:
+    """The ``generate`` block; every problem is raised (several as one SuiteErrors)."""
+    errors = ErrorCollector()
     ranges = {}
     for key in ("size", "vehicles", "tasks"):
         if key in raw:
             low, high = raw[key]
             if low > high:
                 msg = f"{key}={[low, high]!r} must be [min, max] with min <= max"
-                raise suite_error(msg, (*where, key), locate((*where, key)))
+                errors.add(suite_error(msg, (*where, key), locate((*where, key))))
             ranges[key] = (low, high)
-    names = tuple(
-        _type_name(name, types, locate, (*where, "vehicle_types", k))
-        for k, name in enumerate(raw.get("vehicle_types", ()))
-    )
+    names = []
+    for k, name in enumerate(raw.get("vehicle_types", ())):
+        with errors.collecting():
+            names.append(_type_name(name, types, locate, (*where, "vehicle_types", k)))
+    raise_suite_errors(errors)
     return Generation(
         layout=raw.get("layout", "any"),
         one_way=raw.get("one_way"),
-        vehicle_types=names,
+        vehicle_types=tuple(names),
         examples=raw.get("examples", 50),
         **ranges,
     )
@@ -385,23 +558,28 @@ def _generation(
 def _scenario_files(
     root: Path, entry: Mapping[str, Any], locate: Locate, where: tuple[Any, ...]
 ) -> tuple[Path, Path, Path]:
-    """map, vehicles and tasks paths: named ones relative to the suite, the rest from ``dir``."""
+    """map, vehicles and tasks paths: named ones relative to the suite, the rest from ``dir``; every
+    missing one is raised (several as one SuiteErrors)."""
+    errors = ErrorCollector()
     folder = None
     if "dir" in entry:
         folder = root / entry["dir"]
         if not folder.is_dir():
             where_dir = (*where, "dir")
-            raise suite_error(f"no such directory: {str(folder)!r}", where_dir, locate(where_dir))
+            errors.add(suite_error(f"no such directory: {str(folder)!r}", where_dir, locate(where_dir)))
+            folder = None  # its files cannot be looked for
     paths = []
     for key, default_name in (("map", None), ("vehicles", VEHICLES_FILE_NAME), ("tasks", TASKS_FILE_NAME)):
+        path = root  # stands in for what could not be found (then an error is raised)
         if key in entry:
             path = root / entry[key]
             if not path.is_file():
-                raise suite_error(f"no such file: {str(path)!r}", (*where, key), locate((*where, key)))
-        else:
-            assert folder is not None  # the schema requires dir when a file is not named
-            path = _folder_file(folder, default_name, (*where, "dir"), locate)
+                errors.add(suite_error(f"no such file: {str(path)!r}", (*where, key), locate((*where, key))))
+        elif folder is not None:  # the schema requires dir when a file is not named
+            with errors.collecting():
+                path = _folder_file(folder, default_name, (*where, "dir"), locate)
         paths.append(path)
+    raise_suite_errors(errors)
     return paths[0], paths[1], paths[2]
 
 

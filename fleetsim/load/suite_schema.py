@@ -2,6 +2,8 @@
 
 jsonschema's own messages talk about schemas ("is not valid under any of the given schemas"); a suite
 author wants the key, the bad value and what would be accepted, at the line and column of the value.
+:func:`schema_check` reports every mistake (one error per place, every unknown key);
+:func:`check_against_schema` the single most relevant one.
 """
 
 from __future__ import annotations
@@ -10,17 +12,29 @@ import functools
 import importlib.resources
 import json
 import math
-from collections.abc import Hashable, Iterable, Sequence
+from collections.abc import Hashable, Iterable, Iterator, Sequence
+from dataclasses import dataclass
 from typing import Any, cast
 
 from jsonschema import Draft202012Validator
 from jsonschema.exceptions import ValidationError, best_match
 
-from fleetsim.errors import Location, SuiteError
+from fleetsim.errors import LoadErrors, Location, SuiteError, SuiteErrors
+from fleetsim.load.collect import ErrorCollector
 from fleetsim.load.scenario_files import did_you_mean
 from fleetsim.load.yaml_source import Locate
 
-__all__ = ["check_against_schema", "dotted_path", "suite_error", "suite_schema"]
+__all__ = [
+    "SchemaCheck",
+    "check_against_schema",
+    "dotted_path",
+    "raise_suite_errors",
+    "schema_check",
+    "suite_error",
+    "suite_schema",
+]
+
+YamlPath = tuple[Hashable, ...]
 
 _KINDS = {
     "object": "a mapping",
@@ -50,16 +64,120 @@ def _validator() -> Draft202012Validator:
 
 def check_against_schema(data: Any, locate: Locate) -> None:
     """Raise one :class:`SuiteError` for the most relevant schema violation in ``data``, if any."""
-    _reject_non_finite(data, (), locate)
+    for path, value in _non_finite(data, ()):  # the first, as the schema's errors would mislead
+        raise suite_error(f"{value!r} is not a finite number", path, locate(path))
     error = _most_relevant(_validator().iter_errors(data), locate)
-    if error is None:
-        return
-    path: tuple[Hashable, ...] = tuple(error.absolute_path)
+    if error is not None:
+        raise _as_suite_error(error, locate)
+
+
+@dataclass(frozen=True, slots=True)
+class SchemaCheck:
+    """What the schema says of a suite's data: every mistake, and where the data cannot be trusted.
+
+    Attributes:
+        errors: One error per place, in file order: the most relevant violation of each value (an
+            alternative's branches and a value's several rules give one message), every unknown key.
+        broken: The paths of every violation found (reported or not), non-finite numbers included.
+        faulted: The paths of mappings and values that break a rule themselves (a missing key, a wrong
+            type), as opposed to only holding an unknown key.
+    """
+
+    errors: tuple[SuiteError, ...] = ()
+    broken: frozenset[YamlPath] = frozenset()
+    faulted: frozenset[YamlPath] = frozenset()
+
+    def clean(self, path: YamlPath) -> bool:
+        """Whether nothing at ``path`` or below it breaks the schema (its values may be used as they are)."""
+        return not any(broken[: len(path)] == path for broken in self.broken)
+
+    def intact(self, path: YamlPath) -> bool:
+        """Whether the value at ``path`` itself breaks no rule but perhaps unknown keys (its parts may)."""
+        return path not in self.faulted
+
+
+def schema_check(data: Any, locate: Locate) -> SchemaCheck:
+    """Every schema violation of ``data``: the most relevant one per place (see :class:`SchemaCheck`).
+
+    One mistake gives one error: the violations jsonschema reports at one value (a misspelt key also
+    leaves a required one missing; each branch of a oneOf fails) are told as one, unknown keys first.
+    """
+    found: list[SuiteError] = []
+    non_finite: set[YamlPath] = set()
+    for path, value in _non_finite(data, ()):
+        found.append(suite_error(f"{value!r} is not a finite number", path, locate(path)))
+        non_finite.add(path)
+    by_place: dict[YamlPath, list[ValidationError]] = {}
+    faulted: set[YamlPath] = set()
+    for error in _validator().iter_errors(data):
+        path = tuple(error.absolute_path)
+        by_place.setdefault(path, []).append(error)
+        if not _about_keys(error):
+            faulted.add(path)
+    for path, errors in by_place.items():
+        if path in non_finite:  # .nan also fails every bound; its own message says more
+            continue
+        about_keys = [error for error in errors if _about_keys(error)]
+        if about_keys:
+            found += [_key_error(error, key, locate) for error in about_keys for key in _keys_of(error)]
+            continue
+        top = _most_relevant(errors, locate)
+        assert top is not None
+        found.append(_as_suite_error(top, locate))
+    return SchemaCheck(tuple(sorted(found, key=_position)), frozenset(non_finite | set(by_place)), frozenset(faulted))
+
+
+def raise_suite_errors(errors: ErrorCollector) -> None:
+    """Raise what ``errors`` holds: one error as itself, several as one :class:`SuiteErrors`."""
+    try:
+        errors.raise_if_any()
+    except SuiteErrors:
+        raise
+    except LoadErrors as several:
+        raise SuiteErrors(several.errors, several.omitted) from None
+
+
+def _position(error: SuiteError) -> tuple[int, int]:
+    location = error.location
+    return (0, 0) if location is None else (location.line or 0, location.column or 0)
+
+
+def _about_keys(error: ValidationError) -> bool:
+    """Whether ``error`` is about keys of its mapping (unknown, or not a valid name), not its values."""
+    return error.validator == "additionalProperties" or "propertyNames" in error.absolute_schema_path
+
+
+def _keys_of(error: ValidationError) -> list[Hashable]:
+    """The keys ``error`` is about: each unknown key, or the one badly named key."""
+    if "propertyNames" in error.absolute_schema_path:
+        return [cast(Hashable, error.instance)]
+    schema: Any = error.schema
+    value: Any = error.instance
+    return [key for key in value if key not in schema.get("properties", {})]
+
+
+def _key_error(error: ValidationError, key: Hashable, locate: Locate) -> SuiteError:
+    path: YamlPath = tuple(error.absolute_path)
+    if "propertyNames" in error.absolute_schema_path:
+        problem, _ = _describe(error)
+    else:
+        problem = _unknown_key(key, error)
+    return suite_error(problem, path, locate((*path, key), key=True))
+
+
+def _unknown_key(key: Hashable, error: ValidationError) -> str:
+    schema: Any = error.schema
+    known = list(schema.get("properties", {}))
+    return f"unknown key {key!r}{did_you_mean(str(key), known)}"
+
+
+def _as_suite_error(error: ValidationError, locate: Locate) -> SuiteError:
+    path: YamlPath = tuple(error.absolute_path)
     problem, key = _describe(error)
     if "propertyNames" in error.absolute_schema_path:  # the error is about a key of this mapping
         key = error.instance
     where = locate(path) if key is None else locate((*path, key), key=True)
-    raise suite_error(problem, path, where)
+    return suite_error(problem, path, where)
 
 
 def _most_relevant(errors: Iterable[ValidationError], locate: Locate) -> ValidationError | None:
@@ -100,13 +218,14 @@ def dotted_path(path: Sequence[Hashable]) -> str:
     return text
 
 
-def _reject_non_finite(value: Any, path: tuple[Hashable, ...], locate: Locate) -> None:
-    # Schema bounds cannot catch .nan (every comparison with it is false), so check first.
+def _non_finite(value: Any, path: YamlPath) -> Iterator[tuple[YamlPath, float]]:
+    """Every ``.nan`` and ``.inf`` in ``value``, in file order: schema bounds cannot catch .nan (every
+    comparison with it is false), so they are checked apart."""
     if isinstance(value, float) and not math.isfinite(value):
-        raise suite_error(f"{value!r} is not a finite number", path, locate(path))
+        yield path, value
     if isinstance(value, (dict, list)):
         for key, child in value.items() if isinstance(value, dict) else enumerate(value):
-            _reject_non_finite(child, (*path, key), locate)
+            yield from _non_finite(child, (*path, key))
 
 
 def _show(value: Any) -> str:
@@ -147,9 +266,8 @@ def _describe(error: ValidationError) -> tuple[str, Hashable | None]:
             return f"give 'dir', all of 'map', 'vehicles' and 'tasks', or 'generate' ({missing!r} is missing)", None
         return f"missing required key {missing!r}", None
     if kind == "additionalProperties":
-        known = list(schema.get("properties", {}))
-        extra = next(key for key in value if key not in known)
-        return f"unknown key {extra!r}{did_you_mean(str(extra), known)}", extra
+        extra = _keys_of(error)[0]
+        return _unknown_key(extra, error), extra
     if kind in _ALTERNATIVES:
         return f"{_show(value)} is not {_alternatives(rule)}", None
     if kind == "enum":
