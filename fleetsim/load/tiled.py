@@ -44,9 +44,10 @@ from fleetsim.load.tiled_templates import (
     xml_properties,
 )
 
-__all__ = ["MAP_SUFFIXES", "TiledMap", "load_map", "parse_direction", "parse_shape"]
+__all__ = ["MAP_SUFFIXES", "MAX_OBJECT_ID", "TiledMap", "load_map", "parse_direction", "parse_shape"]
 
 MAP_SUFFIXES = (".json", ".tmj", ".tmx")
+MAX_OBJECT_ID = 2**31 - 1  # Tiled keeps object ids in a signed 32-bit int
 
 _SHAPES = {
     "straight": Shape.STRAIGHT,
@@ -300,8 +301,9 @@ def _segment(fields: ObjectFields, shape: Shape, placed: _Placed, header: MapHea
     if fields.id is None:
         raise MapError(f"{_describe(placed)} is a {shape.value} polyline without an id", Location(path))
     where = Location(path, object_id=fields.id)
-    if fields.id <= 0:
-        raise MapError(f"the object's id is {fields.id!r}; Tiled ids are positive integers", where)
+    if not 0 < fields.id <= MAX_OBJECT_ID:
+        msg = f"the object's id is {fields.id!r}; Tiled ids are positive integers up to {MAX_OBJECT_ID}"
+        raise MapError(msg, where)
     polyline = fields.polyline or ()
     if len(polyline) < 2:
         msg = f"polyline has {len(polyline)} point(s); a segment needs at least 2"

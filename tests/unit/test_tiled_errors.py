@@ -127,6 +127,17 @@ def test_duplicate_ids_name_both_objects(tmp_path: Path) -> None:
     assert "object 7" in message and "'segments'" in message and "'more'" in message
 
 
+@pytest.mark.parametrize("object_id", [0, -3, 2**31, 10**300])
+def test_an_id_outside_tileds_range_is_refused(tmp_path: Path, object_id: int) -> None:
+    message = str(map_error(tmx(tmp_path, objects(straight(object_id)))))
+    assert f"the object's id is {object_id}; Tiled ids are positive integers up to 2147483647" in message
+
+
+def test_the_largest_tiled_id_loads(tmp_path: Path) -> None:
+    (segment,) = load_map(tmx(tmp_path, objects(straight(2**31 - 1)))).segments
+    assert segment.id == 2**31 - 1
+
+
 def test_unknown_direction_names_object_and_value(tmp_path: Path) -> None:
     message = str(map_error(tmx(tmp_path, objects(straight(body=direction("sideways"))))))
     assert "object 7" in message
