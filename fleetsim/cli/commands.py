@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import json
 import os
+from collections.abc import Callable
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -15,13 +17,13 @@ from fleetsim.errors import LoadError, UnreachableTaskError
 from fleetsim.exec.protocol import encode_layout
 from fleetsim.layout.layout import Layout, build_layout
 from fleetsim.load.map_options import MapOptions, SiteMap
-from fleetsim.load.scenario import load_scenario
-from fleetsim.load.scenario_files import MAP_FILE_NAMES, map_candidates
+from fleetsim.load.scenario import load_scenario, load_scenario_dir
+from fleetsim.load.scenario_files import MAP_FILE_NAMES, VEHICLES_FILE_NAME, map_candidates
 from fleetsim.load.site_map import load_site_map
-from fleetsim.load.suite import SUITE_SUFFIX, discover_suites, load_suite
+from fleetsim.load.suite import SUITE_SUFFIX, ScenarioSpec, Suite, discover_suites, load_suite
 from fleetsim.load.text import write_text_atomically
 from fleetsim.recording.svg import render_layout_svg
-from fleetsim.scenario import DEFAULT_VEHICLE_TYPE
+from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Scenario
 
 __all__ = ["convert", "inspect", "render", "validate"]
 
@@ -29,54 +31,91 @@ __all__ = ["convert", "inspect", "render", "validate"]
 def validate(args: argparse.Namespace) -> int:
     """Load every scenario of every suite completely (map, layout, CSVs) and print layout lint.
 
-    Exit status 1 when any suite or scenario fails to load; each failure is printed with its location.
+    A folder that holds no suite but is a scenario folder (a map, ``vehicles.csv``, ``tasks.csv``) is
+    validated as one, every vehicle of the default type; a folder that is neither is a usage error, so
+    a mistyped path is never a silent pass. Exit status 1 when any suite or scenario fails to load;
+    each failure is printed with its location.
     """
-    paths = discover_suites([Path(p) for p in args.suites])
-    loaded = failed = warnings = 0
+    paths, folders = _validation_targets(args.suites)
+    tally = _Tally()
     for path in paths:
         try:
             suite = load_suite(path)
         except LoadError as error:
             print(f"FAIL {path}\n{_indent(error, 5)}")
-            failed += 1
+            tally.failed += 1
             continue
         print(f"{path}: suite {suite.name!r}, {len(suite.scenarios)} scenario(s)")
         for spec in suite.scenarios:
             if spec.generate is not None:
-                from fleetsim.gating.generated import check_generate_block  # Hypothesis only when needed
-
-                g = spec.generate
-                try:
-                    check_generate_block(spec, suite)
-                except LoadError as error:
-                    print(f"  FAIL {spec.name}\n{_indent(error, 7)}")
-                    failed += 1
-                    continue
-                loaded += 1
-                print(
-                    f"  ok   {spec.name}: generated ({g.layout} layouts of size {g.size[0]}-{g.size[1]}, "
-                    f"{g.vehicles[0]}-{g.vehicles[1]} vehicles, {g.tasks[0]}-{g.tasks[1]} tasks each, {g.examples} examples)"
-                )
-                continue
-            try:
-                scenario = load_scenario(spec, suite)
-            except LoadError as error:
-                print(f"  FAIL {spec.name}\n{_indent(error, 7)}")
-                failed += 1
-                notes = list(error.notes) if isinstance(error, UnreachableTaskError) else []
+                _check_generated(spec, suite, tally)
             else:
-                loaded += 1
-                layout = scenario.layout
-                print(
-                    f"  ok   {spec.name}: {len(layout.segments)} segments, {len(layout.connections)} connections, "
-                    f"{len(scenario.vehicles)} vehicles, {len(scenario.tasks)} tasks"
-                )
-                notes = [*scenario.warnings, *_lint_notes(layout, scenario.vehicle_length)]
-            warnings += len(notes)
-            for note in notes:
-                print(f"       {note}")
-    print(f"{len(paths)} suite(s): {loaded} scenario(s) valid, {failed} failed, {warnings} lint warning(s)")
-    return 1 if failed else 0
+                _check_scenario(spec.name, partial(load_scenario, spec, suite), tally)
+    for folder in folders:
+        print(f"{folder}: a scenario folder without a suite (every vehicle of the default type)")
+        _check_scenario(folder.resolve().name, partial(load_scenario_dir, folder), tally)
+    held = f"{len(paths)} suite(s)" + (f", {len(folders)} scenario folder(s)" if folders else "")
+    print(f"{held}: {tally.loaded} scenario(s) valid, {tally.failed} failed, {tally.warnings} lint warning(s)")
+    return 1 if tally.failed else 0
+
+
+class _Tally:
+    def __init__(self) -> None:
+        self.loaded = self.failed = self.warnings = 0
+
+
+def _validation_targets(arguments: list[str]) -> tuple[list[Path], list[Path]]:
+    """The suite files to validate, and the scenario folders that hold no suite."""
+    suites: list[Path] = []
+    folders: list[Path] = []
+    for path in map(Path, arguments):
+        found = discover_suites([path])
+        if found or not path.is_dir():
+            suites += [file for file in found if file not in suites]
+        elif map_candidates(path) or (path / VEHICLES_FILE_NAME).exists():
+            folders.append(path)
+        else:
+            msg = f"{path}: no *{SUITE_SUFFIX} files in this folder, and it is no scenario folder (a map, vehicles.csv, tasks.csv)"
+            raise UsageError(msg)
+    return suites, folders
+
+
+def _check_generated(spec: ScenarioSpec, suite: Suite, tally: _Tally) -> None:
+    from fleetsim.gating.generated import check_generate_block  # Hypothesis only when needed
+
+    g = spec.generate
+    assert g is not None
+    try:
+        check_generate_block(spec, suite)
+    except LoadError as error:
+        print(f"  FAIL {spec.name}\n{_indent(error, 7)}")
+        tally.failed += 1
+        return
+    tally.loaded += 1
+    print(
+        f"  ok   {spec.name}: generated ({g.layout} layouts of size {g.size[0]}-{g.size[1]}, "
+        f"{g.vehicles[0]}-{g.vehicles[1]} vehicles, {g.tasks[0]}-{g.tasks[1]} tasks each, {g.examples} examples)"
+    )
+
+
+def _check_scenario(name: str, load: Callable[[], Scenario], tally: _Tally) -> None:
+    try:
+        scenario = load()
+    except LoadError as error:
+        print(f"  FAIL {name}\n{_indent(error, 7)}")
+        tally.failed += 1
+        notes = list(error.notes) if isinstance(error, UnreachableTaskError) else []
+    else:
+        tally.loaded += 1
+        layout = scenario.layout
+        print(
+            f"  ok   {name}: {len(layout.segments)} segments, {len(layout.connections)} connections, "
+            f"{len(scenario.vehicles)} vehicles, {len(scenario.tasks)} tasks"
+        )
+        notes = [*scenario.warnings, *_lint_notes(layout, scenario.vehicle_length)]
+    tally.warnings += len(notes)
+    for note in notes:
+        print(f"       {note}")
 
 
 def _indent(error: LoadError, width: int) -> str:
