@@ -4,6 +4,10 @@ The fixture may return a planner factory from ``--planner`` (the plugin's own fi
 a zero-argument function returning a planner, or a planner instance. Every run needs a fresh planner
 (hash recording runs a scenario twice), so an instance is deep-copied before its first use and each
 further run gets a copy of that pristine copy.
+
+A planner spec is read as :func:`fleetsim.exec.spec.load_planner_factory` reads it, but the exec protocol
+(its package, the JSON Schemas it validates with) is imported only for an ``exec:`` spec, so a session
+testing an in-process planner does not pay for it.
 """
 
 from __future__ import annotations
@@ -15,9 +19,21 @@ from dataclasses import dataclass
 from typing import cast
 
 from fleetsim.planning.protocol import Planner
-from fleetsim.sim.planner_spec import METHODS, PlannerFactory, PlannerSpecError
+from fleetsim.sim.planner_spec import METHODS, PlannerFactory, PlannerSpecError, import_planner_factory
 
-__all__ = ["PlannerSource", "planner_source"]
+__all__ = ["PlannerSource", "load_factory", "planner_source"]
+
+EXEC_PREFIX = "exec:"  # fleetsim.exec.spec.EXEC_PREFIX, which this module must not import to read it
+
+
+def load_factory(spec: str, *, call_timeout: float | None) -> PlannerFactory:
+    """The factory ``spec`` names (:class:`PlannerSpecError` for a mistake in it); the exec protocol is
+    imported for an ``exec:`` spec only."""
+    if spec.startswith(EXEC_PREFIX):
+        from fleetsim.exec.spec import load_planner_factory
+
+        return load_planner_factory(spec, call_timeout=call_timeout)
+    return import_planner_factory(spec)
 
 
 @dataclass(frozen=True, slots=True)

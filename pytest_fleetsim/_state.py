@@ -21,7 +21,6 @@ from typing import Any, Literal
 import pytest
 
 from fleetsim.errors import FleetsimError, LoadError
-from fleetsim.exec.spec import load_planner_factory
 from fleetsim.gating.baseline import (
     Comparison,
     ScenarioMetrics,
@@ -31,27 +30,18 @@ from fleetsim.gating.baseline import (
     read_metrics,
     write_metrics,
 )
-from fleetsim.gating.generated import (
-    counterexample_entry,
-    counterexample_story,
-    counts_story,
-    hunt,
-    hunt_facts,
-    hunt_label,
-    record_counterexample,
-)
 from fleetsim.gating.lockfile import HashLock, LockEntry, LockFileError, lock_path_for
-from fleetsim.gating.verify import run_checked
+from fleetsim.gating.verify import in_ci, run_checked
 from fleetsim.load.scenario import load_scenario
 from fleetsim.load.suite import load_suite
 from fleetsim.recording.artifacts import artifact_folder, discard_run_folder, start_run_folder, write_run_artifacts
 from fleetsim.scenario import Scenario
 from fleetsim.sim.interrupt import StopSignals
 from fleetsim.sim.planner_spec import PlannerFactory, PlannerSpecError
-from fleetsim.sim.report import failure_report, format_table, summary_cells
+from fleetsim.sim.report import SUMMARY_COLUMNS, failure_report, format_table, summary_cells
 from fleetsim.sim.result import RunResult
 from pytest_fleetsim._items import ScenarioFailed, ScenarioItem
-from pytest_fleetsim._planner import planner_source
+from pytest_fleetsim._planner import load_factory, planner_source
 
 __all__ = ["NO_PLANNER", "FleetsimState"]
 
@@ -59,6 +49,8 @@ NO_PLANNER = (
     "no planner to test: run pytest with --planner module:Planner (a class or zero-argument factory), set "
     "fleetsim_planner in the [pytest] ini section, or override the fleetsim_planner fixture in conftest.py"
 )
+OUTCOME_WORDS = ("passed", "failed", "interrupted", "xfailed", "xpassed", "load error")
+NOT_RECORDED = "not recorded"  # the hash cell of a run whose hash no lock file holds yet
 RecordMode = Literal["failed", "all", "none"]
 
 
@@ -86,6 +78,7 @@ class FleetsimState:
     baseline: dict[str, ScenarioMetrics] | None
     baseline_path: Path | None
     thresholds: tuple[Threshold, ...]
+    require_hashes: bool = False  # under CI a missing hash fails its scenario
     _locks: dict[Path, HashLock] = field(default_factory=dict)
     outcomes: dict[str, _Outcome] = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
@@ -101,7 +94,7 @@ class FleetsimState:
         spec = option.fleetsim_planner or config.getini("fleetsim_planner") or None
         timeout = float(option.fleetsim_planner_timeout or config.getini("fleetsim_planner_timeout") or 0)
         try:
-            planner = load_planner_factory(spec, call_timeout=timeout if timeout > 0 else None) if spec else None
+            planner = load_factory(spec, call_timeout=timeout if timeout > 0 else None) if spec else None
         except PlannerSpecError as error:
             details = f"\n{error.details.rstrip()}" if error.details else ""
             raise pytest.UsageError(f"--planner: {error}{details}") from None
@@ -138,6 +131,7 @@ class FleetsimState:
             baseline=baseline,
             baseline_path=baseline_path,
             thresholds=tuple(thresholds),
+            require_hashes=in_ci(),
         )
 
     @property
@@ -161,7 +155,7 @@ class FleetsimState:
         heading = f"fleetsim scenario {item.spec.name!r} ({_relative(self.config, item.path)}:{item.spec.line})"
         try:
             if item.suite.planner is not None:  # the suite documents this planner, whatever was asked
-                fixture_value = load_planner_factory(item.suite.planner, call_timeout=self.timeout)
+                fixture_value = load_factory(item.suite.planner, call_timeout=self.timeout)
             elif fixture_value is None:
                 # Located at the scenario, not here, so -rs points at the suite file.
                 raise pytest.skip.Exception(NO_PLANNER, _use_item_location=True)
@@ -179,9 +173,8 @@ class FleetsimState:
             raise ScenarioFailed(_story(str(error), heading)) from None
         # Relative to where pytest was run, like pytest's own FAILED lines, so it can be pasted there.
         here = os.path.relpath(item.path, self.config.invocation_params.dir)
-        hint = f"pytest {shlex.quote(f'{here}::{item.name}')} --fleetsim-update-hashes"
-        if source.from_option and item.suite.planner is None:
-            hint += f" --planner {shlex.quote(source.identity)}"
+        planner_option = source.from_option and item.suite.planner is None
+        hint = _record_command([f"{here}::{item.name}"], source.identity if planner_option else None)
         # Any run may fail, so a kept trace goes into the artifact folder while the run goes (a run killed
         # outright leaves it); the folder is removed again when the run passes and only failures are kept.
         folder = artifact_folder(self.artifacts, item.path, item.spec.name)
@@ -199,6 +192,7 @@ class FleetsimState:
                 keep_trace=self.record != "none",
                 stop=stop,
                 trace_file=trace_file,
+                require_recorded=self.require_hashes,
             )
         except PlannerSpecError as error:  # the planner could not even be made
             if trace_file is not None:
@@ -209,12 +203,24 @@ class FleetsimState:
             result = self._write_artifacts(item, scenario, result, streamed=trace_file is not None)
         elif trace_file is not None:
             discard_run_folder(folder, self.artifacts)
-        self._describe(item, result, checked.record, source.identity)
+        unrecorded = (here, source.identity if planner_option else None) if checked.unrecorded else None
+        self._describe(item, result, checked.record, source.identity, unrecorded=unrecorded)
         if not result.passed:
             raise ScenarioFailed(failure_report(result, heading=heading))
 
     def _hunt(self, item: ScenarioItem, make: Any, identity: str, heading: str, stop: StopSignals) -> None:
         """A generated entry: Hypothesis hunts for a failing scenario; a shrunk one is saved and reported."""
+        # Hypothesis (and the strategies built on it) only for a session that collected a generated entry.
+        from fleetsim.gating.generated import (
+            counterexample_entry,
+            counterexample_story,
+            counts_story,
+            hunt,
+            hunt_facts,
+            hunt_label,
+            record_counterexample,
+        )
+
         assert item.spec.hunts
         folder = artifact_folder(self.artifacts, item.path, item.spec.name)
         about = {
@@ -286,8 +292,12 @@ class FleetsimState:
         *,
         label: str = "",
         generated: bool = False,
+        unrecorded: tuple[str, str | None] | None = None,
     ) -> None:
         """JUnit properties, and the payload that travels to the controller with the test's report.
+
+        ``unrecorded``: no hash was recorded for this run, which the suite file at this path (relative to
+        where pytest was run) records with this ``--planner`` (``None``: the fixture's planner).
 
         A generated entry (``generated``) gets its summary row but stays out of the metrics document:
         its runs are different scenarios every time, so there is nothing to compare with a baseline.
@@ -303,18 +313,24 @@ class FleetsimState:
             ("fleetsim_sim_time", f"{result.sim_time:.3f}"),
         ]
         item.user_properties += [(f"fleetsim_artifact_{kind}", path) for kind, path in sorted(result.artifacts.items())]
+        cells = list(summary_cells(label or item.spec.name, "", result))
+        if unrecorded is not None:
+            item.user_properties.append(("fleetsim_trace_hash_recorded", "no"))
+            cells[SUMMARY_COLUMNS.index("hash")] = NOT_RECORDED
         item.fleetsim_payload = {
             "suite": str(item.path),
             "scenario": item.spec.name,
             "index": item.index,
             "planner": identity,
             "metrics": ScenarioMetrics.from_result(item.nodeid, "failed", result).to_dict(),  # outcome: see _metrics
-            "cells": list(summary_cells(label or item.spec.name, "", result)),
+            "cells": cells,
             "generated": generated,
             "interrupted": result.ended == "interrupted",
             "record": None
             if record is None
             else {"hash": record.hash, "steps": record.steps, "checkpoints": list(record.checkpoints)},
+            "unrecorded": None if unrecorded is None else list(unrecorded),
+            "only_unrecorded": bool(result.failures) and all(f.kind == "hash-missing" for f in result.failures),
         }
 
     # -- the controller -----------------------------------------------------------------------------
@@ -416,6 +432,56 @@ class FleetsimState:
 
     # -- the terminal -------------------------------------------------------------------------------
 
+    def _unrecorded_lines(self, ordered: list[_Outcome]) -> list[str]:
+        """The scenarios' verdicts and the hashes not recorded yet, with the commands that record them: a
+        suite file when none of its scenarios has a hash, else the scenarios' node ids."""
+        unrecorded = [o for o in ordered if o.payload.get("unrecorded")]
+        if not unrecorded:
+            return []
+        words = [o.outcome for o in ordered]
+        counts = ", ".join(f"{words.count(w)} {w}" for w in OUTCOME_WORDS if w in words)
+        by_planner: dict[str | None, dict[str, list[_Outcome]]] = {}
+        # A failed run's hash would pin the failure; one that failed only for want of a hash (CI) is fine.
+        recordable = [
+            o for o in unrecorded if o.outcome not in ("failed", "interrupted") or o.payload["only_unrecorded"]
+        ]
+        for outcome in recordable:
+            here, planner = outcome.payload["unrecorded"]
+            by_planner.setdefault(planner, {}).setdefault(here, []).append(outcome)
+        commands = []
+        for planner, suites in by_planner.items():
+            targets: list[str] = []
+            for here, outcomes in suites.items():
+                names = [o.payload["scenario"] for o in outcomes]
+                if sorted(names) == sorted(self._scenario_names(Path(outcomes[0].suite))):
+                    targets.append(here)
+                else:
+                    targets += [f"{here}::{name}" for name in names]
+            commands.append(f"  {_record_command(targets, planner)}")
+        head = (
+            f"{_plural(len(ordered), 'scenario', 'scenarios')}: {counts}; "
+            f"{_plural(len(unrecorded), 'trace hash', 'trace hashes')} not recorded"
+        )
+        if self.require_hashes:
+            head += ", which fails under CI (CI is set: a lock entry that was never committed is a CI mistake)"
+        if not recordable:
+            return ["", f"{head}; record them once the scenarios pass"]
+        them = (
+            ("it" if len(unrecorded) == 1 else "them")
+            if len(recordable) == len(unrecorded)
+            else f"the {'hash' if len(recordable) == 1 else 'hashes'} of the "
+            f"{_plural(len(recordable), 'scenario that', 'scenarios that')} did not fail"
+        )
+        where = " where you develop" if self.require_hashes else ""
+        tail = ["and commit the lock files"] if self.require_hashes else []
+        return ["", f"{head}; record {them}{where} with:", *commands, *tail]
+
+    def _scenario_names(self, suite: Path) -> list[str]:
+        try:
+            return [spec.name for spec in load_suite(suite).scenarios]
+        except FleetsimError:
+            return []
+
     def summary_lines(self) -> list[str]:
         ordered = self.ordered()
         several = len({o.suite for o in ordered}) > 1
@@ -426,12 +492,23 @@ class FleetsimState:
             cells[1] = outcome.outcome
             rows.append(cells)
         lines = format_table(rows) if rows else []
+        lines += self._unrecorded_lines(ordered)
         if self.comparison is not None:
             source = f" with {_relative(self.config, self.baseline_path)}" if self.baseline_path else ""
             lines += ["", f"compared{source}:", *self.comparison.lines()]
         if self.notes:
             lines += ["", *self.notes]
         return lines
+
+
+def _plural(count: int, one: str, many: str) -> str:
+    return f"{count} {one if count == 1 else many}"
+
+
+def _record_command(targets: list[str], planner: str | None) -> str:
+    """The pytest command that records the hashes of ``targets`` (node ids or suite files)."""
+    command = " ".join(["pytest", *map(shlex.quote, targets), "--fleetsim-update-hashes"])
+    return command if planner is None else f"{command} --planner {shlex.quote(planner)}"
 
 
 def _story(error: str, heading: str, details: str = "") -> str:

@@ -204,10 +204,15 @@ def pytest_runtest_protocol(item: pytest.Item, nextitem: pytest.Item | None) -> 
 
 
 def pytest_report_teststatus(report: pytest.TestReport) -> tuple[str, str, str] | None:
-    """A scenario a stop signal cut short is a failure, shown as INTERRUPTED."""
+    """A scenario a stop signal cut short is a failure, shown as INTERRUPTED; one that passed with no hash
+    recorded for it says so under ``-v`` (the terminal summary counts them)."""
     payload = getattr(report, "fleetsim", None)
-    if report.when == "call" and report.failed and isinstance(payload, dict) and payload.get("interrupted"):
+    if report.when != "call" or not isinstance(payload, dict):
+        return None
+    if report.failed and payload.get("interrupted"):
         return "failed", "!", "INTERRUPTED"
+    if report.passed and payload.get("unrecorded") and not hasattr(report, "wasxfail"):
+        return "passed", ".", "PASSED (hash not recorded)"
     return None
 
 

@@ -30,6 +30,7 @@ from hypothesis.strategies import SearchStrategy
 
 from fleetsim.errors import Location, SuiteError
 from fleetsim.gating.disturbance_hunt import disturbance_lines, disturbed, stop_schedules
+from fleetsim.gating.verify import in_ci
 from fleetsim.load.scenario import default_vehicle_type, load_scenario
 from fleetsim.load.suite import ScenarioSpec, Suite
 from fleetsim.planning.protocol import Planner
@@ -82,11 +83,6 @@ class Hunt:
     def ran(self) -> int:
         """Every run of the hunt: generated, shrink runs and the recorded run of the counterexample."""
         return self.generated + self.shrink_runs + (self.counterexample is not None)
-
-
-def in_ci() -> bool:
-    """CI services set ``CI``; there the search is derandomised (the same scenarios every time)."""
-    return os.environ.get("CI", "").lower() not in ("", "0", "false", "no")
 
 
 def generation_spec(spec: ScenarioSpec, suite: Suite) -> GenerationSpec:

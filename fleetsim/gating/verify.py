@@ -1,7 +1,10 @@
 """Running a scenario for a gate: judge it, then hold its trace hash against the recorded one.
 
-In *check* mode a run's hash must equal the hash recorded for its planner and scenario; a missing or
-different hash is a failure that says how to record it or from when on the behaviour changed. In
+In *check* mode a run's hash must equal the hash recorded for its planner and scenario; a different hash
+is a failure that says from when on the behaviour changed and how to record the new one. A missing hash
+is no verdict on the planner: the run's own checks decide, and the run is marked ``unrecorded`` (with the
+command that records it) — unless a recorded hash is required (``require_recorded``, as under CI, where a
+lock entry that was never committed is a mistake): then it is a ``hash-missing`` failure. In
 *update* mode the scenario runs twice with fresh planners; equal hashes give a lock entry to record,
 different ones are a ``nondeterministic`` failure naming the first diverging step, and nothing is
 recorded. An interrupted run (a stop signal) is never gated nor recorded: its trace ends early, so its
@@ -10,6 +13,7 @@ hash says nothing about the planner's behaviour.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -23,17 +27,24 @@ from fleetsim.sim.interrupt import StopSignals
 from fleetsim.sim.loop import run_scenario
 from fleetsim.sim.result import Failure, RunResult
 
-__all__ = ["CheckedRun", "HashMode", "run_checked"]
+__all__ = ["CheckedRun", "HashMode", "in_ci", "run_checked"]
 
 HashMode = Literal["check", "update", "ignore"]
 
 
 @dataclass(frozen=True, slots=True)
 class CheckedRun:
-    """The judged run (hash failures included) and, in update mode, the entry to record."""
+    """The judged run (hash failures included); in update mode, the entry to record; in check mode,
+    ``unrecorded`` when no hash was recorded to check against."""
 
     result: RunResult
     record: LockEntry | None = None
+    unrecorded: bool = False
+
+
+def in_ci() -> bool:
+    """CI services set ``CI``: there a missing hash fails its scenario, and hunts are derandomised."""
+    return os.environ.get("CI", "").lower() not in ("", "0", "false", "no")
 
 
 def run_checked(
@@ -48,11 +59,14 @@ def run_checked(
     keep_trace: bool = False,
     stop: StopSignals | None = None,
     trace_file: Path | None = None,
+    require_recorded: bool = False,
 ) -> CheckedRun:
     """Run ``scenario`` with a planner from ``make_planner`` and gate its hash as ``mode`` says.
 
-    ``record_hint`` completes "record it with ..." in the message for a missing hash. ``stop`` and
-    ``trace_file`` are :func:`run_scenario`'s (the trace file is the first run's).
+    ``record_hint`` completes "record it with ..." in the messages for a missing or changed hash. A
+    missing hash fails the run only with ``require_recorded`` (and only a run that passed its checks:
+    otherwise its failures are the story). ``stop`` and ``trace_file`` are :func:`run_scenario`'s (the
+    trace file is the first run's).
     """
 
     def run(trace: Path | None = None) -> RunResult:
@@ -80,10 +94,15 @@ def run_checked(
             return CheckedRun(_failed(result, _nondeterministic(result, again, scenario.settings.time_step)))
         return CheckedRun(result, LockEntry.from_run(result.trace_hash, result.steps, result.checkpoints))
     if recorded is None:
-        if not result.passed:
-            return CheckedRun(result)  # its failures are the story; recording a hash is not the fix
-        msg = f"no trace hash is recorded for planner {identity!r} in this scenario; record it with:\n  {record_hint}"
-        return CheckedRun(_failed(result, Failure("hash-missing", result.sim_time, msg, {"planner": identity})))
+        if not require_recorded or not result.passed:  # a failed run's failures are the story
+            return CheckedRun(result, unrecorded=True)
+        msg = (
+            f"no trace hash is recorded for planner {identity!r} in this scenario, and under CI a missing hash "
+            "fails (a lock entry that was never committed is a CI mistake); record it where you develop with:\n"
+            f"  {record_hint}\nand commit the lock file beside the suite"
+        )
+        failure = Failure("hash-missing", result.sim_time, msg, {"planner": identity})
+        return CheckedRun(_failed(result, failure), unrecorded=True)
     mismatch = compare_run(recorded, result.trace_hash, result.steps, result.checkpoints, scenario.settings.time_step)
     if mismatch is None:
         return CheckedRun(result)

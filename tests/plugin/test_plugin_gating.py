@@ -165,6 +165,18 @@ def project(pytester: pytest.Pytester) -> pytest.Pytester:
     return pytester
 
 
+@pytest.fixture
+def under_ci(monkeypatch: pytest.MonkeyPatch) -> None:
+    """CI set: a missing hash fails its scenario (a lock entry that was never committed is a CI mistake)."""
+    monkeypatch.setenv("CI", "true")
+
+
+@pytest.fixture
+def locally(monkeypatch: pytest.MonkeyPatch) -> None:
+    """CI not set: a missing hash is reported, and the scenario's checks alone decide."""
+    monkeypatch.delenv("CI", raising=False)
+
+
 def write_lock(suite: Path, sections: Mapping[str, Mapping[str, LockEntry]]) -> Path:
     path = suite.with_name(LOCK_FILE)
     path.write_text(lock_text(sections), encoding="utf-8")
@@ -243,7 +255,8 @@ def hint_in(result: pytest.RunResult) -> str:
 # -- 1. hash lock files ------------------------------------------------------------------------------
 
 
-def test_missing_hash_fails_with_a_command_that_records_it_beside_the_suite(
+@pytest.mark.usefixtures("under_ci")
+def test_under_ci_a_missing_hash_fails_with_a_command_that_records_it_beside_the_suite(
     project: pytest.Pytester, recorded: dict[str, LockEntry]
 ) -> None:
     suite = make_project(project.path / "suites", ["crossing"])
@@ -253,7 +266,12 @@ def test_missing_hash_fails_with_a_command_that_records_it_beside_the_suite(
     missing.assert_outcomes(failed=1)
     missing.stdout.fnmatch_lines([f"FAILED suites/{SUITE_FILE}::crossing - hash-missing: *"])
     missing.stdout.fnmatch_lines(
-        [f"*no trace hash is recorded for planner '{RESERVING}'*record it with:", f"  *{command}"]
+        [
+            f"*no trace hash is recorded for planner '{RESERVING}' in this scenario, and under CI a missing hash fails "
+            "(a lock entry that was never committed is a CI mistake); record it where you develop with:",
+            f"  *{command}",
+            "*and commit the lock file beside the suite",
+        ]
     )
     assert hint_in(missing) == command
     assert not suite.with_name(LOCK_FILE).exists()
@@ -268,6 +286,70 @@ def test_missing_hash_fails_with_a_command_that_records_it_beside_the_suite(
     project.runpytest_inprocess("suites", "--planner", RESERVING).assert_outcomes(passed=1)
 
 
+@pytest.mark.usefixtures("locally")
+def test_locally_a_missing_hash_passes_as_not_recorded_and_the_summary_says_how_to_record_it(
+    project: pytest.Pytester, recorded: dict[str, LockEntry]
+) -> None:
+    suite = make_project(project.path / "suites")
+    command = f"pytest suites/{SUITE_FILE} --fleetsim-update-hashes --planner {RESERVING}"
+
+    missing = project.runpytest_inprocess("suites", "--planner", RESERVING, "-v")
+
+    missing.assert_outcomes(passed=2)  # the checks decide: no collision, every task done
+    assert missing.ret == pytest.ExitCode.OK
+    missing.stdout.fnmatch_lines([f"suites/{SUITE_FILE}::crossing PASSED (hash not recorded)*"])
+    table = fleetsim_table(missing)
+    hash_column = table[0].index("hash")
+    assert [(row[0], row[1], row[hash_column]) for row in table[1:]] == [
+        (name, "passed", "not recorded") for name in TWO
+    ]
+    missing.stdout.fnmatch_lines(
+        ["2 scenarios: 2 passed; 2 trace hashes not recorded; record them with:", f"  {command}"]
+    )
+    assert not suite.with_name(LOCK_FILE).exists()
+
+    recording = project.runpytest_inprocess(*shlex.split(command)[1:])
+    recording.assert_outcomes(passed=2)
+    assert suite.with_name(LOCK_FILE).read_text(encoding="utf-8") == lock_text(
+        {RESERVING: {name: recorded[name] for name in TWO}}
+    )
+    again = project.runpytest_inprocess("suites", "--planner", RESERVING, "-v")
+    again.assert_outcomes(passed=2)
+    assert "not recorded" not in again.stdout.str()  # the narrow other side: recorded hashes are not news
+
+
+@pytest.mark.usefixtures("locally")
+def test_locally_the_record_command_names_only_the_unrecorded_scenarios_that_did_not_fail(
+    project: pytest.Pytester, recorded: dict[str, LockEntry]
+) -> None:
+    suite = make_project(project.path, ("crossing", "corridor-passing-bay", "loop-one-way"))
+    write_lock(suite, {RESERVING: {"crossing": recorded["crossing"]}})
+    text = suite.read_text(encoding="utf-8").replace(
+        "dir: examples/loop/\n", "dir: examples/loop/\n    expect: {deadlock: true}\n"
+    )  # a deadlock the planner does not have: the scenario fails on its own check
+    suite.write_text(text, encoding="utf-8")
+
+    result = project.runpytest_inprocess("--planner", RESERVING)
+
+    result.assert_outcomes(passed=2, failed=1)
+    result.stdout.fnmatch_lines(
+        [
+            "3 scenarios: 2 passed, 1 failed; 2 trace hashes not recorded; "
+            "record the hash of the 1 scenario that did not fail with:",
+            f"  pytest {SUITE_FILE}::corridor-passing-bay --fleetsim-update-hashes --planner {RESERVING}",
+        ]
+    )
+
+
+@pytest.mark.usefixtures("under_ci")
+def test_under_ci_a_recorded_hash_still_passes(project: pytest.Pytester, recorded: dict[str, LockEntry]) -> None:
+    write_lock(make_project(project.path), {RESERVING: {name: recorded[name] for name in TWO}})
+    result = project.runpytest_inprocess("--planner", RESERVING)
+    result.assert_outcomes(passed=2)
+    assert "not recorded" not in result.stdout.str()
+
+
+@pytest.mark.usefixtures("under_ci")
 def test_record_command_works_from_the_folder_pytest_was_run_in(
     project: pytest.Pytester, monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -402,6 +484,7 @@ def test_stale_entries_are_reported_in_check_mode_and_pruned_on_update(
     assert lock.read_text(encoding="utf-8") == lock_text({RESERVING: crossing, LATE: crossing})
 
 
+@pytest.mark.usefixtures("locally")
 def test_nondeterministic_planner_is_refused_naming_the_first_diverging_step(
     project: pytest.Pytester, recorded: dict[str, LockEntry]
 ) -> None:
@@ -427,7 +510,7 @@ def test_nondeterministic_planner_is_refused_naming_the_first_diverging_step(
     later = project.runpytest_inprocess(
         "--planner", "gating_planners:Later", "--fleetsim-artifacts", "later", "--fleetsim-record", "all"
     )
-    later.assert_outcomes(failed=1)
+    later.assert_outcomes(passed=1)  # its hash is not recorded, which fails it only under CI
     a = (project.path / "fleetsim-results/gating/crossing/trace.jsonl").read_text(encoding="utf-8").splitlines()
     b = (project.path / "later/gating/crossing/trace.jsonl").read_text(encoding="utf-8").splitlines()
     step = next(
@@ -455,6 +538,7 @@ def test_nondeterministic_planner_is_refused_naming_the_first_diverging_step(
     ],
     ids=["default", "failed", "all", "none", "other-root"],
 )
+@pytest.mark.usefixtures("under_ci")
 def test_record_option_decides_which_runs_leave_artifacts_and_where(
     project: pytest.Pytester, recorded: dict[str, LockEntry], options: list[str], expected: set[str]
 ) -> None:
@@ -485,6 +569,7 @@ def test_record_option_decides_which_runs_leave_artifacts_and_where(
         assert len(listed) == 1  # only the failing scenario's report
 
 
+@pytest.mark.usefixtures("under_ci")
 def test_result_json_and_junit_xml_describe_every_recorded_run(
     project: pytest.Pytester, recorded: dict[str, LockEntry]
 ) -> None:
@@ -520,6 +605,7 @@ def test_result_json_and_junit_xml_describe_every_recorded_run(
 # -- 3. summary and baselines ------------------------------------------------------------------------
 
 
+@pytest.mark.usefixtures("under_ci")  # corridor-passing-bay fails for want of a recorded hash
 def test_summary_table_and_metrics_json_have_one_row_per_scenario(
     project: pytest.Pytester, recorded: dict[str, LockEntry]
 ) -> None:
@@ -546,7 +632,7 @@ def test_summary_table_and_metrics_json_have_one_row_per_scenario(
                 str(row["alerts"]),
                 str(row["rejections"]),
                 "0",  # route errors: the reference planner finds every route
-                row["trace_hash"][:12],
+                "not recorded" if cells[0] == "corridor-passing-bay" else row["trace_hash"][:12],
             ]
         )
         assert re.fullmatch(r"\d+x", cells[8])
@@ -633,6 +719,7 @@ def test_bad_compare_options_are_usage_errors(project: pytest.Pytester, options:
 # -- 4. pytest-xdist ---------------------------------------------------------------------------------
 
 
+@pytest.mark.usefixtures("under_ci")  # corridor-passing-bay fails for want of a recorded hash
 def test_xdist_gives_the_serial_ids_outcomes_and_hashes(
     project: pytest.Pytester, recorded: dict[str, LockEntry]
 ) -> None:
@@ -687,6 +774,7 @@ def test_xdist_update_writes_the_lock_once_as_a_serial_update_does(
     ]
 
 
+@pytest.mark.usefixtures("under_ci")
 def test_a_failed_runs_artifacts_hold_a_readable_recording_and_picture(
     project: pytest.Pytester, recorded: dict[str, LockEntry]
 ) -> None:

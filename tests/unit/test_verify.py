@@ -7,8 +7,10 @@ import json
 from dataclasses import replace
 from pathlib import Path
 
+import pytest
+
 from fleetsim import load_scenario, load_suite
-from fleetsim.gating.verify import run_checked
+from fleetsim.gating.verify import CheckedRun, in_ci, run_checked
 from fleetsim.planners import BFSPlanner, ReservingPlanner
 from fleetsim.planning.plans import FleetPlan
 from fleetsim.recording.artifacts import artifact_folder, write_run_artifacts
@@ -24,7 +26,7 @@ def crossing() -> Scenario:
     return load_scenario(suite.scenarios[0], suite)
 
 
-def gated(scenario: Scenario, make: object = ReservingPlanner, **options: object) -> object:
+def gated(scenario: Scenario, make: object = ReservingPlanner, **options: object) -> CheckedRun:
     settings: dict[str, object] = {
         "identity": "p:Q",
         "mode": "check",
@@ -60,16 +62,41 @@ def test_update_mode_records_an_entry_that_the_check_mode_then_accepts() -> None
     assert checked.result.passed and checked.record is None
 
 
-def test_a_missing_hash_fails_a_passing_run_with_the_command_that_records_it() -> None:
-    result = gated(crossing()).result
-    assert [f.kind for f in result.failures] == ["hash-missing"]
-    assert HINT in result.failures[0].message and "'p:Q'" in result.failures[0].message
+def test_a_missing_hash_leaves_a_passing_run_passed_and_marks_it_unrecorded() -> None:
+    checked = gated(crossing())
+    assert checked.result.passed and checked.result.failures == ()
+    assert checked.unrecorded
+
+
+def test_a_missing_hash_fails_a_passing_run_when_a_recorded_hash_is_required() -> None:
+    checked = gated(crossing(), require_recorded=True)
+    assert [f.kind for f in checked.result.failures] == ["hash-missing"] and checked.unrecorded
+    message = checked.result.failures[0].message
+    assert HINT in message and "'p:Q'" in message and "under CI a missing hash fails" in message
+
+
+def test_a_recorded_hash_is_not_unrecorded() -> None:
+    scenario = crossing()
+    recorded = gated(scenario, mode="update")
+    assert recorded.record is not None
+    assert not gated(scenario, recorded=recorded.record, require_recorded=True).unrecorded
 
 
 def test_a_missing_hash_is_not_added_to_a_run_that_already_failed() -> None:
-    result = gated(crossing(), BFSPlanner).result
-    assert "hash-missing" not in [f.kind for f in result.failures]
-    assert "collision" in [f.kind for f in result.failures]
+    checked = gated(crossing(), BFSPlanner, require_recorded=True)
+    assert "hash-missing" not in [f.kind for f in checked.result.failures]
+    assert "collision" in [f.kind for f in checked.result.failures]
+    assert checked.unrecorded
+
+
+@pytest.mark.parametrize(
+    ("value", "expected"), [("true", True), ("1", True), ("", False), ("false", False), ("0", False)]
+)
+def test_ci_is_set_by_any_value_but_empty_false_0_and_no(
+    monkeypatch: pytest.MonkeyPatch, value: str, expected: bool
+) -> None:
+    monkeypatch.setenv("CI", value)
+    assert in_ci() is expected
 
 
 def test_a_different_hash_says_the_behaviour_changed_and_how_to_re_record() -> None:
