@@ -128,8 +128,8 @@ class SuiteError(LoadError):
 
 
 class SuiteErrors(LoadErrors, SuiteError):
-    """Several mistakes in one ``*.fleetsim.yaml`` suite, reported together: a :class:`LoadErrors` that
-    is also a :class:`SuiteError`, so code that catches either keeps working."""
+    """Several mistakes in one `*.fleetsim.yaml` suite, reported together: a `LoadErrors` that is
+    also a `SuiteError`, so code that catches either keeps working."""
 
 
 class LayoutError(FleetsimError, ValueError):
