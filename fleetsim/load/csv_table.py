@@ -16,6 +16,7 @@ from __future__ import annotations
 import csv
 import difflib
 import io
+from collections import deque
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -85,8 +86,7 @@ def read_table(path: Path, columns: Columns, errors: ErrorCollector) -> Iterator
 
 def check_table(path: Path, columns: Columns, errors: ErrorCollector) -> None:
     """Add the problems of the file's structure (readable, header, row widths) to ``errors``."""
-    for _ in read_table(path, columns, errors) or ():
-        pass
+    deque(read_table(path, columns, errors) or (), maxlen=0)  # reading each row records its width error
 
 
 def _rows(

@@ -214,7 +214,7 @@ def load_or_map_errors(path: Path) -> None:
     try:
         load_map(path)
     except MapError:
-        pass
+        return  # located: the outcome wanted
     except LoadErrors as several:
         assert all(isinstance(error, MapError) for error in several.errors)
 
