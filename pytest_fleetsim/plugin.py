@@ -13,12 +13,14 @@ from collections.abc import Generator
 from fnmatch import fnmatch
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
+from typing import Any
 
 import pytest
 
 from pytest_fleetsim._key import STATE_KEY, SessionState
 
 DEFAULT_SUITE_PATTERN = "*.fleetsim.yaml"
+_WORKER_USAGE_ERROR = pytest.StashKey[str]()  # pytest-xdist's controller: a worker's usage error
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:
@@ -87,7 +89,20 @@ def pytest_addoption(parser: pytest.Parser) -> None:
         type=float,
         help="wall-clock limit per planner call (default: the fleetsim_planner_timeout ini option, 10; 0 = none)",
     )
+    group.addoption(
+        "--fleetsim-skip-without-planner",
+        action="store_true",
+        dest="fleetsim_skip_without_planner",
+        help="skip the scenarios that need a planner when none is given (default: a usage error before any "
+        "test runs, so a forgotten --planner cannot pass)",
+    )
     parser.addini("fleetsim_planner", "the planner under test (module:attr) when --planner is not given")
+    parser.addini(
+        "fleetsim_skip_without_planner",
+        "skip the scenarios that need a planner when none is given, instead of a usage error",
+        type="bool",
+        default=False,
+    )
     parser.addini(
         "fleetsim_suite_patterns",
         "file name patterns of fleetsim suites",
@@ -167,12 +182,69 @@ def pytest_collect_file(file_path: Path, parent: pytest.Collector) -> pytest.Col
     return None
 
 
+def _needs_the_option(item: pytest.Item) -> bool:
+    """The item is a scenario whose planner can only come from ``--planner`` or the ini value: its suite
+    names none, and the ``fleetsim_planner`` fixture it uses is this plugin's own (not a conftest's)."""
+    from pytest_fleetsim._items import ScenarioItem  # imported already: a suite file was collected
+
+    if not isinstance(item, ScenarioItem) or item.suite.planner is not None:
+        return False
+    definitions = item._fixtureinfo.name2fixturedefs.get("fleetsim_planner", ())
+    return bool(definitions) and getattr(definitions[-1].func, "__module__", None) == __name__
+
+
+USAGE_ERROR_KEY = "fleetsim_usage_error"  # a pytest-xdist worker's usage error, in its workeroutput
+
+
+@pytest.hookimpl(tryfirst=True)  # before pytest-xdist's worker sends its collection to the controller
+def pytest_collection_finish(session: pytest.Session) -> None:
+    """No silent pass: scenarios that need a planner, in a session that has none, are a usage error
+    (exit status 4) before any test runs, unless skipping them is asked for.
+
+    A pytest-xdist worker cannot raise it (the controller would see a crashed worker): it runs nothing,
+    asks the session to stop with the message, and the controller ends with status 4 (see
+    :func:`pytest_testnodedown` and :func:`pytest_sessionfinish`)."""
+    config = session.config
+    state = _active(config)
+    if state is None or state.planner is not None or config.option.collectonly:
+        return
+    if config.option.fleetsim_skip_without_planner or config.getini("fleetsim_skip_without_planner"):
+        return
+    waiting = [item for item in session.items if _needs_the_option(item)]
+    if not waiting:
+        return
+    from pytest_fleetsim._state import NO_PLANNER
+
+    some = ", ".join(item.nodeid for item in waiting[:3]) + (", ..." if len(waiting) > 3 else "")
+    message = (
+        f"{NO_PLANNER}.\n{len(waiting)} collected scenario(s) need one ({some}); pass "
+        "--fleetsim-skip-without-planner (or set fleetsim_skip_without_planner = true) to skip them instead"
+    )
+    workeroutput = getattr(config, "workeroutput", None)
+    if workeroutput is None:
+        raise pytest.UsageError(message)
+    workeroutput[USAGE_ERROR_KEY] = message
+    session.shouldstop = message
+    session.items = []
+
+
+@pytest.hookimpl(optionalhook=True)  # a pytest-xdist hook: pytest-xdist need not be installed
+def pytest_testnodedown(node: Any, error: object) -> None:
+    """pytest-xdist's controller: a worker that stopped on a usage error ends the session with it
+    (``node`` is pytest-xdist's WorkerController, with the controller's config)."""
+    message = getattr(node, "workeroutput", {}).get(USAGE_ERROR_KEY)
+    if message is not None:
+        node.config.stash[_WORKER_USAGE_ERROR] = message
+
+
 @pytest.fixture
 def fleetsim_planner(request: pytest.FixtureRequest) -> object:
     """The planner under test, made fresh for every run: by default from ``--planner``.
 
     Override it in a conftest.py to return a planner class, a zero-argument factory, or an instance
-    (copied before each run). ``None`` skips the scenario tests, saying how to pass a planner.
+    (copied before each run). ``None`` skips the scenario tests, saying how to pass a planner. Without an
+    override and without a planner, collecting such a scenario is a usage error (see
+    :func:`pytest_collection_finish`).
     """
     return _activate(request.config).planner
 
@@ -217,6 +289,8 @@ def pytest_report_teststatus(report: pytest.TestReport) -> tuple[str, str, str] 
 
 
 def pytest_sessionfinish(session: pytest.Session) -> None:
+    if _WORKER_USAGE_ERROR in session.config.stash:
+        session.exitstatus = pytest.ExitCode.USAGE_ERROR
     state = _active(session.config)
     if state is None:
         return

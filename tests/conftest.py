@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import os
 
+# numpy cannot be loaded twice in one process, and pytester's in-process runs forget the modules
+# imported inside them: loaded here, every in-process run of the plugin reuses it.
+import numpy  # noqa: F401
 from hypothesis import settings
 
 settings.register_profile("ci", derandomize=True, print_blob=True)

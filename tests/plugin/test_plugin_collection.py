@@ -222,9 +222,9 @@ def test_the_planner_comes_from_the_option_its_alias_or_the_ini_file(pytester: p
     result.assert_outcomes(passed=1)
 
 
-def test_without_a_planner_the_scenarios_are_skipped_saying_how_to_pass_one(pytester: pytest.Pytester) -> None:
+def test_skipping_without_a_planner_skips_each_scenario_saying_how_to_pass_one(pytester: pytest.Pytester) -> None:
     copy_example_suites(pytester)
-    result = pytester.runpytest_inprocess("-rs")
+    result = pytester.runpytest_inprocess("-rs", "--fleetsim-skip-without-planner")
     result.assert_outcomes(skipped=4)
     skipped = [line for line in result.stdout.lines if line.startswith("SKIPPED")]
     assert len(skipped) == 4, skipped  # one per scenario, each at its own line of the suite
@@ -234,7 +234,7 @@ def test_without_a_planner_the_scenarios_are_skipped_saying_how_to_pass_one(pyte
 
 def test_the_no_planner_skip_points_at_the_suite_not_at_the_harness(pytester: pytest.Pytester) -> None:
     copy_example_suites(pytester)
-    result = pytester.runpytest_inprocess("-rs", "-k", "crossing")
+    result = pytester.runpytest_inprocess("-rs", "-k", "crossing", "--fleetsim-skip-without-planner")
     skipped = [line for line in result.stdout.lines if line.startswith("SKIPPED")]
     assert skipped and all("examples.fleetsim.yaml" in line and "_state.py" not in line for line in skipped), skipped
 
