@@ -155,7 +155,20 @@ class _Waker:
             _activate(self.config).pytest_runtest_logreport(report)
 
 
+def _library_not_rewritten(config: pytest.Config) -> None:
+    """pytest rewrites the asserts of every top-level package of a plugin's distribution, so in an
+    ordinary (not editable) install every fleetsim module imported in a session is parsed, rewritten and
+    compiled again wherever pytest cannot keep its own bytecode cache (``PYTHONDONTWRITEBYTECODE``, a
+    read-only site-packages), on every start and in every xdist worker. fleetsim's library holds no test
+    code whose asserts pytest should explain; only the plugin's own package stays marked. pytest has no
+    public way to unmark a package: the hook's set of marked names is used when it is there."""
+    marked = getattr(config.pluginmanager.rewrite_hook, "_must_rewrite", None)
+    if isinstance(marked, set):
+        marked.discard("fleetsim")
+
+
 def pytest_configure(config: pytest.Config) -> None:
+    _library_not_rewritten(config)
     if _asked_for(config):
         _activate(config)
     else:

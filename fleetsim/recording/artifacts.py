@@ -14,6 +14,9 @@ suite, scenario and planner; so a run killed outright still leaves what ``fleets
 needs to rebuild its picture and recording. When the run ends, the files are written quickest and most
 useful first — the picture, ``result.json``, then the recording (slow for a long run) and ``result.json``
 again with its path — and ``run.json`` goes, so a second Ctrl-C during the clean-up leaves complete files.
+
+The picture, recording and RViz modules (and the MCAP and ROS 2 message libraries behind them) are
+imported when a folder gets those files, so a session whose runs all pass does not load them.
 """
 
 from __future__ import annotations
@@ -26,9 +29,6 @@ from pathlib import Path
 from typing import Any
 
 from fleetsim.load.text import write_text_atomically
-from fleetsim.recording.picture import failure_picture, stuck_details
-from fleetsim.recording.recorder import record_mcap
-from fleetsim.recording.rviz import rviz_config
 from fleetsim.scenario import Scenario
 from fleetsim.sim.result import Failure, RunResult
 
@@ -72,6 +72,8 @@ def artifact_folder(root: Path, suite_path: Path, scenario: str) -> Path:
 def stuck_overlay(failures: Sequence[Failure]) -> dict[str, Any] | None:
     """The details of a run's deadlock, timeout or interruption that explains who waits for whom, with its
     headline, for the recording; None when no failure does."""
+    from fleetsim.recording.picture import stuck_details
+
     for failure in failures:
         details = stuck_details(failure)
         if details is not None:
@@ -129,6 +131,10 @@ def write_run_artifacts(
         if not streamed:
             write_text_atomically(folder / TRACE_FILE, "\n".join(lines) + "\n")
     if lines and scenario is not None:
+        from fleetsim.recording.picture import failure_picture
+        from fleetsim.recording.recorder import record_mcap
+        from fleetsim.recording.rviz import rviz_config
+
         picture = failure_picture(scenario, result)
         if picture is not None:
             write_text_atomically(folder / PICTURE_FILE, picture[1])

@@ -1,6 +1,7 @@
 """What a pytest session that runs scenarios imports: Hypothesis only for a generated entry, the exec
-protocol only for an ``exec:`` planner (every module imported under pytest is also assertion-rewritten on
-each start where bytecode is not written, so an unneeded import costs twice).
+protocol only for an ``exec:`` planner, the recording libraries only for a run that leaves a recording; and
+fleetsim's library is not assertion-rewritten (pytest marks a plugin's whole distribution, and rewrites a
+marked module on every start where it cannot keep bytecode).
 
 A conftest dumps ``sys.modules`` at the session's end (``pytest_sessionfinish`` runs before the terminal
 summary, where Hypothesis's own plugin imports Hypothesis in every session whatever was collected).
@@ -33,13 +34,61 @@ scenarios:
 """
 
 
-def imported(pytester: pytest.Pytester, *args: str) -> set[str]:
-    """The top-level names and ``fleetsim.exec`` modules imported by a pytest subprocess run with ``args``."""
+def all_imported(pytester: pytest.Pytester, *args: str, status: int = pytest.ExitCode.OK) -> set[str]:
+    """Every module a pytest subprocess run with ``args`` imported, by the end of its session."""
     pytester.makeconftest(DUMP_MODULES)
     result = pytester.runpytest_subprocess("-p", "no:cacheprovider", *args)
-    assert result.ret == pytest.ExitCode.OK, result.stdout.str()
-    modules = (pytester.path / "modules.txt").read_text(encoding="utf-8").split()
+    assert result.ret == status, result.stdout.str()
+    return set((pytester.path / "modules.txt").read_text(encoding="utf-8").split())
+
+
+def imported(pytester: pytest.Pytester, *args: str) -> set[str]:
+    """The top-level names and ``fleetsim.exec`` modules imported by a pytest subprocess run with ``args``."""
+    modules = all_imported(pytester, *args)
     return {m for m in modules if m.split(".")[0] == "hypothesis" or m.split(".")[:2] == ["fleetsim", "exec"]}
+
+
+RECORDING = {"mcap", "rosbags", "fleetsim.recording.recorder", "fleetsim.recording.picture"}
+
+
+def test_runs_that_pass_load_no_recording_and_a_failing_one_does(
+    pytester: pytest.Pytester, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.delenv("CI", raising=False)
+    copy_example_suites(pytester)
+    assert not RECORDING & all_imported(pytester, "--planner", RESERVING, "-k", "crossing")
+    greedy = all_imported(
+        pytester, "--planner", "fleetsim.planners:GreedyPlanner", "-k", "corridor", status=pytest.ExitCode.TESTS_FAILED
+    )
+    assert greedy >= RECORDING  # its failure picture and recording were written
+
+
+MARK_THE_LIBRARY = """import pytest
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_configure(config):
+    # What an ordinary (not editable) install of fleetsim has pytest do: mark the distribution's packages.
+    config.pluginmanager.rewrite_hook.mark_rewrite("fleetsim")
+"""
+
+REWRITTEN = """import fleetsim.cli.run  # a module with asserts, imported by no plugin before this test
+
+
+def test_rewritten():
+    print("REWRITTEN", "@py_builtins" in vars(fleetsim.cli.run))
+"""
+
+
+@pytest.mark.parametrize(("plugin", "rewritten"), [((), "False"), (("-p", "no:fleetsim"), "True")])
+def test_the_library_is_not_assertion_rewritten_while_the_plugin_is_loaded(
+    pytester: pytest.Pytester, plugin: tuple[str, ...], rewritten: str
+) -> None:
+    pytester.makeconftest(MARK_THE_LIBRARY)
+    pytester.makepyfile(test_rewritten=REWRITTEN)
+    result = pytester.runpytest_subprocess("-p", "no:cacheprovider", "-s", *plugin)
+    assert result.ret == pytest.ExitCode.OK, result.stdout.str()
+    result.stdout.fnmatch_lines([f"*REWRITTEN {rewritten}"])
 
 
 def test_a_plain_scenario_under_pytest_imports_neither_hypothesis_nor_the_exec_protocol(
