@@ -17,15 +17,23 @@ from fleetsim.errors import FleetsimError
 from fleetsim.load.suite import ScenarioSpec, Suite, load_suite
 from pytest_fleetsim._key import STATE_KEY
 
-__all__ = ["ScenarioFailed", "ScenarioItem", "SuiteFile"]
+__all__ = ["ScenarioFailed", "ScenarioItem", "ScenarioNotLoaded", "SuiteFile"]
 
 
-class ScenarioFailed(Exception):
-    """A scenario failed; ``report`` is the text pytest shows for it."""
+class _Story(Exception):
+    """``report`` is the text pytest shows for the failure, instead of a traceback through the harness."""
 
     def __init__(self, report: str) -> None:
         self.report = report
         super().__init__(report)
+
+
+class ScenarioFailed(_Story):
+    """A scenario failed (a suite's ``xfail`` expects this)."""
+
+
+class ScenarioNotLoaded(_Story):
+    """A scenario's files did not load: it never ran, and no ``xfail`` excuses that (as in ``fleetsim run``)."""
 
 
 class SuiteFile(pytest.File):
@@ -44,7 +52,7 @@ class SuiteFile(pytest.File):
                 self.config.addinivalue_line("markers", f"{tag}: fleetsim suite tag")  # for --strict-markers
                 item.add_marker(tag)
             if spec.xfail is not None:
-                item.add_marker(pytest.mark.xfail(reason=spec.xfail))
+                item.add_marker(pytest.mark.xfail(reason=spec.xfail, raises=ScenarioFailed))
             yield item
 
 
@@ -69,6 +77,6 @@ class ScenarioItem(pytest.Function):
         return self.path, self.spec.line - 1, f"scenario {self.spec.name}"
 
     def repr_failure(self, excinfo: pytest.ExceptionInfo[BaseException]) -> Any:  # type: ignore[override]
-        if isinstance(excinfo.value, ScenarioFailed):
+        if isinstance(excinfo.value, _Story):
             return excinfo.value.report
         return super().repr_failure(excinfo)

@@ -40,7 +40,7 @@ from fleetsim.sim.interrupt import StopSignals
 from fleetsim.sim.planner_spec import PlannerFactory, PlannerSpecError
 from fleetsim.sim.report import SUMMARY_COLUMNS, failure_report, format_table, summary_cells
 from fleetsim.sim.result import RunResult
-from pytest_fleetsim._items import ScenarioFailed, ScenarioItem
+from pytest_fleetsim._items import ScenarioFailed, ScenarioItem, ScenarioNotLoaded
 from pytest_fleetsim._planner import load_factory, planner_source
 
 __all__ = ["NO_PLANNER", "FleetsimState"]
@@ -170,7 +170,9 @@ class FleetsimState:
             scenario = load_scenario(item.spec, item.suite)
             lock = self._lock(item.suite.path)
         except (LoadError, LockFileError) as error:
-            raise ScenarioFailed(_story(str(error), heading)) from None
+            self._describe_unrun(item, source.identity, load_error=isinstance(error, LoadError))
+            failure = ScenarioNotLoaded if isinstance(error, LoadError) else ScenarioFailed
+            raise failure(_story(str(error), heading)) from None
         # Relative to where pytest was run, like pytest's own FAILED lines, so it can be pasted there.
         here = os.path.relpath(item.path, self.config.invocation_params.dir)
         planner_option = source.from_option and item.suite.planner is None
@@ -197,6 +199,7 @@ class FleetsimState:
         except PlannerSpecError as error:  # the planner could not even be made
             if trace_file is not None:
                 discard_run_folder(folder, self.artifacts)
+            self._describe_unrun(item, source.identity, load_error=False)
             raise ScenarioFailed(_story(f"planner-error: {error}", heading, error.details)) from None
         result = checked.result
         if self.record == "all" or (self.record == "failed" and not result.passed):
@@ -333,6 +336,25 @@ class FleetsimState:
             "only_unrecorded": bool(result.failures) and all(f.kind == "hash-missing" for f in result.failures),
         }
 
+    def _describe_unrun(self, item: ScenarioItem, identity: str, *, load_error: bool) -> None:
+        """The summary row of a scenario that never ran: its files did not load (``load_error``), or its
+        lock file did not, or its planner could not be made. It has no metrics and no hash to record."""
+        item.user_properties.append(("fleetsim_planner", identity))
+        item.fleetsim_payload = {
+            "suite": str(item.path),
+            "scenario": item.spec.name,
+            "index": item.index,
+            "planner": identity,
+            "metrics": None,
+            "cells": list(summary_cells(item.spec.name, "", None)),
+            "generated": False,
+            "interrupted": False,
+            "load_error": load_error,
+            "record": None,
+            "unrecorded": None,
+            "only_unrecorded": False,
+        }
+
     # -- the controller -----------------------------------------------------------------------------
 
     def pytest_runtest_logreport(self, report: pytest.TestReport) -> None:
@@ -343,6 +365,8 @@ class FleetsimState:
         wasxfail = hasattr(report, "wasxfail")
         if payload.get("interrupted"):
             outcome = "interrupted"
+        elif payload.get("load_error") and report.failed:
+            outcome = "load error"  # never excused by xfail: the scenario did not run
         elif report.skipped and wasxfail:
             outcome = "xfailed"
         elif report.passed:
@@ -362,7 +386,12 @@ class FleetsimState:
             self._note_stale_entries(ordered)
         # Generated entries run other scenarios every time; an interrupted run did not finish: neither has
         # metrics to compare.
-        rows = [self._metrics(o) for o in ordered if not o.payload.get("generated") and o.outcome != "interrupted"]
+        # A scenario that never ran has none either.
+        rows = [
+            self._metrics(o)
+            for o in ordered
+            if not o.payload.get("generated") and o.outcome != "interrupted" and o.payload["metrics"] is not None
+        ]
         if self.metrics_json is not None:
             write_metrics(self.metrics_json, rows)
             self.notes.append(f"metrics of {len(rows)} scenario(s) written to {self.metrics_json}")

@@ -82,17 +82,19 @@ class _Outcome:
 
     @property
     def word(self) -> str:
-        """passed, failed, interrupted, or pytest's xfailed/xpassed for scenarios marked ``xfail`` that
-        loaded and ran to their end."""
+        """passed, failed, interrupted, load error (a scenario whose files did not load: it never ran), or
+        pytest's xfailed/xpassed for scenarios marked ``xfail`` that loaded and ran to their end."""
         if self.result.ended == "interrupted":
             return "interrupted"
+        if self.result.ended == "load-error":
+            return "load error"
         if self.xfail is not None and self.loaded:
             return "xpassed" if self.result.passed else "xfailed"
         return self.result.status
 
     @property
     def counts_as_failure(self) -> bool:
-        return self.word in ("failed", "interrupted")
+        return self.word in ("failed", "interrupted", "load error")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -333,6 +335,9 @@ class _Progress:
     def done(self, outcome: _Outcome) -> None:
         if self.live:
             return
+        if outcome.word == "load error":  # its errors follow the table
+            print(f"{self._prefix}: load error", file=self.stream, flush=True)
+            return
         r = outcome.result
         facts = f"tasks {r.tasks_completed}/{r.tasks_total}, t={r.sim_time:.1f} s" if outcome.loaded else "not loaded"
         if outcome.word == "interrupted":
@@ -359,7 +364,9 @@ def _print_summary(outcomes: list[_Outcome], stream: TextIO) -> None:
         print(line, file=stream)
     words = [o.word for o in outcomes]
     counts = ", ".join(
-        f"{words.count(w)} {w}" for w in ("passed", "failed", "interrupted", "xfailed", "xpassed") if w in words
+        f"{words.count(w)} {w}"
+        for w in ("passed", "failed", "interrupted", "xfailed", "xpassed", "load error")
+        if w in words
     )
     planners = ", ".join(dict.fromkeys(o.result.planner for o in outcomes))  # first-seen order
     print(f"\n{len(outcomes)} scenario(s) with {planners}: {counts}", file=stream)

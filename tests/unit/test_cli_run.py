@@ -232,8 +232,12 @@ def test_a_scenario_that_fails_to_load_fails_alone_and_the_others_run(
     assert failure["kind"] == "load-error"
     assert "tasks.csv:3" in failure["message"] and "99" in failure["message"]
     assert broken["trace_hash"] is None
-    assert "FAILED crossing" in err and "load-error" in err
+    assert "LOAD ERROR crossing" in err and "load-error" in err
     assert "Traceback" not in out + err
+    [row] = [line for line in err.splitlines() if line.startswith("crossing ")]
+    assert row.split()[1:3] == ["load", "error"] and "2 scenario(s) with" in err
+    assert ": 1 passed, 1 load error" in err
+    assert "[1/2] crossing: load error\n" in err  # the progress line too
 
 
 def test_a_suite_that_fails_to_load_is_one_failed_entry(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
