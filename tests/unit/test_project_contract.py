@@ -20,7 +20,7 @@ def test_readme_opens_with_the_main_job_and_the_test_commands() -> None:
     readme = (ROOT / "README.md").read_text(encoding="utf-8")
     blocks = re.findall(r"```sh\n(.+?)\n```", readme, flags=re.S)
     assert blocks[0] == "pip install -e . && pytest scenario_suites --planner fleetsim.planners:ReservingPlanner"
-    assert blocks[1].endswith("pip install -e '.[test]' && python -m pytest")
+    assert blocks[1].endswith("pip install -e '.[test]' && python -m pytest -n 2")
 
 
 def test_packaged_schema_is_the_top_level_schema() -> None:
