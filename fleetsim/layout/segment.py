@@ -32,6 +32,8 @@ class Segment:
         names: What the site calls it (a Tiled object's name, a LIF edge id, an RMF lane's waypoints): the
             first is its name, a second one the id of the opposite LIF edge merged into a two-way segment.
             ``vehicles.csv`` and ``tasks.csv`` may name a segment by any of them.
+        ends: What the site calls the places at its first and last waypoint, when it names them (a LIF
+            edge's start and end node ids, an RMF lane's vertices); VDA 5050 orders use them as node ids.
         length: Metres along the polyline.
     """
 
@@ -40,6 +42,7 @@ class Segment:
     direction: Direction
     waypoints: tuple[Point, ...]
     names: tuple[str, ...] = ()
+    ends: tuple[str, str] | None = field(default=None, compare=False)
     length: float = field(init=False, compare=False)
     # Distance along the polyline at each waypoint, for locating a point by its distance.
     _along: tuple[float, ...] = field(init=False, compare=False, repr=False)

@@ -430,5 +430,7 @@ def _segments(edges: list[_Edge]) -> tuple[Segment, ...]:
         direction = Direction.BOTH if other is not None else Direction.FORWARD
         names = (edge.edge_id,) if other is None else (edge.edge_id, edges[other].edge_id)
         shape = Shape.STRAIGHT if len(edge.waypoints) == 2 else Shape.PATH
-        segments.append(Segment(len(segments) + 1, shape, direction, edge.waypoints, names))
+        segments.append(
+            Segment(len(segments) + 1, shape, direction, edge.waypoints, names, ends=(edge.start, edge.end))
+        )
     return tuple(segments)

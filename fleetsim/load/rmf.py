@@ -419,4 +419,5 @@ def _lane(
     if two_way:
         names += (f"{labels[end]}--{labels[start]}",)
     direction = Direction.BOTH if two_way else Direction.FORWARD
-    lanes.segments.append(Segment(len(lanes.segments) + 1, Shape.STRAIGHT, direction, (a, b), names))
+    ends = (labels[start], labels[end])
+    lanes.segments.append(Segment(len(lanes.segments) + 1, Shape.STRAIGHT, direction, (a, b), names, ends=ends))
