@@ -5,6 +5,9 @@ The public API is exactly what this module exports (``__all__``); everything els
 Importing :mod:`fleetsim` is cheap: each public name is imported from its module when it is first used,
 so that the command line and the pytest plugin (loaded in every pytest session of an environment where
 fleetsim is installed) pay only for what they use.
+
+The library holds no tests, so pytest does not rewrite its asserts (PYTEST_DONT_REWRITE; the plugin
+unmarks its other modules, see ``pytest_fleetsim.plugin``).
 """
 
 from __future__ import annotations
