@@ -73,7 +73,8 @@ class MessageInvalid(FleetsimError, ValueError):
         self.topic = topic
         self.errors = tuple(errors)
         listing = "; ".join(error.error_description for error in self.errors)
-        super().__init__(f"invalid {topic} message ({len(self.errors)} problems): {listing}")
+        count = f"{len(self.errors)} problem" + ("s" if len(self.errors) != 1 else "")
+        super().__init__(f"invalid {topic} message ({count}): {listing}")
 
 
 def _version(version: str) -> str:

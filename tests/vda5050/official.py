@@ -11,11 +11,19 @@ The official schemas disagree with the text in places. Each disagreement fleetsi
 in :data:`KNOWN_DEFECTS` with its reason; :func:`validate_21` forgives exactly those findings, and a test
 shows each still exists (so an entry goes stale loudly, when a fixed schema ships).
 
-What was found in vda-5050-lib 1.4.0's compiled 2.0 validators (``vda-5050-validators-2.0.js``): the
-official 2.0.0-era ``instantActions.schema`` of the VDA5050 repository requires ``actionName`` where the
-text and ``order.schema`` say ``actionType``; vda-5050-lib's validator does not repeat that (an instant
-action needs ``actionType``, one with only ``actionName`` is rejected), and it lists PAUSED among the
-``actionStatus`` values, which the 2.1 schema lacks. So 2.0 needs no forgiveness; tests pin both down.
+What was found in vda-5050-lib 1.4.0's compiled 2.0 validators (``vda-5050-validators-2.0.js``) and in
+the official 2.0.0-era schema files of the VDA5050 repository:
+
+- the official ``instantActions.schema`` requires ``actionName`` where the text and ``order.schema`` say
+  ``actionType`` (and lists no top-level required keys at all). vda-5050-lib's validator does not repeat
+  that: an instant action needs ``actionType``; one with only ``actionName`` is rejected.
+- vda-5050-lib's validator (and its types, and so its master controller) wants the instant actions under
+  the key ``instantActions``; the text's key is ``actions``. A document that follows the text fails it with
+  ``#/instantActions: #/allOf/1/required``. :data:`KNOWN_DEFECTS` holds the adaptation (the key renamed
+  before the document is shown to it).
+- vda-5050-lib lists PAUSED among the ``actionStatus`` values, which the 2.1 schema lacks.
+
+The compiled validators stop at their first finding, so a 2.0 defect is adapted around, not forgiven.
 """
 
 from __future__ import annotations
@@ -56,6 +64,7 @@ class KnownDefect:
     keyword: str
     reason: str
     instance: Callable[[Any], bool] = lambda _value: True
+    adapt: Callable[[Any], Any] | None = None  # 2.0: the document as the defective validator wants it
 
     def forgives(self, topic: str, error: jsonschema.ValidationError) -> bool:
         pointer = "/".join(str(part) for part in error.absolute_path)
@@ -67,7 +76,23 @@ class KnownDefect:
         )
 
 
+def _actions_as_instant_actions(document: Any) -> Any:
+    if not isinstance(document, dict) or "actions" not in document or "instantActions" in document:
+        return document
+    return {("instantActions" if key == "actions" else key): value for key, value in document.items()}
+
+
 KNOWN_DEFECTS = (
+    KnownDefect(
+        name="vda-5050-lib-instantActions-key",
+        version="2.0",
+        topic="instantActions",
+        path="instantActions",
+        keyword="required",
+        adapt=_actions_as_instant_actions,
+        reason="vda-5050-lib 1.4.0's 2.0 validator requires the key 'instantActions' for the array of "
+        "actions; the text (6.7) names it 'actions', as does the 2.1 schema.",
+    ),
     KnownDefect(
         name="state-actionStatus-PAUSED",
         version="2.1",
@@ -105,7 +130,7 @@ def _schema_validator_21(topic: str) -> jsonschema.protocols.Validator:
 def validate_21(topic: str, document: Any, *, forgive_known_defects: bool = True) -> list[str]:
     """The 2.1 schema's findings on ``document`` (empty when valid), each ``pointer: message``; those in
     :data:`KNOWN_DEFECTS` are left out unless ``forgive_known_defects`` is False."""
-    defects = [d for d in KNOWN_DEFECTS if d.version == "2.1"] if forgive_known_defects else []
+    defects = [d for d in KNOWN_DEFECTS if d.version == "2.1" and d.adapt is None] if forgive_known_defects else []
     return [
         f"{'/'.join(str(part) for part in error.absolute_path) or '(document)'}: {error.message}"
         for error in _schema_validator_21(topic).iter_errors(document)
@@ -177,8 +202,12 @@ def node_validator() -> NodeValidator:
     return _node_validator
 
 
-def validate_20(topic: str, document: Any) -> list[str]:
-    """vda-5050-lib's 2.0 findings on ``document`` (empty when valid; the first finding only)."""
+def validate_20(topic: str, document: Any, *, adapt_known_defects: bool = True) -> list[str]:
+    """vda-5050-lib's 2.0 findings on ``document`` (empty when valid; the first finding only), shown the
+    document as the :data:`KNOWN_DEFECTS` of 2.0 adapt it unless ``adapt_known_defects`` is False."""
+    for defect in KNOWN_DEFECTS:
+        if adapt_known_defects and defect.version == "2.0" and defect.topic == topic and defect.adapt is not None:
+            document = defect.adapt(document)
     return node_validator().validate(topic, document)
 
 
