@@ -92,8 +92,7 @@ def _json_type(value: Any) -> str:
 class _Reader:
     """Reads one message, collecting every problem with its key path and the ids it concerns."""
 
-    def __init__(self, topic: str, version: str) -> None:
-        self.topic = topic
+    def __init__(self, version: str) -> None:
         self.version = version
         self.problems: list[tuple[str, str, tuple[ErrorReference, ...]]] = []
         self.references: list[ErrorReference] = []
@@ -185,7 +184,7 @@ class _Reader:
 
 def _load(payload: bytes, topic: str, version: str) -> tuple[_Reader, dict[str, Any] | None]:
     """The payload's top-level object, or None with the reason recorded."""
-    reader = _Reader(topic, _version(version))
+    reader = _Reader(_version(version))
     try:
         text = payload.decode("utf-8")
     except UnicodeDecodeError as error:
@@ -240,6 +239,7 @@ def _actions(reader: _Reader, obj: Mapping[str, Any], key: str, path: str) -> tu
                     reader.problem(f"{at}.value", f"{parameter['value']!r} is not a {reader.version} parameter value")
                 else:
                     parameters.append(ActionParameter(key_, parameter["value"]))
+            # An invalid blockingType is already a problem, so the placeholder NONE never leaves this module.
             actions.append(
                 Action(
                     action_type,

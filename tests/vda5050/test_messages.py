@@ -547,6 +547,20 @@ angles = st.floats(-3.14, 3.14)
 
 
 @st.composite
+def trajectories(draw: st.DrawFn) -> dict[str, Any]:
+    """A NURBS as the text describes it: the knot vector has control points + degree + 1 entries in 0..1."""
+    degree = draw(st.integers(1, 3))
+    points = draw(st.integers(degree + 1, 4))
+    knots = sorted(draw(st.lists(st.floats(0, 1), min_size=points + degree + 1, max_size=points + degree + 1)))
+    control = st.fixed_dictionaries({"x": numbers, "y": numbers}, optional={"weight": st.floats(0, 2)})
+    return {
+        "degree": degree,
+        "knotVector": knots,
+        "controlPoints": draw(st.lists(control, min_size=points, max_size=points)),
+    }
+
+
+@st.composite
 def orders(draw: st.DrawFn) -> tuple[str, dict[str, Any]]:
     """A version and an order valid per the text: alternating nodes and edges, optional keys or not."""
     version = draw(st.sampled_from(VERSIONS))
@@ -555,6 +569,10 @@ def orders(draw: st.DrawFn) -> tuple[str, dict[str, Any]]:
 
     def optional(**choices: st.SearchStrategy[Any]) -> dict[str, Any]:
         return {key: draw(value) for key, value in choices.items() if draw(st.booleans())}
+
+    values = [numbers, ids, st.booleans(), st.lists(ids, max_size=2)]
+    if version == "2.1":
+        values.append(st.dictionaries(ids, numbers, max_size=2))
 
     def actions() -> list[dict[str, Any]]:
         return [
@@ -565,7 +583,7 @@ def orders(draw: st.DrawFn) -> tuple[str, dict[str, Any]]:
                 **optional(
                     actionDescription=ids,
                     actionParameters=st.lists(
-                        st.fixed_dictionaries({"key": ids, "value": st.one_of(numbers, ids, st.booleans())}), max_size=2
+                        st.fixed_dictionaries({"key": ids, "value": st.one_of(values)}), max_size=2
                     ),
                 ),
             }
@@ -603,6 +621,17 @@ def orders(draw: st.DrawFn) -> tuple[str, dict[str, Any]]:
                 rotationAllowed=st.booleans(),
                 length=st.floats(0, 100),
                 direction=ids,
+                trajectory=trajectories(),
+                **(
+                    {
+                        "corridor": st.fixed_dictionaries(
+                            {"leftWidth": st.floats(0, 2), "rightWidth": st.floats(0, 2)},
+                            optional={"corridorRefPoint": st.sampled_from(["KINEMATICCENTER", "CONTOUR"])},
+                        )
+                    }
+                    if version == "2.1"
+                    else {}
+                ),
             ),
         }
         for i in range(count - 1)
@@ -630,3 +659,36 @@ def test_orders_valid_per_the_independent_schema_are_accepted(case: tuple[str, d
     order = decode_order(payload(document), version)
     assert [n.node_id for n in order.nodes] == [n["nodeId"] for n in document["nodes"]]
     assert len(order.base[0]) == sum(n["released"] for n in document["nodes"])
+
+
+def required_places(document: dict[str, Any]) -> list[tuple[dict[str, Any], str, str]]:
+    """Every required key of an order with the object holding it and its key path."""
+    places = [(document, key, key) for key in ("headerId", "timestamp", "version", "manufacturer", "serialNumber")]
+    places += [(document, key, key) for key in ("orderId", "orderUpdateId", "nodes", "edges")]
+    for kind, keys in (("nodes", ("nodeId", "sequenceId", "released", "actions")),
+                       ("edges", ("edgeId", "sequenceId", "released", "startNodeId", "endNodeId", "actions"))):  # fmt: skip
+        for index, item in enumerate(document[kind]):
+            places += [(item, key, f"{kind}[{index}].{key}") for key in keys]
+            for number, act in enumerate(item["actions"]):
+                at = f"{kind}[{index}].actions[{number}]"
+                places += [(act, key, f"{at}.{key}") for key in ("actionId", "actionType", "blockingType")]
+    return places
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(orders(), st.data())
+def test_an_order_missing_or_mistyping_a_required_key_is_rejected_by_both(
+    case: tuple[str, dict[str, Any]], data: st.DataObject
+) -> None:
+    """One required key deleted or given a value of another JSON type: the independent validator and
+    decode_order both reject the order, and decode_order names exactly that key."""
+    version, document = case
+    holder, key, path = data.draw(st.sampled_from(required_places(document)))
+    if data.draw(st.booleans()):
+        del holder[key]
+    else:
+        holder[key] = "x" if isinstance(holder[key], (list, bool, int, float)) else [1]
+    assert official.validate(version, "order", document) != []
+    with pytest.raises(MessageInvalid) as raised:
+        decode_order(payload(document), version)
+    assert list(problems(raised)) == [path]
