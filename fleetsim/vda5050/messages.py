@@ -379,15 +379,40 @@ def _camel(name: str) -> str:
     return head + "".join(part[:1].upper() + part[1:] for part in rest)
 
 
-def _wire(value: Any, version: str, where: str, words: set[str] | None = None) -> Any:
+# Numbers the text's tables type as integers although a float would be a natural reading (2.0's schema insists).
+_INTEGERS = frozenset({("BatteryState", "battery_health")})
+# Bounds the text sets on outgoing numbers, by class and field.
+_RANGES: dict[tuple[str, str], tuple[float | None, float | None]] = {
+    ("AgvPosition", "localization_score"): (0.0, 1.0),
+    ("BatteryState", "battery_health"): (0.0, 100.0),
+    ("BatteryState", "reach"): (0.0, None),
+    ("Load", "weight"): (0.0, None),
+}
+
+
+def _check(name: str, field_name: str, value: Any, where: str) -> None:
+    """The text's constraints on one field of an outgoing model: enumerated words, bounds, timestamps."""
+    words = _WORDS.get((name, field_name))
+    for word in value if isinstance(value, tuple) else (value,):
+        if words is not None and word not in words:
+            msg = f"{where}={word!r} must be one of {sorted(words)}"
+            raise ValueError(msg)
+    if (name, field_name) in _INTEGERS and (isinstance(value, bool) or not isinstance(value, int)):
+        msg = f"{where}={value!r} must be an integer"
+        raise ValueError(msg)
+    low, high = _RANGES.get((name, field_name), (None, None))
+    if (low is not None and value < low) or (high is not None and value > high):
+        msg = f"{where}={value!r} must be in {low}..{'' if high is None else high}"
+        raise ValueError(msg)
+    if field_name == "timestamp" and not _TIMESTAMP.fullmatch(value):
+        msg = f"{where}={value!r} must be an ISO 8601 date-time such as '2026-12-03T13:00:00.25Z'"
+        raise ValueError(msg)
+
+
+def _wire(value: Any, version: str, where: str) -> Any:
     if isinstance(value, Enum):
         return value.value
-    if isinstance(value, bool) or (isinstance(value, (int, str)) and words is None):
-        return value
-    if isinstance(value, str):
-        if value not in words:  # type: ignore[operator]
-            msg = f"{where}={value!r} must be one of {sorted(words)}"  # type: ignore[arg-type]
-            raise ValueError(msg)
+    if isinstance(value, (bool, int, str)):
         return value
     if isinstance(value, float):
         if not math.isfinite(value):
@@ -395,7 +420,7 @@ def _wire(value: Any, version: str, where: str, words: set[str] | None = None) -
             raise ValueError(msg)
         return value
     if isinstance(value, (tuple, list)):
-        return [_wire(item, version, f"{where}[{index}]", words) for index, item in enumerate(value)]
+        return [_wire(item, version, f"{where}[{index}]") for index, item in enumerate(value)]
     if isinstance(value, Mapping):
         return {str(key): _wire(item, version, f"{where}.{key}") for key, item in value.items()}
     if is_dataclass(value) and not isinstance(value, type):
@@ -406,7 +431,8 @@ def _wire(value: Any, version: str, where: str, words: set[str] | None = None) -
             if content is None or (version == "2.0" and (name, item.name) in SINCE_2_1):
                 continue
             key = _camel(item.name)
-            document[key] = _wire(content, version, f"{where}.{key}", _WORDS.get((name, item.name)))
+            _check(name, item.name, content, f"{where}.{key}")
+            document[key] = _wire(content, version, f"{where}.{key}")
             if key == "timestamp" and where.count(".") == 0:
                 document["version"] = VERSIONS[version]  # the header's order: headerId, timestamp, version, ...
         return document

@@ -182,7 +182,7 @@ class BatteryState:
     battery_charge: float
     charging: bool
     battery_voltage: float | None = None
-    battery_health: float | None = None
+    battery_health: int | None = None  # percent; an int8 in the text's table
     reach: float | None = None
 
 

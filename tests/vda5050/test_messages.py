@@ -4,6 +4,7 @@ is wrong is reported as validationErrors naming the key."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import re
@@ -98,7 +99,7 @@ def full_state() -> State:
         last_node_sequence_id=0,
         driving=True,
         operating_mode=OperatingMode.AUTOMATIC,
-        battery_state=BatteryState(80.0, False, 48.0, 97.0, 1200.0),
+        battery_state=BatteryState(80.0, False, 48.0, 97, 1200.0),
         safety_state=SafetyState(EStop.NONE, False),
         node_states=(NodeState("n2", 2, True, "second", NodePosition(2.0, 0.0, "hall", theta=0.0)),),
         edge_states=(EdgeState("e1", 1, True, "first edge", TRAJECTORY),),
@@ -249,6 +250,71 @@ def test_encode_writes_compact_utf8_and_refuses_what_json_cannot_say() -> None:
         encode(wrong_word, "2.1")
     with pytest.raises(ValueError, match=r"version='3.0' must be one of"):
         encode(minimal_state(), "3.0")
+
+
+def test_encode_holds_numbers_and_timestamps_to_the_text() -> None:
+    charged = minimal_state().battery_state
+    over = State(
+        **HEADER,
+        order_id="",
+        order_update_id=0,
+        last_node_id="",
+        last_node_sequence_id=0,
+        driving=False,
+        operating_mode=OperatingMode.MANUAL,
+        battery_state=BatteryState(charged.battery_charge, False, battery_health=101),
+        safety_state=SafetyState(EStop.NONE, False),
+    )
+    with pytest.raises(ValueError, match=r"state\.batteryState\.batteryHealth=101 must be in 0\.0\.\.100\.0"):
+        encode(over, "2.1")
+    fractional = dataclasses.replace(over, battery_state=BatteryState(50.0, False, battery_health=97.5))  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match=r"batteryHealth=97\.5 must be an integer"):
+        encode(fractional, "2.0")
+    lost = Visualization(**HEADER, agv_position=AgvPosition(0.0, 0.0, 0.0, "hall", False, localization_score=-0.1))
+    with pytest.raises(ValueError, match=r"localizationScore=-0\.1 must be in 0\.0\.\.1\.0"):
+        encode(lost, "2.0")
+    late = Connection(7, "13:00 yesterday", "fleetsim", "v1", ConnectionState.OFFLINE)
+    with pytest.raises(ValueError, match=r"connection\.timestamp='13:00 yesterday' must be an ISO 8601 date-time"):
+        encode(late, "2.1")
+
+
+@pytest.mark.parametrize("version", VERSIONS)
+def test_the_validation_errors_of_a_rejected_order_go_into_a_valid_state(version: str) -> None:
+    document = order_document(version)
+    del document["nodes"][0]["released"]
+    document["edges"][1]["actions"] = [action("x1", blocking="SOMETIMES")]
+    with pytest.raises(MessageInvalid) as raised:
+        decode_order(payload(document), version)
+    state = State(
+        **HEADER,
+        order_id="",
+        order_update_id=0,
+        last_node_id="",
+        last_node_sequence_id=0,
+        driving=False,
+        operating_mode=OperatingMode.AUTOMATIC,
+        battery_state=BatteryState(50.0, True),
+        safety_state=SafetyState(EStop.NONE, False),
+        errors=raised.value.errors,
+    )
+    written = to_document(state, version)
+    assert official.validate(version, "state", written) == []
+    assert [e["errorType"] for e in written["errors"]] == ["validationError", "validationError"]
+    assert {"referenceKey": "edgeId", "referenceValue": "e2"} in written["errors"][1]["errorReferences"]
+
+
+def test_a_decoder_asked_for_an_unknown_version_says_which_exist() -> None:
+    with pytest.raises(ValueError, match=r"version='2\.2' must be one of \['2\.0', '2\.1'\]"):
+        decode_order(payload(order_document("2.1")), "2.2")
+
+
+def test_unknown_keys_are_ignored_and_2_1_keys_are_not_checked_in_2_0() -> None:
+    document = order_document("2.0")
+    document["vendorExtension"] = {"anything": True}
+    document["edges"][0]["corridor"] = {"leftWidth": "wide"}
+    assert decode_order(payload(document), "2.0").order_id == "order-1"
+    with pytest.raises(MessageInvalid, match=r"edges\[0\]\.corridor\.leftWidth: expected a number, got 'wide'"):
+        decode_order(payload({**document, "version": "2.1.0"}), "2.1")
 
 
 def action(action_id: str, action_type: str = "pick", blocking: str = "HARD", **extra: Any) -> dict[str, Any]:
@@ -665,8 +731,10 @@ def required_places(document: dict[str, Any]) -> list[tuple[dict[str, Any], str,
     """Every required key of an order with the object holding it and its key path."""
     places = [(document, key, key) for key in ("headerId", "timestamp", "version", "manufacturer", "serialNumber")]
     places += [(document, key, key) for key in ("orderId", "orderUpdateId", "nodes", "edges")]
-    for kind, keys in (("nodes", ("nodeId", "sequenceId", "released", "actions")),
-                       ("edges", ("edgeId", "sequenceId", "released", "startNodeId", "endNodeId", "actions"))):  # fmt: skip
+    for kind, keys in (
+        ("nodes", ("nodeId", "sequenceId", "released", "actions")),
+        ("edges", ("edgeId", "sequenceId", "released", "startNodeId", "endNodeId", "actions")),
+    ):
         for index, item in enumerate(document[kind]):
             places += [(item, key, f"{kind}[{index}].{key}") for key in keys]
             for number, act in enumerate(item["actions"]):
@@ -692,3 +760,120 @@ def test_an_order_missing_or_mistyping_a_required_key_is_rejected_by_both(
     with pytest.raises(MessageInvalid) as raised:
         decode_order(payload(document), version)
     assert list(problems(raised)) == [path]
+
+
+finite = st.floats(-1e4, 1e4)
+
+
+@st.composite
+def states(draw: st.DrawFn) -> State:
+    """A state with any of its optional parts, values within the text's bounds."""
+
+    def maybe(strategy: st.SearchStrategy[Any]) -> Any:
+        return draw(st.none() | strategy)
+
+    position = st.builds(
+        AgvPosition,
+        finite,
+        finite,
+        angles,
+        ids,
+        st.booleans(),
+        st.none() | ids,
+        st.none() | st.floats(0, 1),
+        st.none() | st.floats(0, 5),
+    )
+    node_position = st.builds(NodePosition, finite, finite, ids, st.none() | angles)
+    return State(
+        **HEADER,
+        order_id=draw(ids | st.just("")),
+        order_update_id=draw(st.integers(0, 1000)),
+        last_node_id=draw(ids | st.just("")),
+        last_node_sequence_id=draw(st.integers(0, 1000)),
+        driving=draw(st.booleans()),
+        operating_mode=draw(st.sampled_from(OperatingMode)),
+        battery_state=draw(
+            st.builds(
+                BatteryState,
+                st.floats(0, 100),
+                st.booleans(),
+                st.none() | st.floats(0, 60),
+                st.none() | st.integers(0, 100),
+                st.none() | st.floats(0, 1e5),
+            )
+        ),
+        safety_state=draw(st.builds(SafetyState, st.sampled_from(EStop), st.booleans())),
+        node_states=tuple(
+            draw(
+                st.lists(
+                    st.builds(
+                        NodeState, ids, st.integers(0, 99), st.booleans(), st.none() | ids, st.none() | node_position
+                    ),
+                    max_size=3,
+                )
+            )
+        ),
+        edge_states=tuple(
+            draw(
+                st.lists(
+                    st.builds(
+                        EdgeState, ids, st.integers(0, 99), st.booleans(), st.none() | ids, st.none() | trajectories()
+                    ),
+                    max_size=3,
+                )
+            )
+        ),
+        action_states=tuple(
+            draw(
+                st.lists(
+                    st.builds(
+                        ActionState,
+                        ids,
+                        st.sampled_from(ActionStatus),
+                        st.none() | ids,
+                        st.none() | ids,
+                        st.none() | ids,
+                    ),
+                    max_size=3,
+                )
+            )
+        ),
+        errors=tuple(
+            draw(
+                st.lists(
+                    st.builds(
+                        VdaError,
+                        ids,
+                        ids,
+                        st.sampled_from(ErrorLevel),
+                        st.lists(st.builds(ErrorReference, ids, ids), max_size=2).map(tuple),
+                        st.none() | ids,
+                    ),
+                    max_size=2,
+                )
+            )
+        ),
+        information=tuple(draw(st.lists(st.builds(Information, ids, st.sampled_from(InfoLevel)), max_size=2))),
+        maps=tuple(draw(st.lists(st.builds(MapState, ids, ids, st.sampled_from(MapStatus)), max_size=2))),
+        zone_set_id=maybe(ids),
+        paused=maybe(st.booleans()),
+        new_base_request=maybe(st.booleans()),
+        distance_since_last_node=maybe(st.floats(0, 100)),
+        agv_position=maybe(position),
+        velocity=maybe(st.builds(Velocity, st.none() | finite, st.none() | finite, st.none() | finite)),
+        loads=maybe(
+            st.lists(
+                st.builds(
+                    Load, st.none() | ids, st.none() | ids, st.none() | ids, weight=st.none() | st.floats(0, 1000)
+                ),
+                max_size=2,
+            ).map(tuple)
+        ),
+    )
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(states())
+def test_any_state_fleetsim_can_hold_passes_the_independent_validators(state: State) -> None:
+    for version in VERSIONS:
+        assert official.validate(version, "state", to_document(state, version)) == []
