@@ -19,7 +19,15 @@ from collections import deque
 from dataclasses import dataclass
 from typing import Any
 
-from paho.mqtt.client import Client, ConnectFlags, DisconnectFlags, MQTTMessage, MQTTv311, error_string
+from paho.mqtt.client import (
+    Client,
+    ConnectFlags,
+    DisconnectFlags,
+    MQTTMessage,
+    MQTTv311,
+    error_string,
+    topic_matches_sub,
+)
 from paho.mqtt.enums import CallbackAPIVersion, MQTTErrorCode
 from paho.mqtt.properties import Properties
 from paho.mqtt.reasoncodes import ReasonCode
@@ -79,6 +87,9 @@ class MqttLink:
         self._lost: str | None = None
         self._acks: dict[int, list[ReasonCode]] = {}
         self._acked = threading.Condition()
+        self._requested: dict[int, tuple[str, ...]] = {}  # the filters of each SUBSCRIBE, by packet id
+        self._filters: tuple[str, ...] = ()  # the acknowledged ones; only paho's thread replaces it
+        self._unsolicited = 0
         self._started = False
 
         client = Client(
@@ -116,6 +127,16 @@ class MqttLink:
         """How many messages were dropped, oldest first, because ``inbound_limit`` were waiting already."""
         with self._arrived:
             return self._dropped
+
+    @property
+    def unsolicited(self) -> int:
+        """How many messages were ignored because no acknowledged subscription of this link matches them.
+
+        amqtt 0.12 sends a client, as it connects, the retained messages of every topic any client has
+        subscribed to; a vehicle must not take another vehicle's retained ``connection`` for its own.
+        """
+        with self._arrived:
+            return self._unsolicited
 
     @property
     def pending(self) -> int:
@@ -185,12 +206,19 @@ class MqttLink:
     # -- messages ----------------------------------------------------------------------------------------
 
     def subscribe(self, *topics: str, qos: int = 0, timeout: float = 5.0) -> None:
-        """Subscribe to ``topics`` (filters; ``+`` and ``#`` allowed) and wait for the broker's SUBACK."""
+        """Subscribe to ``topics`` (filters; ``+`` and ``#`` allowed) and wait for the broker's SUBACK.
+
+        Messages count from the SUBACK on (brokers send a subscription's retained messages after it): what
+        arrives on these topics before it is ignored as unsolicited.
+        """
         if not topics:
             msg = "subscribe() needs at least one topic"
             raise ValueError(msg)
         url = self.address.url
-        result, mid = self._client.subscribe([(topic, qos) for topic in topics])
+        with self._acked:  # held until the packet id is known: the SUBACK's callback takes this lock too
+            result, mid = self._client.subscribe([(topic, qos) for topic in topics])
+            if mid is not None:
+                self._requested[mid] = topics
         if result != MQTTErrorCode.MQTT_ERR_SUCCESS or mid is None:
             msg = f"cannot subscribe to {list(topics)!r} on the MQTT broker at {url}: {error_string(result)}"
             raise BrokerError(msg, url)
@@ -260,12 +288,19 @@ class MqttLink:
         self, client: Client, userdata: Any, mid: int, codes: list[ReasonCode], properties: Properties | None
     ) -> None:
         with self._acked:
+            granted = [
+                topic for topic, code in zip(self._requested.pop(mid, ()), codes, strict=False) if not code.is_failure
+            ]
+            self._filters = (*self._filters, *granted)
             self._acks[mid] = codes
             self._acked.notify_all()
 
     def _on_message(self, client: Client, userdata: Any, message: MQTTMessage) -> None:
         item = Inbound(message.topic, bytes(message.payload), time.monotonic())
         with self._arrived:
+            if not any(topic_matches_sub(sub, item.topic) for sub in self._filters):
+                self._unsolicited += 1
+                return
             if len(self._inbound) == self._inbound.maxlen:
                 self._dropped += 1  # the deque drops its oldest item on append
             self._inbound.append(item)
