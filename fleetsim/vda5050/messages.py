@@ -3,9 +3,10 @@
 :func:`decode_order` and :func:`decode_instant_actions` check an incoming payload against the text's
 message tables (required keys, types, ranges, enumerations) in one pass and raise :class:`MessageInvalid`
 with every problem found, each a ``validationError`` a vehicle can put in its state as it is. Unknown keys
-are ignored, as the text allows, with two exceptions seen in the wild: ``instantActions`` in place of
-``actions`` (vda-5050-lib 1.4.0's master controller) and ``actionName`` in place of ``actionType`` (the
-2.0.0 instantActions schema file); both are named so that the sender learns what to fix.
+are ignored, as the text allows, except misspellings seen in the wild, which would otherwise be lost
+silently: ``instantActions`` in place of ``actions`` and ``allowedDeviationXy`` in place of
+``allowedDeviationXY`` (both vda-5050-lib 1.4.0's), ``actionName`` in place of ``actionType`` (the 2.0.0
+instantActions schema file). Each is named so that the sender learns what to fix.
 
 :func:`encode` writes an outgoing message (:mod:`fleetsim.vda5050.state_model`) for one version: camelCase
 keys, the header's ``version``, optional fields left out when ``None``, 2.1's additions left out of 2.0.
@@ -257,6 +258,8 @@ def _node_position(reader: _Reader, obj: Mapping[str, Any], path: str) -> NodePo
     if position is None:
         return None
     at = f"{path}.nodePosition"
+    if "allowedDeviationXy" in position:
+        reader.problem(f"{at}.allowedDeviationXy", "not a VDA 5050 2.x key; the text's key is 'allowedDeviationXY'")
     return NodePosition(
         x=reader.get(position, "x", at, "number"),
         y=reader.get(position, "y", at, "number"),
@@ -374,6 +377,10 @@ _WORDS = {
 }
 
 
+# Wire keys that are not the camelCase of the field's name.
+_KEYS = {("NodePosition", "allowed_deviation_xy"): "allowedDeviationXY"}
+
+
 def _camel(name: str) -> str:
     head, *rest = name.split("_")
     return head + "".join(part[:1].upper() + part[1:] for part in rest)
@@ -430,7 +437,7 @@ def _wire(value: Any, version: str, where: str) -> Any:
             content = getattr(value, item.name)
             if content is None or (version == "2.0" and (name, item.name) in SINCE_2_1):
                 continue
-            key = _camel(item.name)
+            key = _KEYS.get((name, item.name)) or _camel(item.name)
             _check(name, item.name, content, f"{where}.{key}")
             document[key] = _wire(content, version, f"{where}.{key}")
             if key == "timestamp" and where.count(".") == 0:

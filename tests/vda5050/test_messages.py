@@ -101,7 +101,7 @@ def full_state() -> State:
         operating_mode=OperatingMode.AUTOMATIC,
         battery_state=BatteryState(80.0, False, 48.0, 97, 1200.0),
         safety_state=SafetyState(EStop.NONE, False),
-        node_states=(NodeState("n2", 2, True, "second", NodePosition(2.0, 0.0, "hall", theta=0.0)),),
+        node_states=(NodeState("n2", 2, True, "second", NodePosition(2.0, 0.0, "hall", 0.0, 0.25, 0.1, "hall")),),
         edge_states=(EdgeState("e1", 1, True, "first edge", TRAJECTORY),),
         action_states=(
             ActionState("a1", ActionStatus.RUNNING, "pick", "lift", "ok"),
@@ -228,6 +228,25 @@ def test_state_of_each_version_has_its_own_fields() -> None:
     assert "loads" not in to_document(minimal_state(), "2.1") and "zoneSetId" not in to_document(minimal_state(), "2.1")
     factsheet = to_document(full_factsheet(), "2.0")
     assert "vehicleConfig" not in factsheet and "blockingTypes" not in factsheet["protocolFeatures"]["agvActions"][0]
+
+
+def test_keys_the_text_spells_its_own_way_are_written_so() -> None:
+    (node,) = to_document(full_state(), "2.1")["nodeStates"]
+    assert node["nodePosition"]["allowedDeviationXY"] == 0.25 and "allowedDeviationXy" not in node["nodePosition"]
+
+
+def test_vda_5050_lib_allowed_deviation_key_is_named() -> None:
+    """vda-5050-lib 1.4.0 spells the node's tolerance ``allowedDeviationXy``; dropping it would be silent."""
+    document = order_document("2.0")
+    document["nodes"][1]["nodePosition"]["allowedDeviationXy"] = 0.5
+    assert official.validate_20("order", document) == [], "vda-5050-lib itself accepts its spelling"
+    with pytest.raises(MessageInvalid) as raised:
+        decode_order(payload(document), "2.0")
+    (error,) = raised.value.errors
+    assert error.error_description == (
+        "nodes[1].nodePosition.allowedDeviationXy: not a VDA 5050 2.x key; the text's key is 'allowedDeviationXY'"
+    )
+    assert ErrorReference("nodeId", "n2") in error.error_references
 
 
 def test_encode_writes_compact_utf8_and_refuses_what_json_cannot_say() -> None:
