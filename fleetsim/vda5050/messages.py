@@ -183,9 +183,13 @@ class _Reader:
         )
 
 
-def _load(payload: bytes, topic: str, version: str) -> tuple[_Reader, dict[str, Any] | None]:
+def _load(payload: bytes, version: str) -> tuple[_Reader, dict[str, Any] | None]:
     """The payload's top-level object, or None with the reason recorded."""
     reader = _Reader(_version(version))
+    if not isinstance(payload, (bytes, bytearray)):
+        msg = f"payload={payload!r:.80} must be bytes (an MQTT message's payload)"
+        raise TypeError(msg)
+    payload = bytes(payload)
     try:
         text = payload.decode("utf-8")
     except UnicodeDecodeError as error:
@@ -318,9 +322,10 @@ def _edge(reader: _Reader, item: Mapping[str, Any], at: str) -> Edge:
 
 def decode_order(payload: bytes, version: str) -> Order:
     """The ``order`` in ``payload`` for a vehicle speaking ``version`` ("2.0" or "2.1"); raises
-    :class:`MessageInvalid` with every problem (the order's semantics, such as sequence ids alternating
-    between nodes and edges, are the vehicle's to check: those are ``orderError``\\ s)."""
-    reader, document = _load(payload, "order", version)
+    :class:`MessageInvalid` with every problem. Any 2.x header ``version`` is accepted (a minor version only
+    adds optional keys); the order's semantics, such as sequence ids alternating between nodes and edges,
+    are the vehicle's to check: those are ``orderError``\\ s."""
+    reader, document = _load(payload, version)
     if document is None:
         raise MessageInvalid("order", reader.errors())
     header = _header(reader, document)
@@ -350,7 +355,7 @@ def decode_order(payload: bytes, version: str) -> Order:
 
 def decode_instant_actions(payload: bytes, version: str) -> InstantActions:
     """The ``instantActions`` in ``payload`` for a vehicle speaking ``version``; raises :class:`MessageInvalid`."""
-    reader, document = _load(payload, "instantActions", version)
+    reader, document = _load(payload, version)
     if document is None:
         raise MessageInvalid("instantActions", reader.errors())
     header = _header(reader, document)

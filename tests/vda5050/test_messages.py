@@ -896,3 +896,8 @@ def states(draw: st.DrawFn) -> State:
 def test_any_state_fleetsim_can_hold_passes_the_independent_validators(state: State) -> None:
     for version in VERSIONS:
         assert official.validate(version, "state", to_document(state, version)) == []
+
+
+def test_a_payload_that_is_not_bytes_is_a_type_error() -> None:
+    with pytest.raises(TypeError, match=r"payload='\{\}' must be bytes"):
+        decode_order("{}", "2.0")  # type: ignore[arg-type]
