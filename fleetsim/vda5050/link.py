@@ -103,7 +103,11 @@ class MqttLink:
         if address.tls:
             client.tls_set_context(_tls_context(address))
         if will is not None:
-            client.will_set(will.topic, will.payload, qos=will.qos, retain=will.retain)
+            try:
+                client.will_set(will.topic, will.payload, qos=will.qos, retain=will.retain)
+            except ValueError as exc:  # paho's "Invalid topic." names nothing
+                msg = f"MqttLink {client_id!r}: will {will.topic!r} (qos={will.qos!r}) is not a valid last will: {exc}"
+                raise ValueError(msg) from None
         client.on_connect = self._on_connect
         client.on_disconnect = self._on_disconnect
         client.on_subscribe = self._on_subscribe
@@ -235,7 +239,11 @@ class MqttLink:
     def publish(self, topic: str, payload: bytes, qos: int = 0, retain: bool = False, timeout: float = 5.0) -> None:
         """Send ``payload`` to ``topic``. QoS 0 returns at once; QoS 1 and 2 wait until the broker has it."""
         url = self.address.url
-        info = self._client.publish(topic, payload, qos=qos, retain=retain)
+        try:
+            info = self._client.publish(topic, payload, qos=qos, retain=retain)
+        except ValueError as exc:  # a wildcard or an empty topic, a QoS outside 0..2: paho names neither
+            msg = f"cannot publish to topic={topic!r} with qos={qos!r}: {exc}"
+            raise ValueError(msg) from None
         if info.rc != MQTTErrorCode.MQTT_ERR_SUCCESS:
             msg = f"cannot publish to {topic!r} on the MQTT broker at {url}: {error_string(info.rc)}"
             raise BrokerError(msg, url)

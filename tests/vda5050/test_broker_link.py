@@ -164,6 +164,19 @@ def _wait_until(condition: Callable[[], bool], what: str, timeout: float = 5.0) 
         time.sleep(0.01)
 
 
+def test_publishing_to_a_wildcard_or_on_a_closed_link_names_the_topic(embedded_broker: BrokerAddress) -> None:
+    link = MqttLink(embedded_broker, "vehicle")
+    link.connect()
+    with pytest.raises(ValueError, match=r"^cannot publish to topic='fleet/\+/state' with qos=0: "):
+        link.publish("fleet/+/state", b"")
+    link.publish("fleet/v1/state", b"")  # the same link, a valid topic: sent
+    link.disconnect()
+    with pytest.raises(
+        BrokerError, match=rf"^cannot publish to 'fleet/v1/state' on the MQTT broker at {embedded_broker.url}: "
+    ):
+        link.publish("fleet/v1/state", b"")
+
+
 def test_an_inbound_limit_below_one_is_rejected() -> None:
     with pytest.raises(ValueError, match=r"inbound_limit=0 must be >= 1"):
         MqttLink(BrokerAddress("127.0.0.1", 1883), "vehicle", inbound_limit=0)
