@@ -272,18 +272,7 @@ def test_encode_writes_compact_utf8_and_refuses_what_json_cannot_say() -> None:
 
 
 def test_encode_holds_numbers_and_timestamps_to_the_text() -> None:
-    charged = minimal_state().battery_state
-    over = State(
-        **HEADER,
-        order_id="",
-        order_update_id=0,
-        last_node_id="",
-        last_node_sequence_id=0,
-        driving=False,
-        operating_mode=OperatingMode.MANUAL,
-        battery_state=BatteryState(charged.battery_charge, False, battery_health=101),
-        safety_state=SafetyState(EStop.NONE, False),
-    )
+    over = dataclasses.replace(minimal_state(), battery_state=BatteryState(90.0, False, battery_health=101))
     with pytest.raises(ValueError, match=r"state\.batteryState\.batteryHealth=101 must be in 0\.0\.\.100\.0"):
         encode(over, "2.1")
     fractional = dataclasses.replace(over, battery_state=BatteryState(50.0, False, battery_health=97.5))  # type: ignore[arg-type]
@@ -304,19 +293,7 @@ def test_the_validation_errors_of_a_rejected_order_go_into_a_valid_state(version
     document["edges"][1]["actions"] = [action("x1", blocking="SOMETIMES")]
     with pytest.raises(MessageInvalid) as raised:
         decode_order(payload(document), version)
-    state = State(
-        **HEADER,
-        order_id="",
-        order_update_id=0,
-        last_node_id="",
-        last_node_sequence_id=0,
-        driving=False,
-        operating_mode=OperatingMode.AUTOMATIC,
-        battery_state=BatteryState(50.0, True),
-        safety_state=SafetyState(EStop.NONE, False),
-        errors=raised.value.errors,
-    )
-    written = to_document(state, version)
+    written = to_document(dataclasses.replace(minimal_state(), errors=raised.value.errors), version)
     assert official.validate(version, "state", written) == []
     assert [e["errorType"] for e in written["errors"]] == ["validationError", "validationError"]
     assert {"referenceKey": "edgeId", "referenceValue": "e2"} in written["errors"][1]["errorReferences"]
@@ -891,7 +868,7 @@ def states(draw: st.DrawFn) -> State:
     )
 
 
-@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(states())
 def test_any_state_fleetsim_can_hold_passes_the_independent_validators(state: State) -> None:
     for version in VERSIONS:
@@ -901,3 +878,14 @@ def test_any_state_fleetsim_can_hold_passes_the_independent_validators(state: St
 def test_a_payload_that_is_not_bytes_is_a_type_error() -> None:
     with pytest.raises(TypeError, match=r"payload='\{\}' must be bytes"):
         decode_order("{}", "2.0")  # type: ignore[arg-type]
+
+
+def test_without_node_the_20_checks_skip_or_fail_when_tools_are_required(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(official, "_node_validator", None)
+    monkeypatch.setattr("shutil.which", lambda _program: None)
+    monkeypatch.delenv("FLEETSIM_REQUIRE_TOOLS", raising=False)
+    with pytest.raises(pytest.skip.Exception, match=r"Node.js 'node' is not on PATH"):
+        official.validate_20("connection", {})
+    monkeypatch.setenv("FLEETSIM_REQUIRE_TOOLS", "1")
+    with pytest.raises(pytest.fail.Exception, match=r"FLEETSIM_REQUIRE_TOOLS=1 requires it"):
+        official.validate_20("connection", {})
