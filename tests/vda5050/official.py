@@ -8,7 +8,8 @@
   and fails instead under FLEETSIM_REQUIRE_TOOLS=1.
 
 The official schemas disagree with the text in places. Each disagreement fleetsim follows the text on is
-in :data:`KNOWN_DEFECTS` with its reason; :func:`validate_21` forgives exactly those findings, and a test
+in :data:`KNOWN_DEFECTS` with its reason; :func:`validate_21` forgives exactly those findings (and
+:func:`validate_20` adapts the document around vda-5050-lib's), and a test
 shows each still exists (so an entry goes stale loudly, when a fixed schema ships).
 
 What was found in vda-5050-lib 1.4.0's compiled 2.0 validators (``vda-5050-validators-2.0.js``) and in
@@ -22,6 +23,16 @@ the official 2.0.0-era schema files of the VDA5050 repository:
   ``#/instantActions: #/allOf/1/required``. :data:`KNOWN_DEFECTS` holds the adaptation (the key renamed
   before the document is shown to it).
 - vda-5050-lib lists PAUSED among the ``actionStatus`` values, which the 2.1 schema lacks.
+- vda-5050-lib spells the node position's ``allowedDeviationXY`` as ``allowedDeviationXy`` (validators and
+  types); its validator ignores the text's spelling as an unknown key. fleetsim writes the text's and
+  names vda-5050-lib's as a validationError (it would otherwise be dropped silently).
+- 2.0 (vda-5050-lib) types ``batteryHealth`` as an integer, as the text's table does (int8); the 2.1 schema
+  takes any number. fleetsim's model holds an int.
+
+In the 2.1 schemas (vda5050-sdk 0.2.0): ``actionStatus`` lacks PAUSED, and the factsheet's
+``blockingTypes`` carries its enum on the array instead of its items (no array can pass); both are in
+:data:`KNOWN_DEFECTS`. The 2.1 ``state`` schema does not require ``maps``; fleetsim writes it in 2.1
+always (empty when no map is known), which both readings of the text allow.
 
 The compiled validators stop at their first finding, so a 2.0 defect is adapted around, not forgiven.
 """
