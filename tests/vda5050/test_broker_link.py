@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import logging
 import socket
 import time
 from collections.abc import Callable
@@ -361,3 +362,21 @@ def test_the_embedded_broker_retries_a_taken_port_and_then_says_why_it_did_not_s
         with pytest.raises(BrokerError, match=r"^the embedded MQTT broker did not start: .*address already in use"):
             EmbeddedBroker().__enter__()
     assert len(tried) == broker_module._PORT_ATTEMPTS
+
+
+def _connect_once(address: BrokerAddress) -> None:
+    link = MqttLink(address, "vehicle")
+    link.connect()
+    link.subscribe("fleet/v1/order")
+    link.disconnect()
+
+
+def test_the_embedded_broker_logs_nothing_unless_verbose(caplog: pytest.LogCaptureFixture) -> None:
+    caplog.set_level(logging.DEBUG)
+    with EmbeddedBroker() as quiet:
+        _connect_once(quiet.address)
+    assert [record.name for record in caplog.records if record.name.startswith(("amqtt", "transitions"))] == []
+
+    with EmbeddedBroker(verbose=True) as verbose:
+        _connect_once(verbose.address)
+    assert any(record.name.startswith("amqtt") for record in caplog.records)
