@@ -889,3 +889,80 @@ def test_without_node_the_20_checks_skip_or_fail_when_tools_are_required(monkeyp
     monkeypatch.setenv("FLEETSIM_REQUIRE_TOOLS", "1")
     with pytest.raises(pytest.fail.Exception, match=r"FLEETSIM_REQUIRE_TOOLS=1 requires it"):
         official.validate_20("connection", {})
+
+
+@st.composite
+def factsheets(draw: st.DrawFn) -> Factsheet:
+    """A factsheet with any of its optional parts."""
+    some = st.none() | ids
+
+    def words(*choices: str) -> st.SearchStrategy[tuple[str, ...]]:
+        return st.lists(st.sampled_from(choices), min_size=1, max_size=3, unique=True).map(tuple)
+
+    parameter = st.builds(
+        AgvActionParameter,
+        ids,
+        st.sampled_from(["BOOL", "NUMBER", "STRING", "OBJECT"]),
+        some,
+        st.none() | st.booleans(),
+    )
+    agv_action = st.builds(
+        AgvAction,
+        ids,
+        words("INSTANT", "NODE", "EDGE"),
+        some,
+        st.none() | st.lists(parameter, max_size=2).map(tuple),
+        some,
+        st.none() | words("NONE", "SOFT", "HARD"),
+    )
+    outline = st.lists(st.builds(PolygonPoint, finite, finite), min_size=3, max_size=5).map(tuple)
+    return Factsheet(
+        **HEADER,
+        type_specification=draw(
+            st.builds(
+                TypeSpecification,
+                ids,
+                st.sampled_from(["DIFF", "OMNI", "THREEWHEEL"]),
+                st.sampled_from(["FORKLIFT", "CONVEYOR", "TUGGER", "CARRIER"]),
+                st.floats(0, 2000),
+                words("NATURAL", "SPOT", "GRID"),
+                words("AUTONOMOUS", "VIRTUAL_LINE_GUIDED"),
+                some,
+            )
+        ),
+        physical_parameters=draw(st.builds(PhysicalParameters, *[st.floats(0, 10)] * 7, st.none() | st.floats(0, 1))),
+        protocol_limits=draw(
+            st.builds(
+                ProtocolLimits,
+                st.builds(
+                    Timing, st.floats(0, 5), st.floats(0, 5), st.none() | st.floats(0, 5), st.none() | st.floats(0, 5)
+                ),
+                st.dictionaries(st.sampled_from(["msgLen", "idLen", "enumLen"]), st.integers(1, 999)),
+                st.dictionaries(st.sampled_from(["order.nodes", "order.edges"]), st.integers(1, 999)),
+            )
+        ),
+        protocol_features=draw(
+            st.builds(
+                ProtocolFeatures,
+                st.lists(
+                    st.builds(OptionalParameter, ids, st.sampled_from(["SUPPORTED", "REQUIRED"]), some), max_size=2
+                ).map(tuple),
+                st.lists(agv_action, max_size=3).map(tuple),
+            )
+        ),
+        agv_geometry=AgvGeometry(
+            draw(st.none() | st.lists(st.builds(Envelope2d, ids, outline, some), max_size=2).map(tuple))
+        ),
+        load_specification=LoadSpecification(draw(st.none() | st.lists(ids, max_size=2).map(tuple))),
+        vehicle_config=draw(
+            st.none()
+            | st.builds(VehicleConfig, st.none() | st.lists(st.builds(VersionInfo, ids, ids), max_size=2).map(tuple))
+        ),
+    )
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(factsheets())
+def test_any_factsheet_fleetsim_can_hold_passes_the_independent_validators(factsheet: Factsheet) -> None:
+    for version in VERSIONS:
+        assert official.validate(version, "factsheet", to_document(factsheet, version)) == []
