@@ -966,3 +966,17 @@ def factsheets(draw: st.DrawFn) -> Factsheet:
 def test_any_factsheet_fleetsim_can_hold_passes_the_independent_validators(factsheet: Factsheet) -> None:
     for version in VERSIONS:
         assert official.validate(version, "factsheet", to_document(factsheet, version)) == []
+
+
+def test_a_header_with_a_bad_timestamp_or_a_foreign_major_version_is_named() -> None:
+    document = {**order_document("2.0"), "timestamp": "yesterday", "version": "1.1.0"}
+    with pytest.raises(MessageInvalid) as raised:
+        decode_order(payload(document), "2.0")
+    found = problems(raised)
+    assert set(found) == {"timestamp", "version"}
+    assert (
+        found["timestamp"].error_description
+        == "timestamp: 'yesterday' is not an ISO 8601 date-time (YYYY-MM-DDTHH:mm:ss.ffZ)"
+    )
+    assert found["version"].error_description.startswith("version: '1.1.0' is not a VDA 5050 2.x version")
+    assert decode_order(payload({**document, "timestamp": "2026-12-03T13:00:00+02:00", "version": "2.1.0"}), "2.0")
