@@ -220,7 +220,11 @@ class MqttLink:
             raise ValueError(msg)
         url = self.address.url
         with self._acked:  # held until the packet id is known: the SUBACK's callback takes this lock too
-            result, mid = self._client.subscribe([(topic, qos) for topic in topics])
+            try:
+                result, mid = self._client.subscribe([(topic, qos) for topic in topics])
+            except ValueError as exc:  # an empty topic, a QoS outside 0..2: paho names neither
+                msg = f"cannot subscribe to topics={list(topics)!r} with qos={qos!r}: {exc}"
+                raise ValueError(msg) from None
             if mid is not None:
                 self._requested[mid] = topics
         if result != MQTTErrorCode.MQTT_ERR_SUCCESS or mid is None:

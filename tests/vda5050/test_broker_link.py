@@ -165,11 +165,13 @@ def _wait_until(condition: Callable[[], bool], what: str, timeout: float = 5.0) 
         time.sleep(0.01)
 
 
-def test_publishing_to_a_wildcard_or_on_a_closed_link_names_the_topic(embedded_broker: BrokerAddress) -> None:
+def test_a_bad_topic_or_qos_and_a_closed_link_are_errors_naming_the_topic(embedded_broker: BrokerAddress) -> None:
     link = MqttLink(embedded_broker, "vehicle")
     link.connect()
     with pytest.raises(ValueError, match=r"^cannot publish to topic='fleet/\+/state' with qos=0: "):
         link.publish("fleet/+/state", b"")
+    with pytest.raises(ValueError, match=r"^cannot subscribe to topics=\['fleet/v1/order'\] with qos=3: "):
+        link.subscribe("fleet/v1/order", qos=3)
     link.publish("fleet/v1/state", b"")  # the same link, a valid topic: sent
     link.disconnect()
     with pytest.raises(
