@@ -57,6 +57,10 @@ class RejectionCode(str, Enum):
             for their traverses).
         ILLEGAL_PROGRESS_CHANGE: ``"illegal-progress-change"``: a ``CURVE`` vehicle changes progress at a
             ``SAME`` joint, keeps it at an ``OPPOSITE`` one, or meets a ``TURN_IN_PLACE`` joint.
+        ORDER_INVALID: ``"order-invalid"``: a VDA 5050 master control's message breaks a rule of the
+            standard that no plan can show (malformed JSON, a schema violation, sequence ids out of step, a
+            base after the horizon, an outdated order update). Not a check of plans: the VDA 5050 vehicles
+            (`fleetsim.vda5050`) refuse such a message, and the run records it with this code.
     """
 
     __hash__ = str.__hash__
@@ -74,6 +78,7 @@ class RejectionCode(str, Enum):
     GOAL_ORDER = "goal-order"
     GOAL_SEGMENT_MISMATCH = "goal-segment-mismatch"
     GOAL_DIRECTION = "goal-direction"
+    ORDER_INVALID = "order-invalid"
 
     def __str__(self) -> str:
         return self.value

@@ -2,7 +2,8 @@
 
 A planner is any object with ``plan_routes(task, fleet, layout)`` and ``fix_legs(task, fleet, layout)``;
 what they return is in ``fleetsim.planning.plans``. A planner may also answer a planning round's calls
-in one go (:class:`RoundPlanner`: a planner process whose client speaks protocol 1.2's rounds).
+in one go (:class:`RoundPlanner`: a planner process whose client speaks protocol 1.2's rounds), and be
+told of every step before its planning (:class:`SteppedPlanner`: fleetsim's VDA 5050 vehicles).
 """
 
 from __future__ import annotations
@@ -12,11 +13,12 @@ from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 if TYPE_CHECKING:
     from fleetsim.layout.layout import Layout
+    from fleetsim.planning.checks import Rejection
     from fleetsim.planning.plans import Response, RouteError
     from fleetsim.planning.snapshot import FleetSnapshot
     from fleetsim.scenario import Task
 
-__all__ = ["Planner", "RoundCall", "RoundPlanner"]
+__all__ = ["Planner", "RoundCall", "RoundPlanner", "SteppedPlanner"]
 
 # A call of a planning round: (method name, vehicle id, task).
 RoundCall = tuple[str, int, "Task"]
@@ -95,4 +97,18 @@ class RoundPlanner(Planner, Protocol):
         response (a ``RouteError`` object: the whole request raised it) with the call's own duration in
         seconds (``None``: unknown). Every answer but the last changes nothing; the harness applies them,
         then asks again about the calls left."""
+        ...
+
+
+@runtime_checkable
+class SteppedPlanner(Planner, Protocol):
+    """A planner told of every step before its planning (SPEC §9, between steps 1 and 2): fleetsim's VDA 5050
+    vehicles, which pace the run on a wall clock, take in what their master control sent and tell it where
+    the fleet is. Planners without ``begin_step`` are never asked, and their runs are as before.
+    """
+
+    def begin_step(self, fleet: FleetSnapshot, layout: Layout) -> Sequence[Rejection]:
+        """The step at ``fleet.time`` begins (every vehicle's state up to date); return the messages refused
+        since the last step, as rejections made by hand (code ``order-invalid``, no plan), which the run
+        records and judges as any rejection. Raising fails the run as a ``planner-error``."""
         ...

@@ -21,6 +21,7 @@ import gc
 import math
 import threading
 import time
+import traceback
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -35,7 +36,7 @@ from fleetsim.motion.driver import Driver
 from fleetsim.motion.fleet_cruise import FleetCruise, StateColumns
 from fleetsim.motion.track import HeadingTable
 from fleetsim.planning.controller import CallOutcome, FleetController
-from fleetsim.planning.protocol import Planner
+from fleetsim.planning.protocol import Planner, SteppedPlanner
 from fleetsim.planning.reservations import CollisionAlert
 from fleetsim.planning.snapshot import VehicleState
 from fleetsim.scenario import Scenario
@@ -100,8 +101,26 @@ class _Run:
         self.accepted_plans = 0
         self.planner_error: Failure | None = None
         self.interrupted_planning = False
+        self.stepped = planner if isinstance(planner, SteppedPlanner) else None
 
     # -- the steps -----------------------------------------------------------------------------------
+
+    def begin_step(self, now: float, stamp: float, events: list[list[Any]]) -> bool:
+        """Tell a stepped planner (:class:`SteppedPlanner`) that the step at ``now`` begins, every vehicle's
+        state brought up to date first; record the messages it refused as rejections. False when it
+        failed and the run must end."""
+        assert self.stepped is not None
+        self.cruise.release_all()  # the snapshot holds every vehicle where it is now
+        try:
+            refused = list(self.stepped.begin_step(self.controller.snapshot(now), self.scenario.layout))
+        except Exception as exc:
+            fault = PlannerFault(f"begin_step raised {type(exc).__name__}: {exc}", details=traceback.format_exc())
+            self._planner_failed(fault, stamp, events)
+            return False
+        for rejection in refused:
+            self.rejections.append(RejectionEvent(stamp, rejection))
+            events.append(["reject", rejection.code.value, rejection.vehicle_id, rejection.leg_index])
+        return True
 
     def plan(self, now: float, stamp: float, events: list[list[Any]], plans: list[list[Any]]) -> bool:
         """Step 2 at ``now`` (what the planner sees); its events are stamped ``stamp``, the step's end.
@@ -376,7 +395,9 @@ def _simulate(
         # Every event of the step is stamped with its end, when the step enters the trace and the recording
         # (the planner is asked at ``now``). Times are multiples of dt, never sums of them.
         end = (step + 1) * dt
-        planned_ok = run.plan(now, end, events, plans) if step % period == 0 else True
+        planned_ok = run.begin_step(now, end, events) if run.stepped is not None else True
+        if planned_ok and step % period == 0:
+            planned_ok = run.plan(now, end, events, plans)
         rejected = any(e[0] == "reject" for e in events)
         alerted = run.check_reservations(end, events) > 0 if planned_ok else False
         moved, cruised = run.move(dt, end, events) if planned_ok else ([], None)

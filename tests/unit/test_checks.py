@@ -262,7 +262,7 @@ def test_rejection_reads_as_code_vehicle_leg_segment_and_message() -> None:
     assert str(rejection) == "unknown-segment: vehicle 1, leg 1 (segment 99): segment 99 is not in the map"
 
 
-def test_there_are_exactly_the_thirteen_codes_of_the_spec() -> None:
+def test_there_are_exactly_the_thirteen_codes_of_the_spec_and_the_vda5050_one() -> None:
     assert {code.value for code in RejectionCode} == {
         "unknown-vehicle",
         "duplicate-plan",
@@ -277,6 +277,7 @@ def test_there_are_exactly_the_thirteen_codes_of_the_spec() -> None:
         "goal-order",
         "goal-segment-mismatch",
         "goal-direction",
+        "order-invalid",  # made by the VDA 5050 vehicles for a message no plan shows (issue 33)
     }
 
 
