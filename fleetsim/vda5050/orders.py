@@ -12,10 +12,9 @@ Where the order joins what the vehicle already has:
 - An **update** (same ``orderId``, higher ``orderUpdateId``) starts at the stitching node, the last
   released node of the order so far, with its ``sequenceId``. The plan is the vehicle's fixed legs (the
   base it still drives) followed by the update's legs: the old horizon is replaced.
-- A **new order** (another ``orderId``) is taken when the vehicle has no base left to drive: it starts at
-  the node the vehicle's fixed legs end at (where it stands once it has driven them), or, before the
-  vehicle has moved off its start, at the entry node of the leg it stands on, the order's first edge
-  being that leg.
+- A **new order** (another ``orderId``) is taken when the vehicle has no base left beyond the leg it is on:
+  it starts at that leg's exit node (where the vehicle stands once it has driven it), or at its entry
+  node (the vehicle's last node), the order's first edge being that leg.
 - The same ``orderUpdateId`` again is a resend and changes nothing; a lower one is refused.
 
 The plan is then judged by fleetsim's own checks, exactly as any planner's; a VDA 5050 error of the
@@ -130,11 +129,9 @@ def join_order(
     status: OrderStatus,
     current: FleetPlan,
     graph: SiteGraph,
-    *,
-    moved: bool,
 ) -> tuple[Join, FleetPlan | None, tuple[VdaError, ...]]:
     """How ``order`` joins the vehicle's current plan, the plan it makes (None: nothing to do) and the
-    VDA 5050 errors of the join. ``moved``: the vehicle has left the entry of its start leg."""
+    VDA 5050 errors of the join."""
     fixed = tuple(leg for leg in current.legs if leg.fixed)
     first = reading.nodes[0] if reading.nodes else None
     alone = FleetPlan(current.vehicle_id, reading.legs)  # the order read on its own
@@ -170,8 +167,8 @@ def join_order(
     first_id = place.node_id if place is not None else None
     if first_id is not None and first_id == end_node and len(fixed) <= 1:
         return Join.NEW, FleetPlan(current.vehicle_id, fixed + reading.legs), ()
-    if first_id is not None and first_id == entry_node and not moved and len(fixed) <= 1:
-        return Join.NEW, alone, ()
+    if first_id is not None and first_id == entry_node and len(fixed) <= 1:
+        return Join.NEW, alone, ()  # its first edge must be the leg the vehicle is on: the checks see to that
     if len(fixed) > 1:
         description = (
             f"order {order.order_id!r} arrived while order {status.order_id!r} still has base to drive "
@@ -180,9 +177,10 @@ def join_order(
         kind = "orderUpdateError"
     else:
         where = f"node {first.node_id!r}" if first is not None else "no node"
-        description = f"order {order.order_id!r} starts at {where}, but the vehicle is at node {end_node!r}"
-        if not moved:
-            description += f" (or, before it moves off its start, at {entry_node!r})"
+        description = (
+            f"order {order.order_id!r} starts at {where}, but the vehicle is on the edge from node {entry_node!r} "
+            f"to node {end_node!r}: an order starts at one of them"
+        )
         kind = "noRouteError"
     error = VdaError(kind, description, error_references=_refs(("orderId", order.order_id)))
     return Join.NEW, alone, (error,)

@@ -95,6 +95,17 @@ class SiteGraph:
         except KeyError:
             raise KeyError(f"segment {segment} has no edge driven {traverse.value} in map {self.map_id!r}") from None
 
+    def traverses(self, segment: int) -> tuple[Traverse, ...]:
+        """The ways ``segment`` may be driven (forward first): each is an edge a master control may use."""
+        allowed = self._segments[segment]
+        return tuple(
+            t for t in (Traverse.FORWARD, Traverse.BACKWARD) if allowed.allows(t) and (segment, t) in self._edge_of
+        )
+
+    def segment_length(self, segment: int) -> float:
+        """Metres along ``segment``."""
+        return self._segments[segment].length
+
     def leg_of(self, edge_id: str, start_node: str, end_node: str) -> tuple[int, Traverse]:
         """The segment and traverse an order's edge drives; :class:`EdgeProblem` when the edge is no
         edge of the map, a node is no node of it, or the edge does not join ``start_node`` to ``end_node``."""

@@ -218,17 +218,20 @@ def test_a_one_way_segment_driven_against_its_direction_is_wrong_way_and_no_rout
 
 
 def _join(
-    scenario: Scenario, order: Order, status: OrderStatus, current: FleetPlan, *, moved: bool
+    scenario: Scenario,
+    order: Order,
+    status: OrderStatus,
+    current: FleetPlan,
 ) -> tuple[Join, FleetPlan | None, tuple[VdaError, ...]]:
     graph = site_graph(scenario.layout, map_id=scenario.name)
-    return join_order(order, _read(scenario, order), status, current, graph, moved=moved)
+    return join_order(order, _read(scenario, order), status, current, graph)
 
 
 def test_a_first_order_starts_where_the_vehicle_stands() -> None:
     scenario = _scenario("crossing")
     graph = site_graph(scenario.layout, map_id="crossing")
     start = initial_plan(scenario.vehicles[0])
-    join, plan, errors = _join(scenario, _order(graph, [(1, F), (2, F)]), OrderStatus(), start, moved=False)
+    join, plan, errors = _join(scenario, _order(graph, [(1, F), (2, F)]), OrderStatus(), start)
     assert join is Join.NEW and errors == ()
     assert plan is not None and _judge(scenario, plan) == plan
 
@@ -238,11 +241,11 @@ def test_an_order_that_starts_elsewhere_is_no_route_and_changes_the_fixed_legs()
     graph = site_graph(scenario.layout, map_id="crossing")
     start = initial_plan(scenario.vehicles[0])
     order = _order(graph, [(3, F), (4, F)])
-    join, plan, [error] = _join(scenario, order, OrderStatus(), start, moved=False)
+    join, plan, [error] = _join(scenario, order, OrderStatus(), start)
     assert (
         join is Join.NEW
         and error.error_type == "noRouteError"
-        and "but the vehicle is at node" in error.error_description
+        and "but the vehicle is on the edge from node" in error.error_description
     )
     assert plan is not None
     rejection = _judge(scenario, plan)
@@ -255,7 +258,7 @@ def test_an_update_at_the_stitching_node_continues_the_base() -> None:
     current = FleetPlan(1, (FleetLeg(1, F, Progress.FORWARD, True), FleetLeg(2, F, Progress.FORWARD, True)))
     status = OrderStatus("o1", 0, graph.exit_node(2, F), 4)
     update = _order(graph, [(3, F), (4, F)], update=1, first_sequence=4, released=1)
-    join, plan, errors = _join(scenario, update, status, current, moved=True)
+    join, plan, errors = _join(scenario, update, status, current)
     assert join is Join.UPDATE and errors == ()
     assert plan is not None and [(leg.segment, leg.fixed) for leg in plan.legs] == [
         (1, True),
@@ -272,7 +275,7 @@ def test_an_update_elsewhere_is_an_order_update_error_and_a_changed_base() -> No
     current = FleetPlan(1, (FleetLeg(1, F, Progress.FORWARD, True), FleetLeg(2, F, Progress.FORWARD, True)))
     status = OrderStatus("o1", 0, graph.exit_node(2, F), 4)
     update = _order(graph, [(2, F), (3, F)], update=1, first_sequence=2)  # resends base it already has
-    join, plan, [error] = _join(scenario, update, status, current, moved=True)
+    join, plan, [error] = _join(scenario, update, status, current)
     assert join is Join.UPDATE and error.error_type == "orderUpdateError"
     assert "not at the stitching node" in error.error_description
     assert plan is not None
@@ -287,9 +290,9 @@ def test_a_resent_update_changes_nothing_and_an_older_one_is_refused() -> None:
     current = FleetPlan(1, (FleetLeg(1, F, Progress.FORWARD, True),))
     status = OrderStatus("o1", 3, graph.exit_node(1, F), 2)
     again = _order(graph, [(2, F)], update=3, first_sequence=2)
-    assert _join(scenario, again, status, current, moved=True) == (Join.RESENT, None, ())
+    assert _join(scenario, again, status, current) == (Join.RESENT, None, ())
     older = _order(graph, [(2, F)], update=2, first_sequence=2)
-    join, plan, [error] = _join(scenario, older, status, current, moved=True)
+    join, plan, [error] = _join(scenario, older, status, current)
     assert join is Join.OUTDATED and plan is None and error.error_type == "orderUpdateError"
     assert "is lower than the current 3" in error.error_description
 
@@ -300,7 +303,7 @@ def test_a_second_order_while_base_remains_is_refused() -> None:
     current = FleetPlan(1, (FleetLeg(1, F, Progress.FORWARD, True), FleetLeg(2, F, Progress.FORWARD, True)))
     status = OrderStatus("o1", 0, graph.exit_node(2, F), 4)
     other = _order(graph, [(3, F)], order_id="o2")
-    join, plan, [error] = _join(scenario, other, status, current, moved=True)
+    join, plan, [error] = _join(scenario, other, status, current)
     assert join is Join.NEW and error.error_type == "orderUpdateError"
     assert "still has base to drive" in error.error_description
     assert plan is not None
@@ -313,6 +316,6 @@ def test_a_new_order_once_the_base_is_driven_follows_on() -> None:
     graph = site_graph(scenario.layout, map_id="crossing")
     current = FleetPlan(1, (FleetLeg(2, F, Progress.FORWARD, True),))  # on its last fixed leg
     status = OrderStatus("o1", 0, graph.exit_node(2, F), 4)
-    join, plan, errors = _join(scenario, _order(graph, [(3, F)], order_id="o2"), status, current, moved=True)
+    join, plan, errors = _join(scenario, _order(graph, [(3, F)], order_id="o2"), status, current)
     assert join is Join.NEW and errors == ()
     assert plan is not None and [leg.segment for leg in plan.legs] == [2, 3]

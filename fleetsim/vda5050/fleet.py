@@ -1,0 +1,490 @@
+"""The scenario's vehicles as VDA 5050 vehicles on an MQTT broker: the planner a master control drives.
+
+:class:`Vda5050Fleet` is a planner (SPEC §6) that plans nothing itself. Each vehicle is an MQTT client of
+its own (``interfaceName/v2/manufacturer/serialNumber/...``, the serial number being the vehicle id) that
+publishes ``connection`` (ONLINE, OFFLINE at the end, CONNECTIONBROKEN as its last will), ``factsheet``,
+``state`` and ``visualization``, and takes ``order`` and ``instantActions``. Every step begins
+(:meth:`begin_step`) with pacing the run at ``speed`` times real time, taking in what arrived, and
+telling the master control where the fleet is; an order that makes a plan is handed to the harness at
+the vehicle's next planner call, where fleetsim's checks judge it as any planner's.
+
+Beside the standard's topics, two of fleetsim's own under ``interfaceName/fleetsim/`` hand the master
+control what a warehouse system and a map server would: ``site`` (retained: the nodes and edges of the
+map, :mod:`.places`) and ``transportOrders/<taskId>`` (retained: each task when it becomes its vehicle's
+next one, and again when it is done).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
+from datetime import datetime, timedelta, timezone
+from typing import Any
+
+from fleetsim.enums import Progress, TurnCapability
+from fleetsim.layout.layout import Layout
+from fleetsim.planning.checks import CheckContext, Rejection, RejectionCode, check_plans
+from fleetsim.planning.plans import FleetLeg, FleetPlan, Response
+from fleetsim.planning.snapshot import FleetSnapshot, VehicleState
+from fleetsim.scenario import Task
+from fleetsim.vda5050.broker import BrokerAddress, EmbeddedBroker
+from fleetsim.vda5050.link import MqttLink, Will
+from fleetsim.vda5050.messages import MessageInvalid, decode_order, encode, topic
+from fleetsim.vda5050.model import Edge, Node, VdaError
+from fleetsim.vda5050.orders import Join, OrderStatus, join_order, read_order, vda_error
+from fleetsim.vda5050.places import SiteGraph, site_graph
+from fleetsim.vda5050.state_model import (
+    AgvPosition,
+    BatteryState,
+    Connection,
+    ConnectionState,
+    EdgeState,
+    EStop,
+    NodeState,
+    OperatingMode,
+    SafetyState,
+    State,
+    Velocity,
+    Visualization,
+)
+
+__all__ = ["Vda5050Fleet", "Vda5050Settings"]
+
+ARRIVED = 1e-6  # metres short of a leg's end that count as at its exit node
+
+
+@dataclass(frozen=True, slots=True)
+class Vda5050Settings:
+    """How the vehicles speak: protocol ``version`` (``"2.0"`` or ``"2.1"``), topic names, the broker
+    (None: an embedded one on a free loopback port), pacing (``speed`` times real time), and how often a
+    state and a visualization go out when nothing changed (simulated seconds)."""
+
+    version: str = "2.0"
+    interface_name: str = "uagv"
+    manufacturer: str = "fleetsim"
+    broker: BrokerAddress | None = None
+    speed: float = 1.0
+    state_interval: float = 30.0
+    visualization_interval: float = 1.0
+    connect_timeout: float = 10.0
+
+
+@dataclass
+class _Leg:
+    """A leg of the vehicle's plan and the order's edge and end node it came from (None: not from an order)."""
+
+    leg: FleetLeg
+    edge: Edge | None
+    end: Node | None
+
+
+@dataclass
+class _Vehicle:
+    vehicle_id: int
+    serial: str
+    link: MqttLink
+    status: OrderStatus = field(default_factory=OrderStatus)
+    path: list[_Leg] = field(default_factory=list)  # aligned with the plan in force
+    pending: FleetPlan | None = None  # an order's plan, for the next planner call
+    pending_path: list[_Leg] | None = None
+    pending_status: OrderStatus | None = None
+    handed: FleetPlan | None = None  # handed to the harness, its verdict not seen yet
+    errors: list[VdaError] = field(default_factory=list)
+    last_node: tuple[str, int] = ("", 0)
+    headers: dict[str, int] = field(default_factory=dict)
+    published: tuple[Any, ...] | None = None
+    next_state: float = 0.0
+    next_visualization: float = 0.0
+    announced: set[int] = field(default_factory=set)  # tasks published to the master control
+
+
+class Vda5050Fleet:
+    """The planner a VDA 5050 master control drives (see the module docstring). A fresh instance serves
+    one run; :meth:`close` ends it (OFFLINE, disconnect, the embedded broker stopped)."""
+
+    def __init__(self, settings: Vda5050Settings | None = None) -> None:
+        self.settings = settings or Vda5050Settings()
+        self.broker: EmbeddedBroker | None = None
+        self.address: BrokerAddress | None = self.settings.broker
+        self.vehicles: dict[int, _Vehicle] = {}
+        self.graph: SiteGraph | None = None
+        self.epoch = datetime.now(timezone.utc)
+        self.started = 0.0  # time.monotonic() at the first step
+        self.latencies: list[float] = []  # seconds from an order's arrival to its plan's verdict
+        self._arrived: dict[int, float] = {}
+        self._site_link: MqttLink | None = None
+
+    # -- the planner protocol ------------------------------------------------------------------------
+
+    def begin_step(self, fleet: FleetSnapshot, layout: Layout) -> Sequence[Rejection]:
+        if self.graph is None:
+            self._start(fleet, layout)
+        self._pace(fleet.time)
+        refused: list[Rejection] = []
+        for vehicle in self.vehicles.values():
+            self._verdict(vehicle, fleet)
+            self._follow(vehicle, fleet)
+            refused += self._intake(vehicle, fleet, layout)
+            self._announce(vehicle, fleet)
+            self._report(vehicle, fleet)
+        return refused
+
+    def plan_routes(self, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
+        return self._hand(task.vehicle_id)
+
+    def fix_legs(self, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
+        return self._hand(task.vehicle_id)
+
+    def close(self) -> None:
+        for vehicle in self.vehicles.values():
+            if vehicle.link.connected:
+                self._publish(
+                    vehicle, "connection", self._connection(vehicle, ConnectionState.OFFLINE), qos=1, retain=True
+                )
+                vehicle.link.disconnect()
+        if self._site_link is not None and self._site_link.connected:
+            self._site_link.disconnect()
+        if self.broker is not None:
+            self.broker.__exit__(None, None, None)
+            self.broker = None
+
+    # -- set-up -------------------------------------------------------------------------------------
+
+    def _start(self, fleet: FleetSnapshot, layout: Layout) -> None:
+        settings = self.settings
+        if self.address is None:
+            self.broker = EmbeddedBroker()
+            self.address = self.broker.__enter__().address
+        map_id = layout.source.stem if layout.source is not None else "fleetsim"
+        self.graph = site_graph(layout, map_id=map_id)
+        self._site_link = MqttLink(self.address, f"fleetsim-site-{id(self):x}")
+        self._site_link.connect(settings.connect_timeout)
+        self._site_link.publish(self._own_topic("site"), self._site(fleet, layout), qos=1, retain=True)
+        for vid in sorted(fleet.vehicles):
+            serial = str(vid)
+            broken = Connection(0, self._stamp(0.0), settings.manufacturer, serial, ConnectionState.CONNECTIONBROKEN)
+            will = Will(self._topic(serial, "connection"), encode(broken, settings.version), qos=1, retain=True)
+            link = MqttLink(self.address, f"fleetsim-{settings.manufacturer}-{serial}", will=will)
+            vehicle = _Vehicle(vid, serial, link)
+            link.connect(settings.connect_timeout)
+            link.subscribe(self._topic(serial, "order"), self._topic(serial, "instantActions"), qos=0)
+            plan = fleet.plans[vid]
+            vehicle.path = [_Leg(leg, None, None) for leg in plan.legs]
+            first = plan.legs[0]
+            vehicle.last_node = (self.graph.entry_node(first.segment, first.traverse), 0)
+            self.vehicles[vid] = vehicle
+            self._publish(vehicle, "connection", self._connection(vehicle, ConnectionState.ONLINE), qos=1, retain=True)
+        self.started = time.monotonic()
+
+    # -- each step ----------------------------------------------------------------------------------
+
+    def _pace(self, now: float) -> None:
+        """Wait until the wall clock reaches the simulation's time at ``speed`` times real time."""
+        target = self.started + now / self.settings.speed
+        wait = target - time.monotonic()
+        if wait > 0:
+            time.sleep(wait)
+
+    def _verdict(self, vehicle: _Vehicle, fleet: FleetSnapshot) -> None:
+        """Whether the plan handed at the last call was accepted: the plan in force is what it became."""
+        handed = vehicle.handed
+        if handed is None:
+            return
+        vehicle.handed = None
+        current = fleet.plans[vehicle.vehicle_id].legs
+        accepted = len(current) <= len(handed.legs) and tuple(handed.legs[len(handed.legs) - len(current) :]) == current
+        arrived = self._arrived.pop(vehicle.vehicle_id, None)
+        if arrived is not None:
+            self.latencies.append(time.monotonic() - arrived)
+        if accepted and vehicle.pending_path is not None and vehicle.pending_status is not None:
+            vehicle.path = vehicle.pending_path  # the legs it has left since are dropped by _follow
+            vehicle.status = vehicle.pending_status
+            vehicle.errors = [e for e in vehicle.errors if e.error_type != "orderUpdateError"]
+        vehicle.pending_path = vehicle.pending_status = None
+
+    def _follow(self, vehicle: _Vehicle, fleet: FleetSnapshot) -> None:
+        """Drop the legs the vehicle has left; each passed order node becomes its last node."""
+        legs = fleet.plans[vehicle.vehicle_id].legs
+        while len(vehicle.path) > len(legs):
+            passed = vehicle.path.pop(0)
+            if passed.end is not None:
+                vehicle.last_node = (passed.end.node_id, passed.end.sequence_id)
+            elif self.graph is not None:
+                vehicle.last_node = (
+                    self.graph.exit_node(passed.leg.segment, passed.leg.traverse),
+                    vehicle.last_node[1],
+                )
+        for entry, leg in zip(vehicle.path, legs, strict=True):
+            entry.leg = leg  # goal markers, fixed flags as in force
+
+    def _intake(self, vehicle: _Vehicle, fleet: FleetSnapshot, layout: Layout) -> list[Rejection]:
+        refused: list[Rejection] = []
+        assert self.graph is not None
+        for inbound in vehicle.link.drain():
+            name = inbound.topic.rsplit("/", 1)[-1]
+            if name != "order":
+                continue  # instant actions: not handled yet
+            try:
+                order = decode_order(inbound.payload, self.settings.version)
+            except MessageInvalid as invalid:
+                refused.append(self._refuse(vehicle, invalid.errors))
+                continue
+            state = fleet.vehicles[vehicle.vehicle_id]
+            reading = read_order(order, self.graph, layout, state.type, state.progress)
+            if reading.problems:
+                refused.append(self._refuse(vehicle, reading.problems))
+                continue
+            join, plan, errors = join_order(order, reading, vehicle.status, fleet.plans[vehicle.vehicle_id], self.graph)
+            if join is Join.RESENT or plan is None:
+                if errors:
+                    refused.append(self._refuse(vehicle, errors))
+                continue
+            plan = _mark_goals(plan, fleet.tasks.get(vehicle.vehicle_id, ()), fleet.routed)
+            vehicle.errors = [e for e in vehicle.errors if e.error_type == "orderUpdateError"] if errors else []
+            vehicle.errors += errors
+            verdict = self._check(plan, fleet, layout)
+            fixed = len(plan.legs) - len(reading.legs)
+            edges: list[Edge | None] = [None] * fixed + list(reading.edges)
+            if isinstance(verdict, Rejection) and not errors:
+                vehicle.errors.append(vda_error(verdict, order, edges))
+            vehicle.pending = plan
+            vehicle.pending_path = vehicle.path[:fixed] + [
+                _Leg(leg, edge, node)
+                for leg, edge, node in zip(plan.legs[fixed:], reading.edges, reading.nodes[1:], strict=False)
+            ]
+            last_base = [n for n in reading.nodes if n.released]
+            stitch = last_base[-1] if last_base else reading.nodes[0]
+            vehicle.pending_status = OrderStatus(
+                order.order_id, order.order_update_id, stitch.node_id, stitch.sequence_id
+            )
+            self._arrived[vehicle.vehicle_id] = inbound.received
+        return refused
+
+    def _refuse(self, vehicle: _Vehicle, errors: Sequence[VdaError]) -> Rejection:
+        vehicle.errors = list(errors)
+        words = "; ".join(e.error_description for e in errors[:3]) + (
+            f"; and {len(errors) - 3} more" if len(errors) > 3 else ""
+        )
+        return Rejection(RejectionCode.ORDER_INVALID, vehicle.vehicle_id, None, None, words)
+
+    def _check(self, plan: FleetPlan, fleet: FleetSnapshot, layout: Layout) -> FleetPlan | Rejection:
+        types = {vid: state.type for vid, state in fleet.vehicles.items()}
+        context = CheckContext(layout, types, fleet.plans, fleet.tasks, fleet.routed)
+        return check_plans([plan], context)[0]
+
+    def _hand(self, vehicle_id: int) -> Response:
+        vehicle = self.vehicles.get(vehicle_id)
+        if vehicle is None or vehicle.pending is None:
+            return []
+        plan, vehicle.pending = vehicle.pending, None
+        vehicle.handed = plan
+        return [plan]
+
+    def _announce(self, vehicle: _Vehicle, fleet: FleetSnapshot) -> None:
+        """Publish each task when it becomes the vehicle's next; a task no longer queued is done."""
+        assert self._site_link is not None and self.graph is not None
+        queue = fleet.tasks.get(vehicle.vehicle_id, ())
+        for task_id in sorted(vehicle.announced - {t.id for t in queue}):
+            vehicle.announced.discard(task_id)
+            document = {
+                "taskId": str(task_id),
+                "serialNumber": vehicle.serial,
+                "state": "FINISHED",
+                "time": round(fleet.time, 6),
+            }
+            self._site_link.publish(self._own_topic(f"transportOrders/{task_id}"), _json(document), qos=1, retain=True)
+        if queue and queue[0].id not in vehicle.announced:
+            task = queue[0]
+            vehicle.announced.add(task.id)
+            self._site_link.publish(
+                self._own_topic(f"transportOrders/{task.id}"),
+                _json(self._transport_order(task, vehicle, fleet.time)),
+                qos=1,
+                retain=True,
+            )
+
+    def _transport_order(self, task: Task, vehicle: _Vehicle, now: float) -> dict[str, Any]:
+        assert self.graph is not None
+        graph = self.graph
+        segment = task.goal_segment
+        edges = sorted({graph.edge_id(segment, t) for t in graph.traverses(segment)})
+        nodes = sorted({graph.node_at(segment, False), graph.node_at(segment, True)})
+        return {
+            "taskId": str(task.id),
+            "serialNumber": vehicle.serial,
+            "state": "OPEN",
+            "goalEdgeIds": edges,
+            "goalNodeIds": nodes,
+            "goalProgress": task.goal_progress.value if task.goal_progress is not None else None,
+            "time": round(now, 6),
+        }
+
+    def _report(self, vehicle: _Vehicle, fleet: FleetSnapshot) -> None:
+        now = fleet.time
+        state = fleet.vehicles[vehicle.vehicle_id]
+        key = (
+            vehicle.status,
+            vehicle.last_node,
+            self._at_exit(state),
+            tuple(e.leg for e in vehicle.path),
+            tuple(vehicle.errors),
+            state.speed > 0,
+        )
+        if key != vehicle.published or now >= vehicle.next_state:
+            vehicle.published = key
+            vehicle.next_state = now + self.settings.state_interval
+            self._publish(vehicle, "state", self._state(vehicle, state, now))
+        if now >= vehicle.next_visualization:
+            vehicle.next_visualization = now + self.settings.visualization_interval
+            message = Visualization(
+                self._header(vehicle, "visualization"), self._stamp(now), self.settings.manufacturer, vehicle.serial,
+                agv_position=self._position(state), velocity=self._velocity(state),
+            )  # fmt: skip
+            self._publish(vehicle, "visualization", message)
+
+    # -- messages -----------------------------------------------------------------------------------
+
+    def _state(self, vehicle: _Vehicle, state: VehicleState, now: float) -> State:
+        at_exit = bool(vehicle.path) and self.graph is not None and self._at_exit(state)
+        ahead = vehicle.path[1:] if at_exit else vehicle.path
+        node_states = tuple(
+            NodeState(entry.end.node_id, entry.end.sequence_id, entry.end.released)
+            for entry in ahead
+            if entry.end is not None
+        )
+        edge_states = tuple(
+            EdgeState(entry.edge.edge_id, entry.edge.sequence_id, entry.edge.released)
+            for entry in ahead
+            if entry.edge is not None
+        )
+        last_id, last_sequence = vehicle.last_node
+        if at_exit:  # at the end of the leg it is on: that leg's exit node is its last node
+            end = vehicle.path[0].end
+            if end is not None:
+                last_id, last_sequence = end.node_id, end.sequence_id
+            elif self.graph is not None:
+                last_id = self.graph.exit_node(state.segment, state.traverse)
+        return State(
+            header_id=self._header(vehicle, "state"),
+            timestamp=self._stamp(now),
+            manufacturer=self.settings.manufacturer,
+            serial_number=vehicle.serial,
+            order_id=vehicle.status.order_id,
+            order_update_id=vehicle.status.order_update_id,
+            last_node_id=last_id,
+            last_node_sequence_id=last_sequence,
+            driving=state.speed > 0,
+            operating_mode=OperatingMode.AUTOMATIC,
+            battery_state=BatteryState(battery_charge=100.0, charging=False),
+            safety_state=SafetyState(e_stop=EStop.NONE, field_violation=False),
+            node_states=node_states,
+            edge_states=edge_states,
+            errors=tuple(vehicle.errors),
+            paused=False,
+            new_base_request=False,
+            agv_position=self._position(state),
+            velocity=self._velocity(state),
+        )
+
+    def _at_exit(self, state: VehicleState) -> bool:
+        assert self.graph is not None
+        return state.distance >= self.graph.segment_length(state.segment) - ARRIVED
+
+    def _position(self, state: VehicleState) -> AgvPosition:
+        assert self.graph is not None
+        return AgvPosition(
+            state.x, state.y, math.remainder(state.heading, math.tau), self.graph.map_id, position_initialized=True
+        )
+
+    @staticmethod
+    def _velocity(state: VehicleState) -> Velocity:
+        return Velocity(vx=state.speed if state.progress is Progress.FORWARD else -state.speed, vy=0.0, omega=0.0)
+
+    def _connection(self, vehicle: _Vehicle, connection_state: ConnectionState) -> Connection:
+        return Connection(
+            self._header(vehicle, "connection"),
+            self._stamp(0.0),
+            self.settings.manufacturer,
+            vehicle.serial,
+            connection_state,
+        )
+
+    def _site(self, fleet: FleetSnapshot, layout: Layout) -> bytes:
+        assert self.graph is not None
+        graph = self.graph
+        nodes = [{"nodeId": p.node_id, "x": p.x, "y": p.y} for p in graph.places.values()]
+        edges = []
+        for sid in sorted(layout.segments):
+            for traverse in graph.traverses(sid):
+                edges.append(
+                    {
+                        "edgeId": graph.edge_id(sid, traverse),
+                        "startNodeId": graph.entry_node(sid, traverse),
+                        "endNodeId": graph.exit_node(sid, traverse),
+                        "length": layout.segments[sid].length,
+                    }
+                )
+        vehicles = [
+            {
+                "serialNumber": str(vid),
+                "turnInPlace": s.type.turn_capability is TurnCapability.IN_PLACE,
+                # It stands on this edge, facing along it: its first order starts at the edge's start node.
+                "startEdgeId": graph.edge_id(s.segment, s.traverse),
+                "startNodeId": graph.entry_node(s.segment, s.traverse),
+            }
+            for vid, s in sorted(fleet.vehicles.items())
+        ]
+        return _json({"mapId": graph.map_id, "nodes": nodes, "edges": edges, "vehicles": vehicles})
+
+    def _publish(self, vehicle: _Vehicle, name: str, message: Any, *, qos: int = 0, retain: bool = False) -> None:
+        vehicle.link.publish(
+            self._topic(vehicle.serial, name), encode(message, self.settings.version), qos=qos, retain=retain
+        )
+
+    def _header(self, vehicle: _Vehicle, name: str) -> int:
+        vehicle.headers[name] = vehicle.headers.get(name, -1) + 1
+        return vehicle.headers[name]
+
+    def _stamp(self, now: float) -> str:
+        """The simulation's clock: the run's start on the wall clock plus the simulated seconds."""
+        moment = self.epoch + timedelta(seconds=now)
+        return moment.strftime("%Y-%m-%dT%H:%M:%S.") + f"{moment.microsecond // 10000:02d}Z"
+
+    def _topic(self, serial: str, name: str) -> str:
+        s = self.settings
+        return topic(s.interface_name, s.version, s.manufacturer, serial, name)
+
+    def _own_topic(self, name: str) -> str:
+        return f"{self.settings.interface_name}/fleetsim/{name}"
+
+
+def _mark_goals(plan: FleetPlan, queue: tuple[Task, ...], routed: Any) -> FleetPlan:
+    """The order's plan with goal markers: the queued tasks in order, each on the first leg after the last
+    marker that drives its goal segment (with its progress, if the task asks for one)."""
+    legs = list(plan.legs)
+    marked = {leg.goal_for_task for leg in legs if leg.goal_for_task is not None}
+    cursor = max((i for i, leg in enumerate(legs) if leg.goal_for_task is not None), default=-1) + 1
+    for task in queue:
+        if task.id in marked:
+            continue
+        found = next(
+            (
+                i
+                for i in range(cursor, len(legs))
+                if legs[i].segment == task.goal_segment
+                and (task.goal_progress is None or legs[i].progress is task.goal_progress)
+            ),
+            None,
+        )
+        if found is None:
+            break
+        legs[found] = replace(legs[found], goal_for_task=task.id)
+        cursor = found + 1
+    return FleetPlan(plan.vehicle_id, tuple(legs))
+
+
+def _json(document: Any) -> bytes:
+    return json.dumps(document, separators=(",", ":")).encode()

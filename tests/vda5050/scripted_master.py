@@ -1,0 +1,166 @@
+"""A small master control for the tests, written on paho-mqtt alone (none of fleetsim's code): it reads
+the site and the transport orders fleetsim publishes, routes each task by shortest path from where its
+vehicle stands, and sends the whole route as one order, either at once for every vehicle or one vehicle
+at a time (the next vehicle's order only once the last one's task is done)."""
+
+from __future__ import annotations
+
+import itertools
+import json
+import threading
+import time
+from collections.abc import Callable
+from datetime import datetime, timezone
+from typing import Any
+
+import networkx as nx
+from paho.mqtt.client import CallbackAPIVersion, Client, MQTTMessage, MQTTv311
+
+Tamper = Callable[[dict[str, Any]], dict[str, Any] | bytes]
+
+
+class ScriptedMaster:
+    """Connects to ``host:port`` and drives the vehicles of ``interface``/``manufacturer``."""
+
+    def __init__(
+        self,
+        host: str,
+        port: int,
+        *,
+        interface: str = "uagv",
+        manufacturer: str = "fleetsim",
+        version: str = "2.0.0",
+        one_at_a_time: bool = True,
+        tamper: Tamper | None = None,
+    ) -> None:
+        self.interface, self.manufacturer, self.version = interface, manufacturer, version
+        self.one_at_a_time = one_at_a_time
+        self.tamper = tamper
+        self.site: dict[str, Any] | None = None
+        self.states: dict[str, dict[str, Any]] = {}  # each vehicle's latest
+        self.history: list[dict[str, Any]] = []  # every state, in arrival order
+        self.tasks: dict[str, dict[str, Any]] = {}
+        self.sent: list[dict[str, Any]] = []
+        self.orders_of: dict[str, int] = {}
+        self.busy: str | None = None  # the task whose vehicle drives now (one at a time)
+        self.lock = threading.RLock()
+        self.client = Client(
+            callback_api_version=CallbackAPIVersion.VERSION2, client_id="scripted-master", protocol=MQTTv311
+        )
+        self.client.on_message = self._on_message
+        self.client.connect(host, port)
+        self.client.subscribe([(f"{interface}/fleetsim/#", 1), (f"{interface}/v2/{manufacturer}/+/state", 0)])
+        self.client.loop_start()
+
+    def close(self) -> None:
+        self.client.loop_stop()
+        self.client.disconnect()
+
+    def _on_message(self, client: Client, userdata: Any, message: MQTTMessage) -> None:
+        document = json.loads(message.payload)
+        with self.lock:
+            if message.topic.endswith("/fleetsim/site"):
+                self.site = document
+            elif "/transportOrders/" in message.topic:
+                self.tasks[document["taskId"]] = document
+                if document["state"] == "FINISHED" and self.busy == document["taskId"]:
+                    self.busy = None
+            elif message.topic.endswith("/state"):
+                self.states[document["serialNumber"]] = document
+                self.history.append(document)
+            self._dispatch()
+
+    def _dispatch(self) -> None:
+        if self.site is None:
+            return
+        for task_id, task in sorted(self.tasks.items(), key=lambda item: int(item[0])):
+            if task["state"] != "OPEN" or task.get("sent") or (self.one_at_a_time and self.busy is not None):
+                continue
+            serial = task["serialNumber"]
+            if serial not in self.states:
+                continue
+            order = self._order(serial, task)
+            if order is None:
+                continue
+            task["sent"] = True
+            self.busy = task_id
+            self._send(serial, order)
+
+    def _order(self, serial: str, task: dict[str, Any]) -> dict[str, Any] | None:
+        assert self.site is not None
+        graph = nx.DiGraph()
+        for edge in self.site["edges"]:
+            graph.add_edge(edge["startNodeId"], edge["endNodeId"], edgeId=edge["edgeId"], weight=edge["length"])
+        vehicle = next(v for v in self.site["vehicles"] if v["serialNumber"] == serial)
+        state = self.states[serial]
+        first = self.orders_of.get(serial, 0) == 0
+        path: list[str]
+        edges: list[str]
+        if first:  # it stands on its start edge: the order begins with it
+            start_edge = next(
+                e
+                for e in self.site["edges"]
+                if e["edgeId"] == vehicle["startEdgeId"] and e["startNodeId"] == vehicle["startNodeId"]
+            )
+            path, edges = [start_edge["startNodeId"], start_edge["endNodeId"]], [start_edge["edgeId"]]
+        else:
+            path, edges = [state["lastNodeId"]], []
+        # The task is done on its goal edge: route to the edge's start, then drive it.
+        best: tuple[float, list[str], str] | None = None
+        for goal in (e for e in self.site["edges"] if e["edgeId"] in task["goalEdgeIds"]):
+            try:
+                lead = nx.shortest_path(graph, path[-1], goal["startNodeId"], weight="weight")
+            except nx.NetworkXNoPath:
+                continue
+            cost = nx.path_weight(graph, lead, "weight") + goal["length"] if len(lead) > 1 else goal["length"]
+            if best is None or cost < best[0]:
+                best = (cost, [*lead, goal["endNodeId"]], goal["edgeId"])
+        if best is None:
+            return None
+        _, route, goal_edge = best
+        for a, b in itertools.pairwise(route[:-1]):
+            path.append(b)
+            edges.append(graph.edges[a, b]["edgeId"])
+        path.append(route[-1])
+        edges.append(goal_edge)
+        if not edges:
+            return None
+        sequence = 0  # a new order numbers its nodes and edges from 0
+        self.orders_of[serial] = self.orders_of.get(serial, 0) + 1
+        order_id = f"order-{serial}-{self.orders_of[serial]}"
+        now = datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%S.%f")[:-4] + "Z"
+        return {
+            "headerId": len(self.sent),
+            "timestamp": now,
+            "version": self.version,
+            "manufacturer": self.manufacturer,
+            "serialNumber": serial,
+            "orderId": order_id,
+            "orderUpdateId": 0,
+            "nodes": [
+                {"nodeId": node, "sequenceId": sequence + 2 * k, "released": True, "actions": []}
+                for k, node in enumerate(path)
+            ],
+            "edges": [
+                {
+                    "edgeId": edge,
+                    "sequenceId": sequence + 2 * k + 1,
+                    "released": True,
+                    "startNodeId": path[k],
+                    "endNodeId": path[k + 1],
+                    "actions": [],
+                }
+                for k, edge in enumerate(edges)
+            ],
+        }
+
+    def _send(self, serial: str, order: dict[str, Any]) -> None:
+        payload: dict[str, Any] | bytes = self.tamper(order) if self.tamper is not None else order
+        self.sent.append(order)
+        data = payload if isinstance(payload, bytes) else json.dumps(payload).encode()
+        self.client.publish(f"{self.interface}/v2/{self.manufacturer}/{serial}/order", data, qos=0)
+
+    def wait_for_site(self, timeout: float = 10.0) -> None:
+        deadline = time.monotonic() + timeout
+        while self.site is None and time.monotonic() < deadline:
+            time.sleep(0.01)

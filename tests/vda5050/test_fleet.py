@@ -1,0 +1,66 @@
+"""fleetsim's vehicles driven over MQTT by a master control that is not fleetsim's (paho-mqtt, networkx):
+the shipped crossing completed one vehicle at a time, and a collision alert when both routes are released
+at once, on the embedded broker and on Debian's mosquitto."""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+from scripted_master import ScriptedMaster
+
+from fleetsim.load.scenario import load_scenario
+from fleetsim.load.suite import load_suite
+from fleetsim.scenario import Scenario
+from fleetsim.sim.loop import run_scenario
+from fleetsim.vda5050.broker import BrokerAddress
+from fleetsim.vda5050.fleet import Vda5050Fleet, Vda5050Settings
+
+SUITES = Path(__file__).resolve().parents[2] / "scenario_suites"
+SPEED = 20.0
+
+
+def _scenario(name: str) -> Scenario:
+    suite = load_suite(SUITES / "examples.fleetsim.yaml")
+    return load_scenario(next(s for s in suite.scenarios if s.name == name), suite)
+
+
+@pytest.fixture
+def master(broker: BrokerAddress) -> Iterator[ScriptedMaster]:
+    control = ScriptedMaster(broker.host, broker.port)
+    yield control
+    control.close()
+
+
+def test_a_master_control_completes_the_crossing_one_vehicle_at_a_time(
+    broker: BrokerAddress, master: ScriptedMaster
+) -> None:
+    fleet = Vda5050Fleet(Vda5050Settings(broker=broker, speed=SPEED))
+    result = run_scenario(_scenario("crossing"), fleet, planner_timeout=None)
+    assert result.passed, [f.message for f in result.failures]
+    assert result.tasks_completed == 2 and not result.collisions and not result.rejections
+    assert len(master.sent) == 2 and {o["serialNumber"] for o in master.sent} == {"1", "2"}
+    assert fleet.latencies and max(fleet.latencies) < 5.0
+    # The states told it where each vehicle went: node after node of its order, each removed once passed.
+    for serial, goal_node in (("1", "s4.last"), ("2", "s8.last")):
+        seen = [s for s in master.history if s["serialNumber"] == serial and s["orderId"]]
+        remaining = [[n["nodeId"] for n in s["nodeStates"]] for s in seen]
+        assert remaining[0][-1] == goal_node  # the whole route ahead, to the goal edge's end
+        assert all(len(b) <= len(a) for a, b in itertools.pairwise(remaining))  # only shrinks
+        [order] = [o for o in master.sent if o["serialNumber"] == serial]
+        route = [n["nodeId"] for n in order["nodes"]]
+        passed = [route.index(s["lastNodeId"]) for s in seen]
+        assert passed == sorted(passed) and passed[-1] > passed[0]  # its last node moved along the route
+
+
+def test_releasing_both_routes_at_once_raises_a_collision_alert(broker: BrokerAddress) -> None:
+    greedy = ScriptedMaster(broker.host, broker.port, one_at_a_time=False)
+    try:
+        fleet = Vda5050Fleet(Vda5050Settings(broker=broker, speed=SPEED))
+        result = run_scenario(_scenario("crossing"), fleet, planner_timeout=None)
+    finally:
+        greedy.close()
+    assert not result.passed
+    assert result.collisions and result.failures[0].kind == "collision"
