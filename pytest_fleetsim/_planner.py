@@ -24,6 +24,7 @@ from fleetsim.sim.planner_spec import METHODS, PlannerFactory, PlannerSpecError,
 __all__ = ["PlannerSource", "load_factory", "planner_source"]
 
 EXEC_PREFIX = "exec:"  # fleetsim.exec.spec.EXEC_PREFIX, which this module must not import to read it
+VDA5050_PREFIX = "vda5050:"  # likewise fleetsim.vda5050.spec.VDA5050_PREFIX
 
 
 def load_factory(spec: str, *, call_timeout: float | None) -> PlannerFactory:
@@ -33,6 +34,10 @@ def load_factory(spec: str, *, call_timeout: float | None) -> PlannerFactory:
         from fleetsim.exec.spec import load_planner_factory
 
         return load_planner_factory(spec, call_timeout=call_timeout)
+    if spec.startswith(VDA5050_PREFIX):
+        from fleetsim.vda5050 import load_vda5050_factory
+
+        return load_vda5050_factory(spec)
     return import_planner_factory(spec)
 
 

@@ -1,6 +1,8 @@
-"""A planner spec of either form (SPEC §14): ``module:attr``, a planner imported into this process
-(``fleetsim.sim.planner_spec``), or ``exec:COMMAND``, a planner process per run speaking the JSON-lines
-protocol. The command line, the pytest plugin and sweeps read ``--planner`` through this module.
+"""A planner spec of any form (SPEC §14): ``module:attr``, a planner imported into this process
+(``fleetsim.sim.planner_spec``), ``exec:COMMAND``, a planner process per run speaking the JSON-lines
+protocol, or ``vda5050:...``, the vehicles as VDA 5050 vehicles driven by a master control
+(``fleetsim.vda5050.spec``). The command line, the pytest plugin and sweeps read ``--planner`` through
+this module.
 """
 
 from __future__ import annotations
@@ -13,9 +15,10 @@ import shutil
 from fleetsim.exec.process import SubprocessPlanner
 from fleetsim.sim.planner_spec import PlannerFactory, PlannerSpecError, import_planner_factory
 
-__all__ = ["EXEC_PREFIX", "load_planner_factory"]
+__all__ = ["EXEC_PREFIX", "VDA5050_PREFIX", "load_planner_factory"]
 
 EXEC_PREFIX = "exec:"
+VDA5050_PREFIX = "vda5050:"  # fleetsim.vda5050.spec.VDA5050_PREFIX, read without importing the extra
 
 
 def load_planner_factory(spec: str, *, call_timeout: float | None = 10.0) -> PlannerFactory:
@@ -28,6 +31,10 @@ def load_planner_factory(spec: str, *, call_timeout: float | None = 10.0) -> Pla
     """
     if isinstance(spec, str) and spec.startswith(EXEC_PREFIX):
         return _exec_factory(spec, call_timeout)
+    if isinstance(spec, str) and spec.startswith(VDA5050_PREFIX):
+        from fleetsim.vda5050 import load_vda5050_factory
+
+        return load_vda5050_factory(spec)
     return import_planner_factory(spec)
 
 

@@ -18,6 +18,10 @@ from __future__ import annotations
 
 import json
 import math
+import os
+import shlex
+import subprocess
+import sys
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
@@ -30,10 +34,11 @@ from fleetsim.planning.checks import CheckContext, Rejection, RejectionCode, che
 from fleetsim.planning.plans import FleetLeg, FleetPlan, Response
 from fleetsim.planning.snapshot import FleetSnapshot, VehicleState
 from fleetsim.scenario import Task
+from fleetsim.sim.planner_spec import PlannerSpecError
 from fleetsim.vda5050.broker import BrokerAddress, EmbeddedBroker
 from fleetsim.vda5050.link import MqttLink, Will
 from fleetsim.vda5050.messages import MessageInvalid, decode_order, encode, topic
-from fleetsim.vda5050.model import Edge, Node, VdaError
+from fleetsim.vda5050.model import VERSIONS, Edge, Node, VdaError
 from fleetsim.vda5050.orders import Join, OrderStatus, join_order, read_order, vda_error
 from fleetsim.vda5050.places import SiteGraph, site_graph
 from fleetsim.vda5050.state_model import (
@@ -67,9 +72,10 @@ class Vda5050Settings:
     manufacturer: str = "fleetsim"
     broker: BrokerAddress | None = None
     speed: float = 1.0
-    state_interval: float = 30.0
+    state_interval: float = 5.0
     visualization_interval: float = 1.0
     connect_timeout: float = 10.0
+    start_timeout: float = 30.0  # wall seconds the run waits at t = 0 for the master control's first message
 
 
 @dataclass
@@ -105,8 +111,10 @@ class Vda5050Fleet:
     """The planner a VDA 5050 master control drives (see the module docstring). A fresh instance serves
     one run; :meth:`close` ends it (OFFLINE, disconnect, the embedded broker stopped)."""
 
-    def __init__(self, settings: Vda5050Settings | None = None) -> None:
+    def __init__(self, settings: Vda5050Settings | None = None, *, master_command: Sequence[str] | None = None) -> None:
         self.settings = settings or Vda5050Settings()
+        self.master_command = tuple(master_command) if master_command is not None else None
+        self.master: subprocess.Popen[bytes] | None = None
         self.broker: EmbeddedBroker | None = None
         self.address: BrokerAddress | None = self.settings.broker
         self.vehicles: dict[int, _Vehicle] = {}
@@ -122,6 +130,7 @@ class Vda5050Fleet:
     def begin_step(self, fleet: FleetSnapshot, layout: Layout) -> Sequence[Rejection]:
         if self.graph is None:
             self._start(fleet, layout)
+            self._await_master(fleet)
         self._pace(fleet.time)
         refused: list[Rejection] = []
         for vehicle in self.vehicles.values():
@@ -147,6 +156,14 @@ class Vda5050Fleet:
                 vehicle.link.disconnect()
         if self._site_link is not None and self._site_link.connected:
             self._site_link.disconnect()
+        if self.master is not None:
+            self.master.terminate()
+            try:
+                self.master.wait(timeout=5.0)
+            except subprocess.TimeoutExpired:
+                self.master.kill()
+                self.master.wait()
+            self.master = None
         if self.broker is not None:
             self.broker.__exit__(None, None, None)
             self.broker = None
@@ -177,6 +194,58 @@ class Vda5050Fleet:
             vehicle.last_node = (self.graph.entry_node(first.segment, first.traverse), 0)
             self.vehicles[vid] = vehicle
             self._publish(vehicle, "connection", self._connection(vehicle, ConnectionState.ONLINE), qos=1, retain=True)
+        print(
+            f"fleetsim: {len(self.vehicles)} VDA 5050 {settings.version} vehicles on {self.address.url} "
+            f"(topics {settings.interface_name}/v2/{settings.manufacturer}/<serialNumber>/..., "
+            f"{settings.interface_name}/fleetsim/site and .../transportOrders/<taskId>)",
+            file=sys.stderr,
+            flush=True,
+        )
+        if self.master_command is not None:
+            self.master = self._start_master(self.master_command)
+        self.started = time.monotonic()
+
+    def _start_master(self, command: tuple[str, ...]) -> subprocess.Popen[bytes]:
+        """The master control as a child process, told where the broker is (``spec.ENVIRONMENT``)."""
+        assert self.address is not None
+        settings = self.settings
+        environment = {
+            **os.environ,
+            "FLEETSIM_MQTT_URL": self.address.url,
+            "FLEETSIM_VDA5050_INTERFACE": settings.interface_name,
+            "FLEETSIM_VDA5050_MANUFACTURER": settings.manufacturer,
+            "FLEETSIM_VDA5050_VERSION": VERSIONS[settings.version],
+        }
+        if self.address.username is not None:
+            environment["FLEETSIM_MQTT_USERNAME"] = self.address.username
+        if self.address.password is not None:
+            environment["FLEETSIM_MQTT_PASSWORD"] = self.address.password
+        try:
+            return subprocess.Popen(command, env=environment, stdin=subprocess.DEVNULL)
+        except OSError as error:
+            msg = f"the master control {shlex.join(command)!r} could not be started: {error.strerror or error}"
+            raise PlannerSpecError(msg, shlex.join(command)) from None
+
+    def _await_master(self, fleet: FleetSnapshot) -> None:
+        """Hold the run at t = 0 until the master control sends its first message to any vehicle, telling it
+        the vehicles' states once a second meanwhile (it may connect late); the run's clock starts then.
+        A master control silent for ``start_timeout`` seconds fails the run, naming where it was awaited."""
+        deadline = time.monotonic() + self.settings.start_timeout
+        for vehicle in self.vehicles.values():
+            self._announce(vehicle, fleet)  # the tasks it is to dispatch
+        while not any(v.link.pending for v in self.vehicles.values()):
+            left = deadline - time.monotonic()
+            if left <= 0:
+                assert self.address is not None
+                msg = (
+                    f"the master control sent no message to any vehicle within {self.settings.start_timeout:g} s; the "
+                    f"vehicles were ONLINE on {self.address.url} (uagv/v2/.../connection) and waited at t = 0"
+                )
+                raise TimeoutError(msg)
+            for vehicle in self.vehicles.values():
+                state = fleet.vehicles[vehicle.vehicle_id]
+                self._publish(vehicle, "state", self._state(vehicle, state, 0.0))
+            next(iter(self.vehicles.values())).link.wait(min(1.0, left))
         self.started = time.monotonic()
 
     # -- each step ----------------------------------------------------------------------------------

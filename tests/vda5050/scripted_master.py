@@ -164,3 +164,29 @@ class ScriptedMaster:
         deadline = time.monotonic() + timeout
         while self.site is None and time.monotonic() < deadline:
             time.sleep(0.01)
+
+
+def main() -> int:
+    """Run as the master control of a ``vda5050:...,exec=`` planner spec: the broker from the environment,
+    until fleetsim stops it (SIGTERM)."""
+    import os
+    import signal
+    from urllib.parse import urlsplit
+
+    url = urlsplit(os.environ["FLEETSIM_MQTT_URL"])
+    stopped = threading.Event()
+    signal.signal(signal.SIGTERM, lambda *_: stopped.set())
+    master = ScriptedMaster(
+        url.hostname or "127.0.0.1",
+        url.port or 1883,
+        interface=os.environ["FLEETSIM_VDA5050_INTERFACE"],
+        manufacturer=os.environ["FLEETSIM_VDA5050_MANUFACTURER"],
+        version=os.environ["FLEETSIM_VDA5050_VERSION"],
+    )
+    stopped.wait()
+    master.close()
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

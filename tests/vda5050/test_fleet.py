@@ -64,3 +64,12 @@ def test_releasing_both_routes_at_once_raises_a_collision_alert(broker: BrokerAd
         greedy.close()
     assert not result.passed
     assert result.collisions and result.failures[0].kind == "collision"
+
+
+def test_a_master_control_that_never_speaks_fails_the_run_saying_where_it_was_awaited(broker: BrokerAddress) -> None:
+    fleet = Vda5050Fleet(Vda5050Settings(broker=broker, speed=SPEED, start_timeout=1.0))
+    result = run_scenario(_scenario("crossing"), fleet, planner_timeout=None)
+    assert result.ended == "planner-error" and result.steps == 1  # the clock never started
+    [failure] = result.failures
+    assert "the master control sent no message to any vehicle within 1 s" in failure.message
+    assert broker.url in failure.message
