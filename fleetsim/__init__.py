@@ -65,7 +65,7 @@ if TYPE_CHECKING:
     from fleetsim.sim import Divergence, Failure, RunResult, first_divergence, run_scenario
     from fleetsim.sim.planner_spec import PlannerSpecError
 
-__version__ = "0.1.0"
+from fleetsim.version import __version__
 
 __all__ = [
     "DEFAULT_VEHICLE_TYPE",

@@ -15,10 +15,10 @@ from collections.abc import Sequence
 from importlib import import_module
 from typing import Any
 
-from fleetsim import __version__
 from fleetsim.enums import ConflictModel
 from fleetsim.errors import FleetsimError
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, ScenarioSettings
+from fleetsim.version import __version__
 
 __all__ = ["build_parser", "main"]
 

@@ -44,7 +44,6 @@ from xml.sax.saxutils import quoteattr
 
 from mcap.writer import CompressionType, Writer
 
-from fleetsim import __version__
 from fleetsim.planning.reservations import CollisionAlert
 from fleetsim.recording import messages as m
 from fleetsim.recording.cdr import pack_clock
@@ -52,6 +51,7 @@ from fleetsim.recording.colours import vehicle_colours
 from fleetsim.recording.replay import Frame, replay
 from fleetsim.recording.scene import Scene, frame_name
 from fleetsim.scenario import Scenario
+from fleetsim.version import __version__
 
 __all__ = [
     "QOS_TRANSIENT_LOCAL",
