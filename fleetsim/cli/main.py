@@ -15,6 +15,7 @@ from collections.abc import Sequence
 from importlib import import_module
 from typing import Any
 
+from fleetsim.cli.orders import add_orders_arguments
 from fleetsim.enums import ConflictModel
 from fleetsim.errors import FleetsimError
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, ScenarioSettings
@@ -216,6 +217,14 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="N",
         help="record every N-th step in full (steps with new plans, alerts or events always; default: 1)",
     )
+
+    orders_parser = sub.add_parser(
+        "orders",
+        help="write a recorded run's accepted plans as VDA 5050 orders (to replay on a vehicle)",
+        command="fleetsim.cli.orders:orders",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    add_orders_arguments(orders_parser)
 
     run_parser = sub.add_parser(
         "run", help="simulate scenarios with a planner and judge the runs", command="fleetsim.cli.run:run"

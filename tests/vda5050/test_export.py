@@ -38,24 +38,34 @@ TRAVERSE = {"f": Traverse.FORWARD, "b": Traverse.BACKWARD}
 PROGRESS = {"f": Progress.FORWARD, "r": Progress.REVERSE}
 
 
+# Runs of other kinds, for the round trip: a planner whose run fails (the greedy one deadlocks in the
+# corridor), and an Open-RMF site with random stops.
+GREEDY = "greedy-corridor"
+CLINIC = "random-stops-in-the-clinic"
+ROUND_TRIPS = [*SCENARIOS, GREEDY, CLINIC]
+
+
+def _record(root: Path, planner: str, *suites: str) -> None:
+    assert main(["run", *suites, "--planner", planner, "--record", str(root)]) in (0, 1)
+
+
 @pytest.fixture(scope="module")
 def recorded(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
-    """The run folders of the example scenarios and the LIF site, recorded by ``fleetsim run --record``."""
+    """Run folders recorded by ``fleetsim run --record``: the example scenarios and the LIF site with the
+    reserving planner, and the other runs above."""
     root = tmp_path_factory.mktemp("runs")
-    code = main(
-        [
-            "run",
-            str(SUITES / "examples.fleetsim.yaml"),
-            f"{SUITES / 'sites.fleetsim.yaml'}::{LIF}",
-            "--planner",
-            PLANNER,
-            "--record",
-            str(root),
-        ]
+    _record(root, PLANNER, str(SUITES / "examples.fleetsim.yaml"), f"{SUITES / 'sites.fleetsim.yaml'}::{LIF}")
+    _record(
+        root / "greedy", "fleetsim.planners:GreedyPlanner", f"{SUITES / 'examples.fleetsim.yaml'}::corridor-passing-bay"
     )
-    assert code == 0
-    folders = {name: root / "examples" / name for name in EXAMPLES} | {LIF: root / "sites" / LIF}
+    _record(root, PLANNER, f"{SUITES / 'disturbances.fleetsim.yaml'}::{CLINIC}")
+    folders = {name: root / "examples" / name for name in EXAMPLES} | {
+        LIF: root / "sites" / LIF,
+        GREEDY: root / "greedy" / "examples" / "corridor-passing-bay",
+        CLINIC: root / "disturbances" / CLINIC,
+    }
     assert all((folder / "trace.jsonl").is_file() for folder in folders.values())
+    assert json.loads((folders[GREEDY] / "result.json").read_text())["status"] == "failed"
     return folders
 
 
@@ -108,7 +118,7 @@ def _read_back(
 # -- the round trip ---------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("name", SCENARIOS)
+@pytest.mark.parametrize("name", ROUND_TRIPS)
 @pytest.mark.parametrize("version", ["2.0", "2.1"])
 def test_every_exported_order_reads_back_as_the_plan_fleetsim_accepted(
     recorded: dict[str, Path], name: str, version: str
@@ -233,7 +243,7 @@ def test_a_plan_that_drops_the_fixed_legs_is_an_export_error_naming_step_and_veh
 # -- what is written ---------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("name", SCENARIOS)
+@pytest.mark.parametrize("name", ROUND_TRIPS)
 @pytest.mark.parametrize("version", ["2.0", "2.1"])
 def test_every_exported_message_passes_the_official_validators(
     recorded: dict[str, Path], name: str, version: str
@@ -375,3 +385,11 @@ def test_the_options_leave_the_command_to_run_where_fleetsims_main_keeps_it() ->
     add_orders_arguments(parser)
     args = parser.parse_args(["runs/crossing"])
     assert (args.run, args.path) == ("fleetsim.cli.orders:orders", "runs/crossing")
+
+
+def test_fleetsim_orders_is_a_command_of_the_command_line(recorded: dict[str, Path], tmp_path: Path) -> None:
+    from fleetsim.cli.main import main
+
+    assert main(["orders", str(recorded["crossing"]), "--out", str(tmp_path)]) == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["1.orders.jsonl", "2.orders.jsonl"]
+    assert main(["orders", str(tmp_path / "nowhere")]) == 2  # a usage error, named
