@@ -110,5 +110,9 @@ class SteppedPlanner(Planner, Protocol):
     def begin_step(self, fleet: FleetSnapshot, layout: Layout) -> Sequence[Rejection]:
         """The step at ``fleet.time`` begins (every vehicle's state up to date); return the messages refused
         since the last step, as rejections made by hand (code ``order-invalid``, no plan), which the run
-        records and judges as any rejection. Raising fails the run as a ``planner-error``."""
+        records and judges as any rejection. Raising fails the run as a ``planner-error``.
+
+        A stepped planner may also have ``paused() -> set of vehicle ids``, asked right after: the vehicles
+        held still from this step on (a VDA 5050 ``startPause``), each braking to rest within the distance
+        its fixed legs leave it and staying until it is no longer named."""
         ...

@@ -202,7 +202,8 @@ def _disturbed(going: dict[int, list[str]], events: Sequence[Sequence[Any]]) -> 
             going.setdefault(event[1], []).append(event[2])
         elif event[0] == "resume" and event[2] in going.get(event[1], []):
             going[event[1]].remove(event[2])
-    return MappingProxyType({v: "stop" if "stop" in kinds else "slow" for v, kinds in sorted(going.items()) if kinds})
+    shown = {v: "stop" if {"stop", "pause"} & set(kinds) else "slow" for v, kinds in sorted(going.items()) if kinds}
+    return MappingProxyType(shown)  # a paused vehicle (VDA 5050 startPause) is shown as stopped
 
 
 def frame_at(scenario: Scenario, lines: Iterable[str], step: int) -> Frame:

@@ -201,7 +201,7 @@ def describe_event(event: Sequence[Any]) -> str:
         return "planner error" + ("" if rest[0] is None else f" (vehicle {rest[0]})")
     if kind in ("disturb", "resume") and len(rest) == 2:
         vehicle, what = rest
-        noun = {"stop": "stop", "slow": "slow-down"}.get(what, what)
+        noun = {"stop": "stop", "slow": "slow-down", "pause": "pause"}.get(what, what)
         return f"vehicle {vehicle}'s {noun} {'begins' if kind == 'disturb' else 'ends'}"
     if kind == "interrupted" and len(rest) == 1:
         return f"interrupted by {rest[0]}"

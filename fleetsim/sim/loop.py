@@ -102,6 +102,7 @@ class _Run:
         self.planner_error: Failure | None = None
         self.interrupted_planning = False
         self.stepped = planner if isinstance(planner, SteppedPlanner) else None
+        self.paused: set[int] = set()  # the vehicles a stepped planner holds still
 
     # -- the steps -----------------------------------------------------------------------------------
 
@@ -120,6 +121,15 @@ class _Run:
         for rejection in refused:
             self.rejections.append(RejectionEvent(stamp, rejection))
             events.append(["reject", rejection.code.value, rejection.vehicle_id, rejection.leg_index])
+        asked = getattr(self.stepped, "paused", None)
+        paused = set(asked()) if callable(asked) else set()
+        for vehicle in sorted(paused - self.paused):
+            self.drivers[vehicle].halt()
+            events.append(["disturb", vehicle, "pause"])  # shown and recorded as a stop
+        for vehicle in sorted(self.paused - paused):
+            self.drivers[vehicle].release()
+            events.append(["resume", vehicle, "pause"])
+        self.paused = paused
         return True
 
     def plan(self, now: float, stamp: float, events: list[list[Any]], plans: list[list[Any]]) -> bool:

@@ -8,6 +8,14 @@ publishes ``connection`` (ONLINE, OFFLINE at the end, CONNECTIONBROKEN as its la
 telling the master control where the fleet is; an order that makes a plan is handed to the harness at
 the vehicle's next planner call, where fleetsim's checks judge it as any planner's.
 
+Instant actions: ``stateRequest`` and ``factsheetRequest`` answer at once; ``startPause`` and
+``stopPause`` hold a vehicle still and let it go (it brakes within its fixed legs); ``cancelOrder``
+drops the horizon and finishes once the vehicle stands at the end of its base (a fixed leg is a
+commitment fleetsim never takes back, so the base is driven to its end); ``initPosition`` fails (a
+simulated vehicle stands where its scenario puts it), and so does an action of any other type, each
+with an error in the state. Actions on an order's nodes and edges are not carried out: each ends FAILED
+with an error, and the order is driven.
+
 Beside the standard's topics, two of fleetsim's own under ``interfaceName/fleetsim/`` hand the master
 control what a warehouse system and a map server would: ``site`` (retained: the nodes and edges of the
 map, :mod:`.places`) and ``transportOrders/<taskId>`` (retained: each task when it becomes its vehicle's
@@ -37,21 +45,33 @@ from fleetsim.scenario import Task
 from fleetsim.sim.planner_spec import PlannerSpecError
 from fleetsim.vda5050.broker import BrokerAddress, EmbeddedBroker
 from fleetsim.vda5050.link import MqttLink, Will
-from fleetsim.vda5050.messages import MessageInvalid, decode_order, encode, topic
-from fleetsim.vda5050.model import VERSIONS, Edge, Node, VdaError
+from fleetsim.vda5050.messages import MessageInvalid, decode_instant_actions, decode_order, encode, topic
+from fleetsim.vda5050.model import VERSIONS, Action, Edge, ErrorReference, Node, VdaError
 from fleetsim.vda5050.orders import Join, OrderStatus, join_order, read_order, vda_error
 from fleetsim.vda5050.places import SiteGraph, site_graph
 from fleetsim.vda5050.state_model import (
+    ActionState,
+    ActionStatus,
+    AgvAction,
+    AgvGeometry,
     AgvPosition,
     BatteryState,
     Connection,
     ConnectionState,
     EdgeState,
+    Envelope2d,
     EStop,
+    Factsheet,
     NodeState,
     OperatingMode,
+    PhysicalParameters,
+    PolygonPoint,
+    ProtocolFeatures,
+    ProtocolLimits,
     SafetyState,
     State,
+    Timing,
+    TypeSpecification,
     Velocity,
     Visualization,
 )
@@ -105,6 +125,9 @@ class _Vehicle:
     next_state: float = 0.0
     next_visualization: float = 0.0
     announced: set[int] = field(default_factory=set)  # tasks published to the master control
+    actions: dict[str, ActionState] = field(default_factory=dict)  # by actionId, in arrival order
+    paused: bool = False
+    cancelling: str | None = None  # the actionId of a cancelOrder until the base is driven
 
 
 class Vda5050Fleet:
@@ -140,6 +163,10 @@ class Vda5050Fleet:
             self._announce(vehicle, fleet)
             self._report(vehicle, fleet)
         return refused
+
+    def paused(self) -> set[int]:
+        """The vehicles a ``startPause`` holds still (the harness brakes them)."""
+        return {vid for vid, vehicle in self.vehicles.items() if vehicle.paused}
 
     def plan_routes(self, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
         return self._hand(task.vehicle_id)
@@ -194,6 +221,7 @@ class Vda5050Fleet:
             vehicle.last_node = (self.graph.entry_node(first.segment, first.traverse), 0)
             self.vehicles[vid] = vehicle
             self._publish(vehicle, "connection", self._connection(vehicle, ConnectionState.ONLINE), qos=1, retain=True)
+            self._publish(vehicle, "factsheet", self._factsheet(vehicle, fleet), qos=1, retain=True)
         print(
             f"fleetsim: {len(self.vehicles)} VDA 5050 {settings.version} vehicles on {self.address.url} "
             f"(topics {settings.interface_name}/v2/{settings.manufacturer}/<serialNumber>/..., "
@@ -294,8 +322,9 @@ class Vda5050Fleet:
         assert self.graph is not None
         for inbound in vehicle.link.drain():
             name = inbound.topic.rsplit("/", 1)[-1]
-            if name != "order":
-                continue  # instant actions: not handled yet
+            if name == "instantActions":
+                refused += self._instant(vehicle, inbound.payload, fleet)
+                continue
             try:
                 order = decode_order(inbound.payload, self.settings.version)
             except MessageInvalid as invalid:
@@ -319,6 +348,12 @@ class Vda5050Fleet:
             edges: list[Edge | None] = [None] * fixed + list(reading.edges)
             if isinstance(verdict, Rejection) and not errors:
                 vehicle.errors.append(vda_error(verdict, order, edges))
+            for action in [a for n in reading.nodes for a in n.actions] + [a for e in reading.edges for a in e.actions]:
+                self._fail(
+                    vehicle,
+                    action,
+                    "fleetsim's vehicles carry out no node or edge actions; the order is driven without it",
+                )
             vehicle.pending = plan
             vehicle.pending_path = vehicle.path[:fixed] + [
                 _Leg(leg, edge, node)
@@ -331,6 +366,57 @@ class Vda5050Fleet:
             )
             self._arrived[vehicle.vehicle_id] = inbound.received
         return refused
+
+    def _instant(self, vehicle: _Vehicle, payload: bytes, fleet: FleetSnapshot) -> list[Rejection]:
+        try:
+            message = decode_instant_actions(payload, self.settings.version)
+        except MessageInvalid as invalid:
+            return [self._refuse(vehicle, invalid.errors)]
+        for action in message.actions:
+            kind = action.action_type
+            if kind == "stateRequest":
+                vehicle.published = None  # the state goes out this step
+                self._done(vehicle, action)
+            elif kind == "factsheetRequest":
+                self._publish(vehicle, "factsheet", self._factsheet(vehicle, fleet))
+                self._done(vehicle, action)
+            elif kind in ("startPause", "stopPause"):
+                vehicle.paused = kind == "startPause"
+                self._done(vehicle, action)
+            elif kind == "cancelOrder":
+                self._cancel(vehicle, action, fleet)
+            elif kind == "initPosition":
+                self._fail(
+                    vehicle, action, "a simulated vehicle stands where its scenario puts it; it cannot be moved by hand"
+                )
+            else:
+                self._fail(
+                    vehicle, action, f"fleetsim's vehicles know no action {kind!r}", error_type="unknownActionError"
+                )
+        return []
+
+    def _cancel(self, vehicle: _Vehicle, action: Action, fleet: FleetSnapshot) -> None:
+        """Drop the horizon (the base is a commitment: it is driven to its end, then the cancel finishes)."""
+        plan = fleet.plans[vehicle.vehicle_id]
+        if not vehicle.status.order_id or (len(plan.legs) == 1 and self._at_exit(fleet.vehicles[vehicle.vehicle_id])):
+            self._fail(vehicle, action, "there is no order to cancel", error_type="noOrderToCancel")
+            return
+        fixed = tuple(leg for leg in plan.legs if leg.fixed)
+        vehicle.pending = FleetPlan(vehicle.vehicle_id, fixed)
+        vehicle.pending_path = vehicle.path[: len(fixed)]
+        vehicle.pending_status = vehicle.status
+        vehicle.cancelling = action.action_id
+        vehicle.actions[action.action_id] = ActionState(action.action_id, ActionStatus.RUNNING, action.action_type)
+
+    def _done(self, vehicle: _Vehicle, action: Action) -> None:
+        vehicle.actions[action.action_id] = ActionState(action.action_id, ActionStatus.FINISHED, action.action_type)
+
+    def _fail(self, vehicle: _Vehicle, action: Action, why: str, *, error_type: str = "actionError") -> None:
+        vehicle.actions[action.action_id] = ActionState(
+            action.action_id, ActionStatus.FAILED, action.action_type, result_description=why
+        )
+        references = (ErrorReference("actionId", action.action_id), ErrorReference("actionType", action.action_type))
+        vehicle.errors.append(VdaError(error_type, f"{action.action_type}: {why}", error_references=references))
 
     def _refuse(self, vehicle: _Vehicle, errors: Sequence[VdaError]) -> Rejection:
         vehicle.errors = list(errors)
@@ -394,12 +480,18 @@ class Vda5050Fleet:
     def _report(self, vehicle: _Vehicle, fleet: FleetSnapshot) -> None:
         now = fleet.time
         state = fleet.vehicles[vehicle.vehicle_id]
+        if vehicle.cancelling is not None and self._base_driven(vehicle, fleet):
+            done = vehicle.actions[vehicle.cancelling]
+            vehicle.actions[vehicle.cancelling] = replace(done, action_status=ActionStatus.FINISHED)
+            vehicle.cancelling = None
         key = (
             vehicle.status,
             vehicle.last_node,
             self._at_exit(state),
             tuple(e.leg for e in vehicle.path),
             tuple(vehicle.errors),
+            tuple(vehicle.actions.values()),
+            vehicle.paused,
             state.speed > 0,
         )
         if key != vehicle.published or now >= vehicle.next_state:
@@ -413,6 +505,12 @@ class Vda5050Fleet:
                 agv_position=self._position(state), velocity=self._velocity(state),
             )  # fmt: skip
             self._publish(vehicle, "visualization", message)
+
+    def _base_driven(self, vehicle: _Vehicle, fleet: FleetSnapshot) -> bool:
+        """The cancelled order's plan is in force and the vehicle stands at the end of its base."""
+        state = fleet.vehicles[vehicle.vehicle_id]
+        settled = vehicle.pending is None and vehicle.handed is None
+        return settled and len(fleet.plans[vehicle.vehicle_id].legs) == 1 and self._at_exit(state) and state.speed == 0
 
     # -- messages -----------------------------------------------------------------------------------
 
@@ -452,7 +550,8 @@ class Vda5050Fleet:
             node_states=node_states,
             edge_states=edge_states,
             errors=tuple(vehicle.errors),
-            paused=False,
+            action_states=tuple(vehicle.actions.values()),
+            paused=vehicle.paused,
             new_base_request=False,
             agv_position=self._position(state),
             velocity=self._velocity(state),
@@ -479,6 +578,65 @@ class Vda5050Fleet:
             self.settings.manufacturer,
             vehicle.serial,
             connection_state,
+        )
+
+    def _factsheet(self, vehicle: _Vehicle, fleet: FleetSnapshot) -> Factsheet:
+        """What the vehicle is, from its type: dimensions, speeds, how often it reports, what it can do."""
+        kind = fleet.vehicles[vehicle.vehicle_id].type
+        half_length, half_width = kind.length / 2, kind.width / 2
+        outline = tuple(
+            PolygonPoint(x, y)
+            for x, y in (
+                (half_length, half_width),
+                (-half_length, half_width),
+                (-half_length, -half_width),
+                (half_length, -half_width),
+            )
+        )
+        instant = ("INSTANT",)
+        supported = tuple(
+            AgvAction(name, instant, description)
+            for name, description in (
+                ("stateRequest", "a state now"),
+                ("factsheetRequest", "this factsheet now"),
+                ("startPause", "brake to rest within the base, and stay"),
+                ("stopPause", "drive on"),
+                ("cancelOrder", "drop the horizon; finished once the base is driven"),
+            )
+        )
+        return Factsheet(
+            header_id=self._header(vehicle, "factsheet"),
+            timestamp=self._stamp(fleet.time),
+            manufacturer=self.settings.manufacturer,
+            serial_number=vehicle.serial,
+            type_specification=TypeSpecification(
+                series_name=kind.name,
+                agv_kinematic="DIFF" if kind.turn_capability is TurnCapability.IN_PLACE else "THREEWHEEL",
+                agv_class="CARRIER",
+                max_load_mass=0.0,
+                localization_types=("NATURAL",),
+                navigation_types=("VIRTUAL_LINE_GUIDED",),
+                series_description="a fleetsim vehicle",
+            ),
+            physical_parameters=PhysicalParameters(
+                speed_min=0.0,
+                speed_max=kind.max_speed,
+                acceleration_max=kind.acceleration,
+                deceleration_max=kind.acceleration,
+                height_max=kind.height,
+                width=kind.width,
+                length=kind.length,
+            ),
+            protocol_limits=ProtocolLimits(
+                timing=Timing(
+                    min_order_interval=0.0,
+                    min_state_interval=0.0,
+                    default_state_interval=self.settings.state_interval / self.settings.speed,
+                    visualization_interval=self.settings.visualization_interval / self.settings.speed,
+                )
+            ),
+            protocol_features=ProtocolFeatures(agv_actions=supported),
+            agv_geometry=AgvGeometry(envelopes2d=(Envelope2d("footprint", outline, "the type's length x width"),)),
         )
 
     def _site(self, fleet: FleetSnapshot, layout: Layout) -> bytes:

@@ -49,7 +49,8 @@ class ScriptedMaster:
         )
         self.client.on_message = self._on_message
         self.client.connect(host, port)
-        self.client.subscribe([(f"{interface}/fleetsim/#", 1), (f"{interface}/v2/{manufacturer}/+/state", 0)])
+        self.wire: list[tuple[str, dict[str, Any]]] = []  # every VDA 5050 message a vehicle published
+        self.client.subscribe([(f"{interface}/fleetsim/#", 1), (f"{interface}/v2/{manufacturer}/+/+", 0)])
         self.client.loop_start()
 
     def close(self) -> None:
@@ -65,9 +66,14 @@ class ScriptedMaster:
                 self.tasks[document["taskId"]] = document
                 if document["state"] == "FINISHED" and self.busy == document["taskId"]:
                     self.busy = None
-            elif message.topic.endswith("/state"):
-                self.states[document["serialNumber"]] = document
-                self.history.append(document)
+            else:
+                name = message.topic.rsplit("/", 1)[-1]
+                if name in ("order", "instantActions"):
+                    return  # our own
+                self.wire.append((name, document))
+                if name == "state":
+                    self.states[document["serialNumber"]] = document
+                    self.history.append(document)
             self._dispatch()
 
     def _dispatch(self) -> None:
@@ -159,6 +165,31 @@ class ScriptedMaster:
         self.sent.append(order)
         data = payload if isinstance(payload, bytes) else json.dumps(payload).encode()
         self.client.publish(f"{self.interface}/v2/{self.manufacturer}/{serial}/order", data, qos=0)
+
+    def instant(self, serial: str, *actions: dict[str, Any], key: str = "actions") -> None:
+        """Send ``actions`` (each a dict with actionType and actionId) to vehicle ``serial`` (under ``key``:
+        vda-5050-lib 1.4.0 wrongly writes ``instantActions``)."""
+        now = datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%S.%f")[:-4] + "Z"
+        message = {
+            "headerId": len(self.sent),
+            "timestamp": now,
+            "version": self.version,
+            "manufacturer": self.manufacturer,
+            "serialNumber": serial,
+            key: [{"blockingType": "NONE", "actionParameters": [], **a} for a in actions],
+        }
+        self.client.publish(
+            f"{self.interface}/v2/{self.manufacturer}/{serial}/instantActions", json.dumps(message).encode()
+        )
+
+    def wait_until(self, condition: Callable[[], bool], timeout: float = 10.0) -> bool:
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            with self.lock:
+                if condition():
+                    return True
+            time.sleep(0.01)
+        return False
 
     def wait_for_site(self, timeout: float = 10.0) -> None:
         deadline = time.monotonic() + timeout
