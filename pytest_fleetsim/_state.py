@@ -51,6 +51,7 @@ NO_PLANNER = (
 )
 OUTCOME_WORDS = ("passed", "failed", "interrupted", "xfailed", "xpassed", "load error")
 NOT_RECORDED = "not recorded"  # the hash cell of a run whose hash no lock file holds yet
+NOT_GATED = "not gated"  # the hash cell of a run a wall clock paced (a VDA 5050 master control)
 RecordMode = Literal["failed", "all", "none"]
 
 
@@ -320,6 +321,8 @@ class FleetsimState:
         if unrecorded is not None:
             item.user_properties.append(("fleetsim_trace_hash_recorded", "no"))
             cells[SUMMARY_COLUMNS.index("hash")] = NOT_RECORDED
+        elif result.paced is not None:
+            cells[SUMMARY_COLUMNS.index("hash")] = NOT_GATED
         item.fleetsim_payload = {
             "suite": str(item.path),
             "scenario": item.spec.name,
@@ -522,6 +525,13 @@ class FleetsimState:
             rows.append(cells)
         lines = format_table(rows) if rows else []
         lines += self._unrecorded_lines(ordered)
+        paced = [o for o in ordered if o.payload["cells"][SUMMARY_COLUMNS.index("hash")] == NOT_GATED]
+        if paced:
+            lines += [
+                "",
+                f"{_plural(len(paced), 'scenario', 'scenarios')} paced by a wall clock (a VDA 5050 master control in "
+                "another process): a trace hash does not repeat there, so it is not gated; the checks decide",
+            ]
         if self.comparison is not None:
             source = f" with {_relative(self.config, self.baseline_path)}" if self.baseline_path else ""
             lines += ["", f"compared{source}:", *self.comparison.lines()]

@@ -8,7 +8,9 @@ lock entry that was never committed is a mistake): then it is a ``hash-missing``
 *update* mode the scenario runs twice with fresh planners; equal hashes give a lock entry to record,
 different ones are a ``nondeterministic`` failure naming the first diverging step, and nothing is
 recorded. An interrupted run (a stop signal) is never gated nor recorded: its trace ends early, so its
-hash says nothing about the planner's behaviour.
+hash says nothing about the planner's behaviour. Nor is a run paced by a wall clock (``RunResult.paced``:
+a VDA 5050 master control in another process): its hash is not repeatable, so its checks and metrics
+alone judge it.
 """
 
 from __future__ import annotations
@@ -84,6 +86,8 @@ def run_checked(
     result = run(trace_file)
     if mode == "ignore" or result.ended in ("planner-error", "interrupted"):
         return CheckedRun(result)  # a broken or cut-short run has no behaviour worth pinning
+    if result.paced is not None:
+        return CheckedRun(result)  # a wall clock paced it (a VDA 5050 master control): no hash repeats
     if mode == "update":
         again = run()
         if again.ended == "interrupted":

@@ -492,5 +492,12 @@ def _simulate(
         diagnosis=diagnosis,
         checkpoints=tuple(run.trace.checkpoints),
         disturbances=run.disturber.happened() if run.disturber is not None else (),
+        paced=_paced(planner),
         trace=run.trace if keep_trace else None,
     )
+
+
+def _paced(planner: Planner) -> float | None:
+    """The speed a planner on a wall clock paced the run at (its ``paced`` attribute), else None."""
+    speed = getattr(planner, "paced", None)
+    return float(speed) if isinstance(speed, int | float) and not isinstance(speed, bool) else None

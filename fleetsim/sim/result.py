@@ -227,6 +227,8 @@ class RunResult:
         diagnosis: Why tasks were still pending at a deadlock or the time limit, or ``None``.
         checkpoints: ``(step, digest so far)`` every 100 steps, for finding where two runs diverge.
         disturbances: The disturbances that happened, in the order they began.
+        paced: The multiple of real time the run was paced at when its planner runs on a wall clock (a VDA
+            5050 master control), else ``None``. Such a run's hash is not repeatable, so it is not gated.
         artifacts: Files the run left (recording, picture, trace), by kind; empty unless a caller
             recorded them.
         trace: The trace itself (every step's lines), unless the run was asked not to keep it.
@@ -251,6 +253,7 @@ class RunResult:
     diagnosis: Diagnosis | None = None  # why tasks are pending at a deadlock or the time limit
     checkpoints: tuple[tuple[int, str], ...] = ()
     disturbances: tuple[DisturbanceEvent, ...] = ()  # those that happened, in the order they began
+    paced: float | None = None  # paced at this many times real time by a planner on a wall clock
     artifacts: Mapping[str, str] = field(default_factory=lambda: MappingProxyType({}))
     trace: Trace | None = field(default=None, compare=False, repr=False)
 
@@ -305,7 +308,7 @@ class RunResult:
             "metrics": self.metrics.to_dict(),
             "disturbances": [d.to_dict() for d in self.disturbances],
             "artifacts": dict(self.artifacts),
-        }
+        } | ({} if self.paced is None else {"paced": self.paced})
 
 
 def _first(events: tuple[RejectionEvent, ...] | tuple[AlertEvent, ...]) -> float:

@@ -4,6 +4,7 @@ with the master control started as a child process that finds the broker in its 
 from __future__ import annotations
 
 import json
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -83,4 +84,22 @@ def test_fleetsim_run_drives_the_vehicles_with_a_master_control_it_starts(tmp_pa
     assert done.returncode == 0, done.stderr
     [result] = [json.loads(line) for line in done.stdout.splitlines()]
     assert result["status"] == "passed" and result["tasks"] == {"total": 2, "completed": 2}
+    assert result["paced"] == 20.0  # the result says a wall clock paced it
     assert "VDA 5050 2.0 vehicles on mqtt://127.0.0.1:" in done.stderr  # where the broker is, said
+
+
+def test_under_pytest_a_paced_run_is_judged_by_its_checks_and_its_hash_is_not_gated(
+    pytester: pytest.Pytester, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("CI", "true")  # where a missing hash would fail any other run
+    for folder in ("examples", "tiled"):
+        shutil.copytree(ROOT / "scenario_suites" / folder, pytester.path / folder)
+    shutil.copy(ROOT / "scenario_suites" / "examples.fleetsim.yaml", pytester.path)
+    spec = f"vda5050:speed=20,exec={sys.executable} {MASTER}"
+    result = pytester.runpytest_subprocess("-p", "no:cacheprovider", "--planner", spec, "-k", "crossing", timeout=120)
+    assert result.ret == pytest.ExitCode.OK, result.stdout.str()
+    result.assert_outcomes(passed=1)
+    result.stdout.fnmatch_lines(
+        ["crossing *passed *2/2 *not gated*", "*paced by a wall clock*not gated; the checks decide"]
+    )
+    assert not (pytester.path / "examples.fleetsim.lock.json").exists()  # nothing recorded
