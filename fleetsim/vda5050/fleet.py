@@ -647,12 +647,24 @@ class Vda5050Fleet:
         edges = []
         for sid in sorted(layout.segments):
             for traverse in graph.traverses(sid):
+                # What may follow this edge: a vehicle that cannot turn in place takes no turn_in_place joint,
+                # and at an opposite one (a cusp) it changes between nose first and backing.
+                following = [
+                    {
+                        "edgeId": graph.edge_id(nsid, ntraverse),
+                        "endNodeId": graph.exit_node(nsid, ntraverse),
+                        "joint": joint.value,
+                    }
+                    for nsid, ntraverse, joint in layout.successors(sid, traverse)
+                    if ntraverse in graph.traverses(nsid)
+                ]
                 edges.append(
                     {
                         "edgeId": graph.edge_id(sid, traverse),
                         "startNodeId": graph.entry_node(sid, traverse),
                         "endNodeId": graph.exit_node(sid, traverse),
                         "length": layout.segments[sid].length,
+                        "next": following,
                     }
                 )
         vehicles = [
