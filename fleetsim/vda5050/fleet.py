@@ -156,11 +156,15 @@ class Vda5050Fleet:
             self._start(fleet, layout)
             self._await_master(fleet)
         self._pace(fleet.time)
+        self._check_master(fleet.time)
         refused: list[Rejection] = []
         for vehicle in self.vehicles.values():
             self._verdict(vehicle, fleet)
             self._follow(vehicle, fleet)
-            refused += self._intake(vehicle, fleet, layout)
+            found = self._intake(vehicle, fleet, layout)
+            if found:  # one rejection per vehicle and step, however many messages a flood brought
+                more = f" (and {len(found) - 1} more refused messages this step)" if len(found) > 1 else ""
+                refused.append(replace(found[0], message=found[0].message + more))
             self._announce(vehicle, fleet)
             self._report(vehicle, fleet)
         return refused
@@ -263,6 +267,7 @@ class Vda5050Fleet:
         for vehicle in self.vehicles.values():
             self._announce(vehicle, fleet)  # the tasks it is to dispatch
         while not any(v.link.pending for v in self.vehicles.values()):
+            self._check_master(0.0)
             left = deadline - time.monotonic()
             if left <= 0:
                 assert self.address is not None
@@ -276,6 +281,15 @@ class Vda5050Fleet:
                 self._publish(vehicle, "state", self._state(vehicle, state, 0.0))
             next(iter(self.vehicles.values())).link.wait(min(1.0, left))
         self.started = time.monotonic()
+
+    def _check_master(self, now: float) -> None:
+        """A master control started with ``exec=`` that has exited ends the run, naming its status."""
+        if self.master is None or self.master.poll() is None:
+            return
+        status = self.master.returncode
+        self.master = None
+        msg = f"the master control exited with status {status} at t = {now:.1f} s; the run cannot go on without it"
+        raise RuntimeError(msg)
 
     # -- each step ----------------------------------------------------------------------------------
 

@@ -22,7 +22,7 @@ import shutil
 from dataclasses import replace
 
 from fleetsim.sim.planner_spec import PlannerFactory, PlannerSpecError
-from fleetsim.vda5050.broker import BrokerError, parse_broker_url
+from fleetsim.vda5050.broker import BrokerError, check_reachable, parse_broker_url
 from fleetsim.vda5050.fleet import Vda5050Fleet, Vda5050Settings
 from fleetsim.vda5050.model import VERSIONS
 
@@ -45,6 +45,11 @@ def vda5050_factory(spec: str) -> PlannerFactory:
     """The factory of fresh :class:`Vda5050Fleet` planners that ``spec`` describes (see the module
     docstring); every mistake is a :class:`PlannerSpecError` naming the option and the value."""
     settings, command = _parse(spec)
+    if settings.broker is not None:  # an unreachable broker is the user's mistake: said before any run
+        try:
+            check_reachable(settings.broker, timeout=5.0)
+        except BrokerError as error:
+            raise PlannerSpecError(f"planner spec {spec!r}: {error}", spec) from None
     return PlannerFactory(spec, functools.partial(Vda5050Fleet, settings, master_command=command))
 
 

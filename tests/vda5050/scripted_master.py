@@ -58,6 +58,8 @@ class ScriptedMaster:
         self.client.disconnect()
 
     def _on_message(self, client: Client, userdata: Any, message: MQTTMessage) -> None:
+        if message.topic.rsplit("/", 1)[-1] in ("order", "instantActions"):
+            return  # our own
         document = json.loads(message.payload)
         with self.lock:
             if message.topic.endswith("/fleetsim/site"):
@@ -68,8 +70,6 @@ class ScriptedMaster:
                     self.busy = None
             else:
                 name = message.topic.rsplit("/", 1)[-1]
-                if name in ("order", "instantActions"):
-                    return  # our own
                 self.wire.append((name, document))
                 if name == "state":
                     self.states[document["serialNumber"]] = document

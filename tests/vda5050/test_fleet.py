@@ -5,10 +5,16 @@ at once, on the embedded broker and on Debian's mosquitto."""
 from __future__ import annotations
 
 import itertools
+import json
+import sys
+import threading
+import time
 from collections.abc import Iterator
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
+from paho.mqtt.client import CallbackAPIVersion, Client, MQTTv311
 from scripted_master import ScriptedMaster
 
 from fleetsim.load.scenario import load_scenario
@@ -73,3 +79,63 @@ def test_a_master_control_that_never_speaks_fails_the_run_saying_where_it_was_aw
     [failure] = result.failures
     assert "the master control sent no message to any vehicle within 1 s" in failure.message
     assert broker.url in failure.message
+
+
+def test_malformed_json_is_a_validation_error_in_the_state_and_an_order_invalid_rejection(
+    broker: BrokerAddress,
+) -> None:
+    def garble(order: dict[str, object]) -> bytes:
+        return b'{"headerId": 0, "orderId": ' if order["serialNumber"] == "1" else json.dumps(order).encode()
+
+    tampering = ScriptedMaster(broker.host, broker.port, tamper=garble)
+    try:
+        fleet = Vda5050Fleet(Vda5050Settings(broker=broker, speed=SPEED))
+        crossing = _scenario("crossing")
+        going_on = replace(crossing, settings=replace(crossing.settings, stop_on=(), time_limit=3.0))
+        result = run_scenario(going_on, fleet, planner_timeout=None)
+    finally:
+        tampering.close()
+    assert result.rejections and result.rejections[0].rejection.code.value == "order-invalid"
+    assert result.rejections[0].rejection.vehicle_id == 1
+    assert "JSON" in result.rejections[0].rejection.message or "json" in result.rejections[0].rejection.message
+    errors = [e for s in tampering.history if s["serialNumber"] == "1" for e in s["errors"]]
+    assert errors and all(e["errorType"] == "validationError" for e in errors)
+
+
+def test_a_flood_is_contained_one_rejection_a_step_and_a_bounded_buffer(broker: BrokerAddress) -> None:
+    flooder = Client(callback_api_version=CallbackAPIVersion.VERSION2, client_id="flooder", protocol=MQTTv311)
+    flooder.connect(broker.host, broker.port)
+    flooder.loop_start()
+    try:
+        fleet = Vda5050Fleet(Vda5050Settings(broker=broker, speed=SPEED, start_timeout=20.0))
+        done = threading.Event()
+
+        def flood() -> None:
+            while not done.is_set():
+                for _ in range(200):
+                    flooder.publish("uagv/v2/fleetsim/1/order", b"not json at all", qos=0)
+                time.sleep(0.01)
+
+        thread = threading.Thread(target=flood, daemon=True)
+        thread.start()
+        scenario = replace(
+            _scenario("crossing"), settings=replace(_scenario("crossing").settings, time_limit=5.0, stop_on=())
+        )
+        result = run_scenario(scenario, fleet, planner_timeout=None)
+        done.set()
+        thread.join(timeout=5)
+    finally:
+        flooder.loop_stop()
+        flooder.disconnect()
+    assert result.ended == "time-limit"  # the harness went on, step by step
+    assert len(result.rejections) <= result.steps  # at most one a step for the flooded vehicle
+    assert any("more refused messages this step" in r.rejection.message for r in result.rejections)
+
+
+def test_a_master_control_that_exits_fails_the_run_naming_its_status(tmp_path: Path) -> None:
+    from fleetsim.exec.spec import load_planner_factory
+
+    planner = load_planner_factory(f"vda5050:speed={SPEED},exec={sys.executable} -c 'import sys; sys.exit(3)'")()
+    result = run_scenario(_scenario("crossing"), planner, planner_timeout=None)
+    assert result.ended == "planner-error"
+    assert "the master control exited with status 3" in result.failures[0].message

@@ -54,6 +54,7 @@ def test_the_spec_makes_a_fresh_fleet_per_run() -> None:
         ("vda5050:broker=http://x", "broker"),
         ("vda5050:interface=a/b", "interface='a/b' must be a non-empty topic level"),
         ("vda5050:exec=", "exec= names no command"),
+        ("vda5050:broker=mqtt://127.0.0.1:1", "cannot reach the MQTT broker at mqtt://127.0.0.1:1"),
         ("vda5050:exec=no-such-master-control", "the master control's program 'no-such-master-control' is not on PATH"),
     ],
 )
