@@ -393,3 +393,13 @@ def test_fleetsim_orders_is_a_command_of_the_command_line(recorded: dict[str, Pa
     assert main(["orders", str(recorded["crossing"]), "--out", str(tmp_path)]) == 0
     assert sorted(p.name for p in tmp_path.iterdir()) == ["1.orders.jsonl", "2.orders.jsonl"]
     assert main(["orders", str(tmp_path / "nowhere")]) == 2  # a usage error, named
+
+
+def test_fleetsim_orders_exits_2_with_a_one_line_error_for_a_folder_without_a_trace(
+    recorded: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["orders", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert err == f"fleetsim: error: {tmp_path}: no trace.jsonl in this folder (the run did not keep its trace)\n"
+    assert main(["orders", str(recorded["crossing"]), "--out", str(tmp_path / "out")]) == 0  # narrow: a run exports
+    assert sorted(path.name for path in (tmp_path / "out").iterdir()) == ["1.orders.jsonl", "2.orders.jsonl"]
