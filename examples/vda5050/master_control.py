@@ -16,15 +16,18 @@ What it does:
   advances and locks free up.
 
 The reservation rule: a vehicle has at most :data:`AHEAD` released edges ahead of the node it last passed;
-it holds a lock on every node of its released base it has not passed (and, standing still without an
-order, on the node it stands at and the start of the edge it stands on). An edge is released only when its
-end node is locked by no other vehicle and no node one edge away from that end node is either: fleetsim's
-reservation check is geometric, and segments that meet at a junction conflict.
+it holds the edge it is on and every edge of its released base it has not driven (standing still, the edge
+it stands on). An edge is released only when it conflicts with no edge another vehicle holds: fleetsim's
+reservation check is geometric, so two edges conflict when they meet at a node or come closer than
+:data:`CLEARANCE` (taken between the straight lines from node to node).
 
-Deadlock avoidance, the simple fallback: each vehicle's horizon is re-routed at every update, with the
-nodes other vehicles lock or stand on made expensive (:data:`OCCUPIED`) and, for a vehicle of a higher serial
-number, the nodes on the rest of a lower serial number's route too (:data:`YIELD`). So the lower serial goes
-first, and the higher one routes around it where the map has a way (a passing bay) and waits there.
+Deadlock avoidance, the simple fallback: routes are costed so that a vehicle keeps off edges another means
+to drive the other way (:data:`HEAD_ON`: its remaining route, or its next task's plain shortest route), off
+nodes where a vehicle without an order stands (:data:`OCCUPIED`) and, for a higher serial number, off the
+rest of a lower one's route (:data:`YIELD`); a turn-in-place vehicle's horizon is re-routed at every update.
+And a vehicle of a higher serial number that has reached an edge clear of a lower one's remaining route
+releases nothing beyond it that is not clear too: it waits out of the way (in a passing bay) until the
+lower one has passed. The lower serial number goes first.
 """
 
 from __future__ import annotations
@@ -83,7 +86,7 @@ class Vehicle:
     serial: str
     turn_in_place: bool
     start_edge: EdgeKey
-    standing: str  # the edge it stands on once its base is driven
+    standing: EdgeKey  # the edge it stands on once its base is driven
     orders: int = 0
     backing: bool = False  # the progress at the end of the last order sent
     job: Job | None = None
@@ -150,9 +153,7 @@ class MasterControl:
         }
         for v in site["vehicles"]:
             key = (v["startEdgeId"], v["startNodeId"])
-            self.vehicles.setdefault(
-                v["serialNumber"], Vehicle(v["serialNumber"], v["turnInPlace"], key, v["startEdgeId"])
-            )
+            self.vehicles.setdefault(v["serialNumber"], Vehicle(v["serialNumber"], v["turnInPlace"], key, key))
 
     # -- dispatching ---------------------------------------------------------------------------------
 
@@ -170,7 +171,7 @@ class MasterControl:
                 task = self._next_task(vehicle, state)
                 if task is None:
                     continue
-                job = self._plan(vehicle, task, state)
+                job = self._plan(vehicle, task)
                 if job is None:
                     continue
                 vehicle.job = job
@@ -194,15 +195,15 @@ class MasterControl:
         ]
         return min(open_tasks, key=lambda t: _serial_order(t["taskId"]), default=None)
 
-    def _plan(self, vehicle: Vehicle, task: dict[str, Any], state: dict[str, Any]) -> Job | None:
+    def _plan(self, vehicle: Vehicle, task: dict[str, Any]) -> Job | None:
         if vehicle.orders == 0:  # it stands on its start edge: the order begins with it
             start: SearchState = (vehicle.start_edge, vehicle.backing)
             start_node = vehicle.start_edge[1]
-            legs = self._route(vehicle, start, None, task)
+            legs = self._route(vehicle, start, task, begin=True)
         else:
-            start_node = state["lastNodeId"]
-            legs = self._route(vehicle, None, start_node, task)
-        if legs is None:
+            start_node = self.edges[vehicle.standing]["endNodeId"]  # its lastNodeId, once the base is driven
+            legs = self._route(vehicle, (vehicle.standing, vehicle.backing), task, begin=False)
+        if not legs:
             print(f"master control: task {task['taskId']}: no route for vehicle {vehicle.serial}", file=sys.stderr)
             vehicle.done.add(task["taskId"])
             return None
@@ -221,13 +222,14 @@ class MasterControl:
     def _route(
         self,
         vehicle: Vehicle,
-        first: SearchState | None,
-        node: str | None,
+        first: SearchState,
         task: dict[str, Any],
         *,
+        begin: bool,
         plain: bool = False,
     ) -> list[Leg] | None:
-        """The cheapest legs from ``first`` (an edge it must begin with) or ``node`` onto a goal edge."""
+        """The cheapest legs onto a goal edge from ``first``: beginning with it (``begin``: the edge it
+        stands on at its start) or with what may follow it (the edge it stands on after an order)."""
         goals = set(task["goalEdgeIds"])
         want = task.get("goalProgress")
         costs, head_on = ({}, set()) if plain else self._costs(vehicle)
@@ -248,15 +250,12 @@ class MasterControl:
                     graph.add_edge(here, there, weight=weight)
                 if key[0] in goals and (want is None or vehicle.turn_in_place or backing == (want == "reverse")):
                     graph.add_edge(here, sink, weight=0.0)
-        if first is not None:
+        if begin:
             graph.add_edge(source, first, weight=0.0)
-        else:
-            for key, edge in self.edges.items():
-                if edge["startNodeId"] == node:
-                    weight = self._weight(key, costs, head_on)
-                    graph.add_edge(source, (key, vehicle.backing), weight=weight)
-                    if vehicle.turn_in_place:
-                        graph.add_edge(source, (key, not vehicle.backing), weight=weight)
+        elif first in graph:
+            for after in list(graph.successors(first)):
+                if after != sink:
+                    graph.add_edge(source, after, weight=graph.edges[first, after]["weight"])
         try:
             path = nx.shortest_path(graph, source, sink, weight="weight")
         except (nx.NetworkXNoPath, nx.NodeNotFound):
@@ -310,9 +309,9 @@ class MasterControl:
             return []
         backing = vehicle.backing
         if vehicle.orders == 0:
-            legs = self._route(vehicle, (vehicle.start_edge, vehicle.backing), None, task, plain=True)
+            legs = self._route(vehicle, (vehicle.start_edge, vehicle.backing), task, begin=True, plain=True)
         else:
-            legs = self._route(vehicle, None, state["lastNodeId"], task, plain=True)
+            legs = self._route(vehicle, (vehicle.standing, vehicle.backing), task, begin=False, plain=True)
         vehicle.backing = backing
         return legs or []
 
@@ -332,16 +331,18 @@ class MasterControl:
         """The edges the vehicle stands on or may drive without asking again, in order."""
         job = vehicle.job
         if job is None or job.released == 0:
-            return [vehicle.standing]
+            return [vehicle.standing[0]]
         passed = self._passed(vehicle, job)
         held = [leg.edge_id for leg in job.legs[max(passed - 1, 0) : job.released]]
-        return [vehicle.standing, *held] if passed == 0 else held
+        return [vehicle.standing[0], *held] if passed == 0 else held
 
     def _remaining(self, vehicle: Vehicle) -> list[str]:
         """The edges the vehicle holds and those it is still to drive."""
         job = vehicle.job
         if job is None or job.released == 0:
-            return [vehicle.standing, *(leg.edge_id for leg in job.legs)] if job is not None else [vehicle.standing]
+            return (
+                [vehicle.standing[0], *(leg.edge_id for leg in job.legs)] if job is not None else [vehicle.standing[0]]
+            )
         return [*self._holds(vehicle), *(leg.edge_id for leg in job.legs[job.released :])]
 
     def _clashes(self, edge_id: str, edges: set[str]) -> bool:
@@ -381,7 +382,7 @@ class MasterControl:
         self._send(vehicle, job, first, target)
         job.released = target
         if target == len(job.legs):
-            vehicle.standing = job.legs[-1].edge_id
+            vehicle.standing = (job.legs[-1].edge_id, job.legs[-1].start)
 
     def _reroute(self, vehicle: Vehicle, job: Job, target: int) -> None:
         if vehicle.turn_in_place is False:
@@ -389,13 +390,12 @@ class MasterControl:
         task = self.tasks.get(job.task_id)
         if task is None or job.legs[target - 1].edge_id in job.goal_edges:
             return
-        backing = vehicle.backing
-        rest = self._route(vehicle, None, job.legs[target - 1].end, task)
+        backing = vehicle.backing  # always nose first: it turns in place
+        last = job.legs[target - 1]
+        rest = self._route(vehicle, ((last.edge_id, last.start), backing), task, begin=False)
         vehicle.backing = backing
-        if rest is not None:
+        if rest:
             job.legs = job.legs[:target] + rest
-            while job.legs[target - 1].edge_id in job.goal_edges and len(job.legs) > target:
-                job.legs = job.legs[:target]
 
     # -- output --------------------------------------------------------------------------------------
 
