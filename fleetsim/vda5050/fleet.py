@@ -36,7 +36,7 @@ from dataclasses import dataclass, field, replace
 from datetime import datetime, timedelta, timezone
 from typing import Any
 
-from fleetsim.enums import Progress, TurnCapability
+from fleetsim.enums import Disturbed, Progress, TurnCapability
 from fleetsim.layout.layout import Layout
 from fleetsim.planning.checks import CheckContext, Rejection, RejectionCode, check_plans
 from fleetsim.planning.plans import FleetLeg, FleetPlan, Response
@@ -62,6 +62,8 @@ from fleetsim.vda5050.state_model import (
     Envelope2d,
     EStop,
     Factsheet,
+    InfoLevel,
+    Information,
     NodeState,
     OperatingMode,
     PhysicalParameters,
@@ -79,6 +81,7 @@ from fleetsim.vda5050.state_model import (
 __all__ = ["Vda5050Fleet", "Vda5050Settings"]
 
 ARRIVED = 1e-6  # metres short of a leg's end that count as at its exit node
+STILL = 1e-6  # metres per second below which a vehicle stands
 
 
 @dataclass(frozen=True, slots=True)
@@ -417,9 +420,10 @@ class Vda5050Fleet:
             self._fail(vehicle, action, "there is no order to cancel", error_type="noOrderToCancel")
             return
         fixed = tuple(leg for leg in plan.legs if leg.fixed)
-        vehicle.pending = FleetPlan(vehicle.vehicle_id, fixed)
-        vehicle.pending_path = vehicle.path[: len(fixed)]
-        vehicle.pending_status = vehicle.status
+        if len(fixed) < len(plan.legs):  # a horizon to drop, at the vehicle's next planner call
+            vehicle.pending = FleetPlan(vehicle.vehicle_id, fixed)
+            vehicle.pending_path = vehicle.path[: len(fixed)]
+            vehicle.pending_status = vehicle.status
         vehicle.cancelling = action.action_id
         vehicle.actions[action.action_id] = ActionState(action.action_id, ActionStatus.RUNNING, action.action_type)
 
@@ -507,7 +511,8 @@ class Vda5050Fleet:
             tuple(vehicle.errors),
             tuple(vehicle.actions.values()),
             vehicle.paused,
-            state.speed > 0,
+            state.disturbed,
+            _moving(state),
         )
         if key != vehicle.published or now >= vehicle.next_state:
             vehicle.published = key
@@ -525,7 +530,9 @@ class Vda5050Fleet:
         """The cancelled order's plan is in force and the vehicle stands at the end of its base."""
         state = fleet.vehicles[vehicle.vehicle_id]
         settled = vehicle.pending is None and vehicle.handed is None
-        return settled and len(fleet.plans[vehicle.vehicle_id].legs) == 1 and self._at_exit(state) and state.speed == 0
+        return (
+            settled and len(fleet.plans[vehicle.vehicle_id].legs) == 1 and self._at_exit(state) and not _moving(state)
+        )
 
     # -- messages -----------------------------------------------------------------------------------
 
@@ -558,10 +565,13 @@ class Vda5050Fleet:
             order_update_id=vehicle.status.order_update_id,
             last_node_id=last_id,
             last_node_sequence_id=last_sequence,
-            driving=state.speed > 0,
+            driving=_moving(state),
             operating_mode=OperatingMode.AUTOMATIC,
             battery_state=BatteryState(battery_charge=100.0, charging=False),
-            safety_state=SafetyState(e_stop=EStop.NONE, field_violation=False),
+            # A disturbance (fleetsim.sim.disturbances) is what a real vehicle meets on the floor: a stop
+            # is its protective field tripped, a slow-down a warning field; both are told as information.
+            safety_state=SafetyState(e_stop=EStop.NONE, field_violation=state.disturbed is Disturbed.STOPPED),
+            information=_disturbance_information(state),
             node_states=node_states,
             edge_states=edge_states,
             errors=tuple(vehicle.errors),
@@ -713,6 +723,18 @@ class Vda5050Fleet:
 
     def _own_topic(self, name: str) -> str:
         return f"{self.settings.interface_name}/fleetsim/{name}"
+
+
+def _moving(state: VehicleState) -> bool:
+    """Driving: faster than a rounding residue (a vehicle braked to rest may keep 1e-14 m/s)."""
+    return state.speed > STILL
+
+
+def _disturbance_information(state: VehicleState) -> tuple[Information, ...]:
+    if state.disturbed is None:
+        return ()
+    words = "stopped by an obstacle" if state.disturbed is Disturbed.STOPPED else "slowed down"
+    return (Information("disturbance", InfoLevel.INFO, f"the vehicle is {words} (a disturbance of the scenario)"),)
 
 
 def _mark_goals(plan: FleetPlan, queue: tuple[Task, ...], routed: Any) -> FleetPlan:

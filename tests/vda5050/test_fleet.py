@@ -19,7 +19,7 @@ from scripted_master import ScriptedMaster
 
 from fleetsim.load.scenario import load_scenario
 from fleetsim.load.suite import load_suite
-from fleetsim.scenario import Scenario
+from fleetsim.scenario import Disturbance, Scenario
 from fleetsim.sim.loop import run_scenario
 from fleetsim.vda5050.broker import BrokerAddress
 from fleetsim.vda5050.fleet import Vda5050Fleet, Vda5050Settings
@@ -91,7 +91,7 @@ def test_malformed_json_is_a_validation_error_in_the_state_and_an_order_invalid_
     try:
         fleet = Vda5050Fleet(Vda5050Settings(broker=broker, speed=SPEED))
         crossing = _scenario("crossing")
-        going_on = replace(crossing, settings=replace(crossing.settings, stop_on=(), time_limit=3.0))
+        going_on = replace(crossing, settings=replace(crossing.settings, stop_on=(), time_limit=40.0))
         result = run_scenario(going_on, fleet, planner_timeout=None)
     finally:
         tampering.close()
@@ -139,3 +139,16 @@ def test_a_master_control_that_exits_fails_the_run_naming_its_status(tmp_path: P
     result = run_scenario(_scenario("crossing"), planner, planner_timeout=None)
     assert result.ended == "planner-error"
     assert "the master control exited with status 3" in result.failures[0].message
+
+
+def test_a_disturbed_vehicle_tells_it_in_its_state(broker: BrokerAddress, master: ScriptedMaster) -> None:
+    crossing = _scenario("crossing")
+    stop = Disturbance(vehicle=1, kind="stop", duration=4.0, at=3.0)
+    disturbed = replace(crossing, disturbances=(stop,))
+    result = run_scenario(disturbed, Vda5050Fleet(Vda5050Settings(broker=broker, speed=SPEED)), planner_timeout=None)
+    assert result.passed and [d.kind for d in result.disturbances] == ["stop"]
+    told = [s for s in master.history if s["serialNumber"] == "1" and s["information"]]
+    assert told and told[0]["information"][0]["infoType"] == "disturbance"
+    assert all(s["safetyState"]["fieldViolation"] for s in told)
+    calm = [s for s in master.history if s["serialNumber"] == "2"]
+    assert calm and not any(s["information"] or s["safetyState"]["fieldViolation"] for s in calm)
