@@ -84,6 +84,8 @@ def test_vda_5050_libs_master_controller_drives_the_crossing_one_vehicle_at_a_ti
     assert result["tasks"] == {"total": 2, "completed": 2}
     assert result["collisions"] == [] and result["rejections"] == [] and result["failures"] == []
     assert result["paced"] == 20.0
+    # The library drops (and says so on stderr) any inbound message its 2.0 validators reject: none was.
+    assert not [line for line in stderr if "Drop inbound message" in line]
     master = [line for line in stderr if line.startswith("master.js: ")]
     assert any("vda-5050-lib MasterController started on mqtt://127.0.0.1:" in line for line in master)
     assigned = [k for k, line in enumerate(master) if ": vda-5050-lib-" in line and " to vehicle " in line]
@@ -103,6 +105,7 @@ def test_the_libs_instant_actions_key_is_named_in_the_state_and_rejected_as_orde
     assert rejection["code"] == "order-invalid"
     assert "expected key 'actions'" in rejection["message"] and "'instantActions'" in rejection["message"]
     assert result["tasks"]["completed"] == 0
+    assert not [line for line in stderr if "Drop inbound message" in line]  # a state with errors is valid too
     # The vehicle told the library why, in its state's errors, as the library's state subscription read it.
     prefix = "master.js: vehicle 1 errors: "
     [reported, *_] = [json.loads(line.removeprefix(prefix)) for line in stderr if line.startswith(prefix)]
