@@ -147,8 +147,11 @@ class Vda5050Fleet:
         self.vehicles: dict[int, _Vehicle] = {}
         self.graph: SiteGraph | None = None
         self.epoch = datetime.now(timezone.utc)
-        self.started = 0.0  # time.monotonic() at the first step
+        self.started = 0.0  # time.monotonic() when the paced run began (after the master control spoke)
+        self.finished = 0.0  # time.monotonic() when it ended
         self.latencies: list[float] = []  # seconds from an order's arrival to its plan's verdict
+        self.lag = 0.0  # the most wall seconds a step began behind its paced time (0: the pace was kept)
+        self.late_steps = 0  # steps that began more than one step's wall time behind
         self._arrived: dict[int, float] = {}
         self._site_link: MqttLink | None = None
 
@@ -183,6 +186,7 @@ class Vda5050Fleet:
         return self._hand(task.vehicle_id)
 
     def close(self) -> None:
+        self.finished = time.monotonic()  # the paced part ran from ``started`` to here
         for vehicle in self.vehicles.values():
             if vehicle.link.connected:
                 self._publish(
@@ -302,6 +306,10 @@ class Vda5050Fleet:
         wait = target - time.monotonic()
         if wait > 0:
             time.sleep(wait)
+        elif -wait > self.lag:
+            self.lag = -wait
+        if -wait > 0.1 / self.settings.speed:  # more than a (default) step behind
+            self.late_steps += 1
 
     def _verdict(self, vehicle: _Vehicle, fleet: FleetSnapshot) -> None:
         """Whether the plan handed at the last call was accepted: the plan in force is what it became."""
