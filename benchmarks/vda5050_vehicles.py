@@ -1,6 +1,9 @@
 """What VDA 5050 vehicles cost: message rates, order latency, CPU per vehicle, and where pacing breaks.
 
-    python benchmarks/vda5050.py [--vehicles 10,50,100,200] [--speeds 10,20,50] [--seconds 20]
+(Not named ``vda5050.py``: with ``benchmarks/`` on ``sys.path`` that would shadow the ``vda5050`` package
+of vda5050-sdk, whose schemas the tests validate with.)
+
+    python benchmarks/vda5050_vehicles.py [--vehicles 10,50,100,200] [--speeds 10,20,50] [--seconds 20]
 
 Each fleet drives a generated warehouse lattice (``benchmarks/warehouse.py``) through fleetsim's embedded
 broker, with state and visualization at their default rates (state on every change and every 5 simulated
