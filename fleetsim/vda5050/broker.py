@@ -144,8 +144,7 @@ def check_reachable(address: BrokerAddress, timeout: float = 5.0) -> None:
     Only TCP: a TLS or login problem shows when a client connects, with the broker's own reason.
     """
     try:
-        with socket.create_connection((address.host, address.port), timeout=timeout):
-            pass
+        socket.create_connection((address.host, address.port), timeout=timeout).close()
     except OSError as exc:
         reason = "timed out" if isinstance(exc, TimeoutError) else exc.strerror or str(exc)
         msg = f"cannot reach the MQTT broker at {address.url}: {reason}"

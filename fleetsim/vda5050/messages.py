@@ -244,7 +244,7 @@ def _actions(reader: _Reader, obj: Mapping[str, Any], key: str, path: str) -> tu
                     reader.problem(f"{at}.value", f"{parameter['value']!r} is not a {reader.version} parameter value")
                 else:
                     parameters.append(ActionParameter(key_, parameter["value"]))
-            # An invalid blockingType is already a problem, so the placeholder NONE never leaves this module.
+            # An invalid blockingType is a problem already: the message is refused, and NONE fills an Action never used.
             actions.append(
                 Action(
                     action_type,
