@@ -12,10 +12,10 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from runs import run_command
 
 ROOT = Path(__file__).resolve().parents[2]
 MASTER = ROOT / "examples" / "vda5050" / "master_control.py"
-SUITE = "scenario_suites/examples.fleetsim.yaml"
 EXAMPLES = {"crossing": 2, "loop-one-way": 4, "corridor-passing-bay": 2, "mixed-shapes": 3}  # name: tasks
 
 
@@ -25,7 +25,7 @@ def results() -> dict[str, tuple[int, str, dict[str, Any] | None]]:
     spec = f"vda5050:speed=20,exec={sys.executable} {MASTER}"
     runs = {
         name: subprocess.Popen(
-            [sys.executable, "-m", "fleetsim", "run", f"{SUITE}::{name}", "--planner", spec, "--json"],
+            run_command(name, spec),
             cwd=ROOT,
             stdout=subprocess.PIPE,
             stderr=subprocess.PIPE,

@@ -5,11 +5,11 @@ from __future__ import annotations
 
 import json
 import shutil
-import subprocess
 import sys
 from pathlib import Path
 
 import pytest
+from runs import run_example
 
 from fleetsim.exec.spec import load_planner_factory
 from fleetsim.sim.planner_spec import PlannerSpecError
@@ -66,22 +66,7 @@ def test_each_mistake_is_named(spec: str, words: str) -> None:
 
 def test_fleetsim_run_drives_the_vehicles_with_a_master_control_it_starts(tmp_path: Path) -> None:
     spec = f"vda5050:speed=20,exec={sys.executable} {MASTER}"
-    done = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "fleetsim",
-            "run",
-            "scenario_suites/examples.fleetsim.yaml::crossing",
-            "--planner",
-            spec,
-            "--json",
-        ],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    done = run_example("crossing", spec)
     assert done.returncode == 0, done.stderr
     [result] = [json.loads(line) for line in done.stdout.splitlines()]
     assert result["status"] == "passed" and result["tasks"] == {"total": 2, "completed": 2}

@@ -19,12 +19,12 @@ import json
 import os
 import shutil
 import subprocess
-import sys
 from pathlib import Path
 from typing import Any
 
 import pytest
 from official import NODE_DIR
+from runs import run_example
 
 ROOT = Path(__file__).resolve().parents[2]
 MASTER = NODE_DIR / "master.js"
@@ -54,23 +54,7 @@ def _run(node: str, **environment: str) -> tuple[dict[str, Any], list[str]]:
     """``fleetsim run`` of the crossing with master.js as its master control: the JSON result and the
     stderr lines (fleetsim's and master.js's, which it inherits)."""
     spec = f"vda5050:speed=20,exec={node} {MASTER.relative_to(ROOT)}"
-    done = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "fleetsim",
-            "run",
-            "scenario_suites/examples.fleetsim.yaml::crossing",
-            "--planner",
-            spec,
-            "--json",
-        ],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=120,
-        env={**os.environ, **environment},
-    )
+    done = run_example("crossing", spec, **environment)
     lines = done.stdout.splitlines()
     assert len(lines) == 1, done.stdout + done.stderr
     result: dict[str, Any] = json.loads(lines[0])
