@@ -8,12 +8,9 @@ this module.
 from __future__ import annotations
 
 import functools
-import os
-import shlex
-import shutil
 
 from fleetsim.exec.process import SubprocessPlanner
-from fleetsim.sim.planner_spec import PlannerFactory, PlannerSpecError, import_planner_factory
+from fleetsim.sim.planner_spec import PlannerFactory, command_words, import_planner_factory
 
 __all__ = ["EXEC_PREFIX", "VDA5050_PREFIX", "load_planner_factory"]
 
@@ -39,17 +36,6 @@ def load_planner_factory(spec: str, *, call_timeout: float | None = 10.0) -> Pla
 
 
 def _exec_factory(spec: str, call_timeout: float | None) -> PlannerFactory:
-    try:
-        command = shlex.split(spec[len(EXEC_PREFIX) :])
-    except ValueError as error:
-        msg = f"planner spec {spec!r}: the command cannot be split into words ({error})"
-        raise PlannerSpecError(msg, spec) from None
-    if not command:
-        msg = f"planner spec {spec!r} names no command; write exec:COMMAND, e.g. 'exec:node planner.js'"
-        raise PlannerSpecError(msg, spec)
-    program = command[0]
-    if shutil.which(program) is None:
-        where = "is not a file" if os.sep in program else "is not on PATH"
-        msg = f"planner spec {spec!r}: the program {program!r} {where}"
-        raise PlannerSpecError(msg, spec)
+    empty = f"planner spec {spec!r} names no command; write exec:COMMAND, e.g. 'exec:node planner.js'"
+    command = list(command_words(spec, spec[len(EXEC_PREFIX) :], whose="the", empty=empty))
     return PlannerFactory(spec, functools.partial(SubprocessPlanner, command, timeout=call_timeout))

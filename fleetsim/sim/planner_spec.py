@@ -13,6 +13,8 @@ from __future__ import annotations
 import importlib
 import inspect
 import os
+import shlex
+import shutil
 import sys
 import traceback
 from collections.abc import Callable
@@ -24,7 +26,7 @@ from fleetsim.errors import FleetsimError
 from fleetsim.load.scenario_files import did_you_mean
 from fleetsim.planning.protocol import Planner
 
-__all__ = ["METHODS", "PlannerFactory", "PlannerSpecError", "import_planner_factory"]
+__all__ = ["METHODS", "PlannerFactory", "PlannerSpecError", "command_words", "import_planner_factory"]
 
 EXAMPLE = "fleetsim.planners:ReservingPlanner"
 METHODS = ("plan_routes", "fix_legs")
@@ -247,3 +249,22 @@ def _user_traceback(exc: BaseException) -> str:
     lines = ["Traceback (most recent call last):\n", *traceback.format_list(_user_frames(exc))]
     lines += traceback.format_exception_only(type(exc), exc)
     return "".join(lines)
+
+
+def command_words(spec: str, text: str, *, whose: str, empty: str) -> tuple[str, ...]:
+    """The words of the command ``text`` that planner spec ``spec`` names (``exec:COMMAND``, a
+    ``vda5050:`` spec's ``exec=``), its program found on PATH or as a file; else a
+    :class:`PlannerSpecError` naming the spec. ``whose`` says whose command the messages speak of ("the",
+    "the master control's"); ``empty`` is the whole message for a spec that names no command."""
+    try:
+        words = tuple(shlex.split(text))
+    except ValueError as error:
+        msg = f"planner spec {spec!r}: {whose} command cannot be split into words ({error})"
+        raise PlannerSpecError(msg, spec) from None
+    if not words:
+        raise PlannerSpecError(empty, spec)
+    if shutil.which(words[0]) is None:
+        where = "is not a file" if os.sep in words[0] else "is not on PATH"
+        msg = f"planner spec {spec!r}: {whose} program {words[0]!r} {where}"
+        raise PlannerSpecError(msg, spec)
+    return words

@@ -16,12 +16,9 @@ and the topic names in its environment: see :data:`ENVIRONMENT`).
 from __future__ import annotations
 
 import functools
-import os
-import shlex
-import shutil
 from dataclasses import replace
 
-from fleetsim.sim.planner_spec import PlannerFactory, PlannerSpecError
+from fleetsim.sim.planner_spec import PlannerFactory, PlannerSpecError, command_words
 from fleetsim.vda5050.broker import BrokerError, check_reachable, parse_broker_url
 from fleetsim.vda5050.fleet import Vda5050Fleet, Vda5050Settings
 from fleetsim.vda5050.model import VERSIONS
@@ -100,16 +97,5 @@ def _set(spec: str, settings: Vda5050Settings, key: str, value: str) -> Vda5050S
 
 
 def _command(spec: str, text: str) -> tuple[str, ...]:
-    try:
-        words = tuple(shlex.split(text))
-    except ValueError as error:
-        msg = f"planner spec {spec!r}: the master control's command cannot be split into words ({error})"
-        raise PlannerSpecError(msg, spec) from None
-    if not words:
-        msg = f"planner spec {spec!r}: exec= names no command; write exec=COMMAND, e.g. 'exec=python master.py'"
-        raise PlannerSpecError(msg, spec)
-    if shutil.which(words[0]) is None:
-        where = "is not a file" if os.sep in words[0] else "is not on PATH"
-        msg = f"planner spec {spec!r}: the master control's program {words[0]!r} {where}"
-        raise PlannerSpecError(msg, spec)
-    return words
+    empty = f"planner spec {spec!r}: exec= names no command; write exec=COMMAND, e.g. 'exec=python master.py'"
+    return command_words(spec, text, whose="the master control's", empty=empty)
