@@ -227,24 +227,16 @@ def _sequence_problems(order: Order, nodes: tuple[Node, ...], edges: tuple[Edge,
             )
         )
     start = nodes[0].sequence_id
-    for k, node in enumerate(nodes):
-        if node.sequence_id != start + 2 * k:
+    numbered = [("node", "nodeId", n.node_id, n.sequence_id, start + 2 * k) for k, n in enumerate(nodes)]
+    numbered += [("edge", "edgeId", e.edge_id, e.sequence_id, start + 2 * k + 1) for k, e in enumerate(edges)]
+    for kind, key, ident, sequence_id, expected in numbered:
+        if sequence_id != expected:
             problems.append(
                 _problem(
-                    f"node {node.node_id!r} has sequenceId {node.sequence_id}, expected {start + 2 * k}: nodes and edges "
-                    "alternate by sequenceId (node, edge, node, ...)",
-                    ("nodeId", node.node_id),
-                    ("sequenceId", str(node.sequence_id)),
-                )
-            )
-    for k, edge in enumerate(edges):
-        if edge.sequence_id != start + 2 * k + 1:
-            problems.append(
-                _problem(
-                    f"edge {edge.edge_id!r} has sequenceId {edge.sequence_id}, expected {start + 2 * k + 1}: nodes and "
-                    "edges alternate by sequenceId (node, edge, node, ...)",
-                    ("edgeId", edge.edge_id),
-                    ("sequenceId", str(edge.sequence_id)),
+                    f"{kind} {ident!r} has sequenceId {sequence_id}, expected {expected}: nodes and edges alternate by "
+                    "sequenceId (node, edge, node, ...)",
+                    (key, ident),
+                    ("sequenceId", str(sequence_id)),
                 )
             )
     return problems
