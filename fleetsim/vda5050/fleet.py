@@ -145,7 +145,7 @@ class Vda5050Fleet:
         self.broker: EmbeddedBroker | None = None
         self.address: BrokerAddress | None = self.settings.broker
         self.vehicles: dict[int, _Vehicle] = {}
-        self.graph: SiteGraph | None = None
+        self.graph: SiteGraph | None = None  # the map's nodes and edges, from the first step on
         self.epoch = datetime.now(timezone.utc)
         self.started = 0.0  # time.monotonic() when the paced run began (after the master control spoke)
         self.finished = 0.0  # time.monotonic() when it ended
@@ -154,6 +154,14 @@ class Vda5050Fleet:
         self.late_steps = 0  # steps that began more than one step's wall time behind
         self._arrived: dict[int, float] = {}
         self._site_link: MqttLink | None = None
+
+    @property
+    def site(self) -> SiteGraph:
+        """The map's nodes and edges (made at the first step, when the layout is known)."""
+        if self.graph is None:
+            msg = "the VDA 5050 vehicles have not started: their first step has not begun"
+            raise RuntimeError(msg)
+        return self.graph
 
     # -- the planner protocol ------------------------------------------------------------------------
 
@@ -335,9 +343,9 @@ class Vda5050Fleet:
             passed = vehicle.path.pop(0)
             if passed.end is not None:
                 vehicle.last_node = (passed.end.node_id, passed.end.sequence_id)
-            elif self.graph is not None:
+            else:
                 vehicle.last_node = (
-                    self.graph.exit_node(passed.leg.segment, passed.leg.traverse),
+                    self.site.exit_node(passed.leg.segment, passed.leg.traverse),
                     vehicle.last_node[1],
                 )
         for entry, leg in zip(vehicle.path, legs, strict=True):
@@ -345,7 +353,6 @@ class Vda5050Fleet:
 
     def _intake(self, vehicle: _Vehicle, fleet: FleetSnapshot, layout: Layout) -> list[Rejection]:
         refused: list[Rejection] = []
-        assert self.graph is not None
         for inbound in vehicle.link.drain():
             name = inbound.topic.rsplit("/", 1)[-1]
             if name == "instantActions":
@@ -357,11 +364,11 @@ class Vda5050Fleet:
                 refused.append(self._refuse(vehicle, invalid.errors))
                 continue
             state = fleet.vehicles[vehicle.vehicle_id]
-            reading = read_order(order, self.graph, layout, state.type, state.progress)
+            reading = read_order(order, self.site, layout, state.type, state.progress)
             if reading.problems:
                 refused.append(self._refuse(vehicle, reading.problems))
                 continue
-            join, plan, errors = join_order(order, reading, vehicle.status, fleet.plans[vehicle.vehicle_id], self.graph)
+            join, plan, errors = join_order(order, reading, vehicle.status, fleet.plans[vehicle.vehicle_id], self.site)
             if join is Join.RESENT or plan is None:
                 if errors:
                     refused.append(self._refuse(vehicle, errors))
@@ -467,7 +474,7 @@ class Vda5050Fleet:
 
     def _announce(self, vehicle: _Vehicle, fleet: FleetSnapshot) -> None:
         """Publish each task when it becomes the vehicle's next; a task no longer queued is done."""
-        assert self._site_link is not None and self.graph is not None
+        assert self._site_link is not None
         queue = fleet.tasks.get(vehicle.vehicle_id, ())
         for task_id in sorted(vehicle.announced - {t.id for t in queue}):
             vehicle.announced.discard(task_id)
@@ -489,8 +496,7 @@ class Vda5050Fleet:
             )
 
     def _transport_order(self, task: Task, vehicle: _Vehicle, now: float) -> dict[str, Any]:
-        assert self.graph is not None
-        graph = self.graph
+        graph = self.site
         segment = task.goal_segment
         edges = sorted({graph.edge_id(segment, t) for t in graph.traverses(segment)})
         nodes = sorted({graph.node_at(segment, False), graph.node_at(segment, True)})
@@ -545,7 +551,7 @@ class Vda5050Fleet:
     # -- messages -----------------------------------------------------------------------------------
 
     def _state(self, vehicle: _Vehicle, state: VehicleState, now: float) -> State:
-        at_exit = bool(vehicle.path) and self.graph is not None and self._at_exit(state)
+        at_exit = bool(vehicle.path) and self._at_exit(state)
         ahead = vehicle.path[1:] if at_exit else vehicle.path
         node_states = tuple(
             NodeState(entry.end.node_id, entry.end.sequence_id, entry.end.released)
@@ -562,8 +568,8 @@ class Vda5050Fleet:
             end = vehicle.path[0].end
             if end is not None:
                 last_id, last_sequence = end.node_id, end.sequence_id
-            elif self.graph is not None:
-                last_id = self.graph.exit_node(state.segment, state.traverse)
+            else:
+                last_id = self.site.exit_node(state.segment, state.traverse)
         return State(
             header_id=self._header(vehicle, "state"),
             timestamp=self._stamp(now),
@@ -591,13 +597,11 @@ class Vda5050Fleet:
         )
 
     def _at_exit(self, state: VehicleState) -> bool:
-        assert self.graph is not None
-        return state.distance >= self.graph.segment_length(state.segment) - ARRIVED
+        return state.distance >= self.site.segment_length(state.segment) - ARRIVED
 
     def _position(self, state: VehicleState) -> AgvPosition:
-        assert self.graph is not None
         return AgvPosition(
-            state.x, state.y, math.remainder(state.heading, math.tau), self.graph.map_id, position_initialized=True
+            state.x, state.y, math.remainder(state.heading, math.tau), self.site.map_id, position_initialized=True
         )
 
     @staticmethod
@@ -673,8 +677,7 @@ class Vda5050Fleet:
         )
 
     def _site(self, fleet: FleetSnapshot, layout: Layout) -> bytes:
-        assert self.graph is not None
-        graph = self.graph
+        graph = self.site
         nodes = [{"nodeId": p.node_id, "x": p.x, "y": p.y} for p in graph.places.values()]
         edges = []
         for sid in sorted(layout.segments):
