@@ -112,7 +112,12 @@ class MasterControl:
         if user:
             self.client.username_pw_set(user, os.environ.get("FLEETSIM_MQTT_PASSWORD"))
         self.client.on_message = self._on_message
+        # fleetsim's master/connection: ONLINE while it runs, OFFLINE when it stops, CONNECTIONBROKEN (its
+        # last will, sent by the broker) when it crashes: fleetsim then fails the run, naming it.
+        self.presence = f"{interface}/fleetsim/master/connection"
+        self.client.will_set(self.presence, self._connection("CONNECTIONBROKEN"), qos=1, retain=True)
         self.client.connect(host, port)
+        self.client.publish(self.presence, self._connection("ONLINE"), qos=1, retain=True)
         self.client.subscribe(
             [
                 (f"{interface}/fleetsim/site", 1),
@@ -123,8 +128,20 @@ class MasterControl:
         self.client.loop_start()
 
     def close(self) -> None:
+        self.client.publish(self.presence, self._connection("OFFLINE"), qos=1, retain=True).wait_for_publish(5.0)
         self.client.loop_stop()
         self.client.disconnect()
+
+    def _connection(self, state: str) -> bytes:
+        message = {
+            "headerId": 0,
+            "timestamp": datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%S.%f")[:-4] + "Z",
+            "version": self.version,
+            "manufacturer": self.manufacturer,
+            "serialNumber": "example-master-control",
+            "connectionState": state,
+        }
+        return json.dumps(message).encode()
 
     # -- input --------------------------------------------------------------------------------------
 

@@ -114,5 +114,7 @@ class SteppedPlanner(Planner, Protocol):
 
         A stepped planner may also have ``paused() -> set of vehicle ids``, asked right after: the vehicles
         held still from this step on (a VDA 5050 ``startPause``), each braking to rest within the distance
-        its fixed legs leave it and staying until it is no longer named."""
+        its fixed legs leave it and staying until it is no longer named. And ``explain_wait(vehicle_id, now)
+        -> str``, asked when a run ends stuck (deadlock or time limit) for each vehicle with a pending task:
+        a sentence the stuck-fleet diagnosis adds to that vehicle's finding (empty: nothing to add)."""
         ...

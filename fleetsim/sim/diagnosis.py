@@ -11,6 +11,10 @@ gets one :class:`Finding` with a stable ``reason`` code:
 - ``no-plan``: its plan ends before the goal leg of its head task and the planner added nothing;
 - ``moving`` (time limit only): it is still driving; the run needed more time.
 
+A planner may add a ``note`` to a vehicle's finding (fleetsim's VDA 5050 vehicles tell which order the
+vehicle waits for and when its master control last spoke to it): it ends the finding's line and the root
+cause it is.
+
 A vehicle that waits needs *every* holder to move (the planner cannot fix the leg while any of them holds
 a conflicting segment), so every cycle of the wait-for graph is a deadlock by itself, and so is every
 chain that ends at a vehicle that will not move: one with no tasks left, or one whose finding is
@@ -21,7 +25,7 @@ headline names the one most vehicles wait behind.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any, Literal
 
 import networkx as nx
@@ -91,6 +95,7 @@ class Finding:
     plan_end: int | None = None  # the segment its plan ends on (no-plan)
     planned_near: tuple[int, ...] = ()  # not-fixed: vehicles whose unfixed legs come near the wanted leg
     chain: tuple[int, ...] = ()  # waits-for: the way to its root cause, itself first
+    note: str = ""  # what the planner says about this vehicle's wait (a VDA 5050 master control's order)
 
     @property
     def blocked_by(self) -> tuple[int, ...]:
@@ -101,7 +106,10 @@ class Finding:
         return tuple(sorted({segment for _, segments in self.held for segment in segments}))
 
     def text(self) -> str:
-        """One line of the report."""
+        """One line of the report, the planner's note last."""
+        return f"{self._text()}; {self.note}" if self.note else self._text()
+
+    def _text(self) -> str:
         who = f"vehicle {self.vehicle} (task {self.task.id}, to segment {self.task.goal_segment})"
         wanted = _leg_text(self.leg_index, self.leg) if self.leg is not None and self.leg_index is not None else "leg"
         if self.reason in ("waits-for", "blocked-by-idle"):
@@ -156,6 +164,8 @@ class Finding:
             document["planned_near"] = list(self.planned_near)
         if self.chain:
             document["chain"] = list(self.chain)
+        if self.note:
+            document["note"] = self.note
         return document
 
 
@@ -272,6 +282,7 @@ class StuckFacts:
     plan_changed: Mapping[int, float]  # when the planner last changed each vehicle's plan (absent: never)
     route_errors: Sequence[Mapping[str, Any]]  # {time, vehicle, message}, in order
     accepted_plans: int  # plans accepted over the run (any that changed something)
+    notes: Mapping[int, str] = field(default_factory=dict)  # the planner's word on a vehicle's wait
 
 
 def diagnose(facts: StuckFacts) -> Diagnosis:
@@ -311,7 +322,7 @@ def _holders(plans: Mapping[int, FleetPlan]) -> dict[int, list[int]]:
 
 def _finding(facts: StuckFacts, vid: int, holders: Mapping[int, list[int]]) -> Finding:
     plan, task, state = facts.plans[vid], facts.heads[vid], facts.states[vid]
-    base = Finding(vehicle=vid, reason="no-plan", segment=state.segment, task=task)
+    base = Finding(vehicle=vid, reason="no-plan", segment=state.segment, task=task, note=facts.notes.get(vid, ""))
     goal_index = next((i for i, leg in enumerate(plan.legs) if leg.goal_for_task == task.id), None)
     if facts.kind == "timeout" and facts.last_moved.get(vid, -1.0) >= facts.time - 1e-9:
         return _moving(facts, base, plan, state, goal_index)
@@ -426,7 +437,8 @@ def _roots(
             continue
         kind: RootKind = finding.reason  # type: ignore[assignment]  # a sink is never waits-for
         where = (finding.leg.segment,) if finding.leg is not None else (finding.segment,)
-        roots.append(RootCause(kind, (vehicle,), where, tuple(waiting), tuple(behind), _detail(finding)))
+        detail = f"{_detail(finding)}; {finding.note}" if finding.note else _detail(finding)
+        roots.append(RootCause(kind, (vehicle,), where, tuple(waiting), tuple(behind), detail))
     return tuple(sorted(roots, key=lambda r: (-len(r.behind), _ROOT_ORDER[r.kind], r.vehicles)))
 
 

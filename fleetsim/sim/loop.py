@@ -22,7 +22,7 @@ import math
 import threading
 import time
 import traceback
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -39,7 +39,7 @@ from fleetsim.planning.controller import CallOutcome, FleetController
 from fleetsim.planning.protocol import Planner, SteppedPlanner
 from fleetsim.planning.reservations import CollisionAlert
 from fleetsim.planning.snapshot import VehicleState
-from fleetsim.scenario import Scenario
+from fleetsim.scenario import Scenario, Task
 from fleetsim.sim.diagnosis import Diagnosis, StuckFacts, diagnose
 from fleetsim.sim.disturbances import Disturber
 from fleetsim.sim.guard import PlannerFault, PlannerGuard
@@ -274,8 +274,25 @@ class _Run:
             plan_changed=self.plan_changed,
             route_errors=self.route_errors,
             accepted_plans=self.accepted_plans,
+            notes=self.wait_notes(controller.tasks.heads(), now),
         )
         return diagnose(facts)
+
+    def wait_notes(self, heads: Mapping[int, Task], now: float) -> dict[int, str]:
+        """A stepped planner's word on why each vehicle with a pending task waits (``explain_wait``), if it
+        has one; a planner that raises is named in the note instead, and the diagnosis goes on."""
+        explain = getattr(self.stepped, "explain_wait", None)
+        if not callable(explain):
+            return {}
+        notes = {}
+        for vehicle in sorted(heads):
+            try:
+                note = explain(vehicle, now)
+            except Exception as exc:
+                note = f"(the planner's explain_wait raised {type(exc).__name__}: {exc})"
+            if note:
+                notes[vehicle] = str(note)
+        return notes
 
 
 def run_scenario(

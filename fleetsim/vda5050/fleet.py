@@ -19,7 +19,9 @@ with an error, and the order is driven.
 Beside the standard's topics, two of fleetsim's own under ``interfaceName/fleetsim/`` hand the master
 control what a warehouse system and a map server would: ``site`` (retained: the nodes and edges of the
 map, :mod:`.places`) and ``transportOrders/<taskId>`` (retained: each task when it becomes its vehicle's
-next one, and again when it is done).
+next one, and again when it is done); fleetsim reads a third, ``master/connection``, where a master
+control may tell its own presence as a vehicle does (its last will CONNECTIONBROKEN fails the run).
+A run that ends stuck asks :meth:`Vda5050Fleet.explain_wait` which order each waiting vehicle waits for.
 """
 
 from __future__ import annotations
@@ -45,7 +47,14 @@ from fleetsim.scenario import Task
 from fleetsim.sim.planner_spec import PlannerSpecError
 from fleetsim.vda5050.broker import BrokerAddress, EmbeddedBroker
 from fleetsim.vda5050.link import MqttLink, Will
-from fleetsim.vda5050.messages import MessageInvalid, decode_instant_actions, decode_order, encode, topic
+from fleetsim.vda5050.messages import (
+    MessageInvalid,
+    decode_connection,
+    decode_instant_actions,
+    decode_order,
+    encode,
+    topic,
+)
 from fleetsim.vda5050.model import VERSIONS, Action, Edge, ErrorReference, Node, VdaError
 from fleetsim.vda5050.orders import Join, OrderStatus, join_order, read_order, vda_error
 from fleetsim.vda5050.places import SiteGraph, site_graph
@@ -131,6 +140,7 @@ class _Vehicle:
     actions: dict[str, ActionState] = field(default_factory=dict)  # by actionId, in arrival order
     paused: bool = False
     cancelling: str | None = None  # the actionId of a cancelOrder until the base is driven
+    heard: float | None = None  # the simulated time of the master control's last message to it
 
 
 class Vda5050Fleet:
@@ -154,6 +164,8 @@ class Vda5050Fleet:
         self.late_steps = 0  # steps that began more than one step's wall time behind
         self._arrived: dict[int, float] = {}
         self._site_link: MqttLink | None = None
+        self.master_name = ""  # the serialNumber a master control announced on master/connection
+        self.master_left = ""  # how and when it went OFFLINE with no task queued (the run may go on)
 
     @property
     def site(self) -> SiteGraph:
@@ -170,7 +182,7 @@ class Vda5050Fleet:
             self._start(fleet, layout)
             self._await_master(fleet)
         self._pace(fleet.time)
-        self._check_master(fleet.time)
+        self._check_master(fleet)
         refused: list[Rejection] = []
         for vehicle in self.vehicles.values():
             self._verdict(vehicle, fleet)
@@ -186,6 +198,41 @@ class Vda5050Fleet:
     def paused(self) -> set[int]:
         """The vehicles a ``startPause`` holds still (the harness brakes them)."""
         return {vid for vid, vehicle in self.vehicles.items() if vehicle.paused}
+
+    def explain_wait(self, vehicle_id: int, now: float) -> str:
+        """For the stuck-fleet diagnosis, in VDA 5050's terms: which order the vehicle holds and what it
+        waits for (an order update releasing its horizon, or a new order), when the master control last
+        sent it anything, and whether it is paused or the master control is gone."""
+        vehicle = self.vehicles.get(vehicle_id)
+        if vehicle is None:
+            return ""
+        status = vehicle.status
+        if not status.order_id:
+            tasks = sorted(vehicle.announced)
+            published = (
+                f" (its task {tasks[0]} is on {self._own_topic(f'transportOrders/{tasks[0]}')})" if tasks else ""
+            )
+            parts = [f"VDA 5050: it has had no order{published}"]
+        else:
+            horizon = [e.edge.edge_id for e in vehicle.path if e.edge is not None and not e.edge.released]
+            waits = (
+                f"it waits for an order update releasing its horizon ({', '.join(horizon)})"
+                if horizon
+                else "its order has no horizon: it waits for an order update or a new order"
+            )
+            parts = [
+                f"VDA 5050: order {status.order_id!r} (update {status.order_update_id}) is released up to node "
+                f"{status.stitch_node_id!r} (sequence {status.stitch_sequence_id}); {waits}"
+            ]
+        if vehicle.heard is None:
+            parts.append("the master control has sent it nothing")
+        else:
+            parts.append(f"the master control's last message to it came at t = {vehicle.heard:.1f} s")
+        if vehicle.paused:
+            parts.append("it is paused (startPause without stopPause)")
+        if self.master_left:
+            parts.append(self.master_left)
+        return "; ".join(parts)
 
     def plan_routes(self, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
         return self._hand(task.vehicle_id)
@@ -226,6 +273,7 @@ class Vda5050Fleet:
         self.graph = site_graph(layout, map_id=map_id)
         self._site_link = MqttLink(self.address, f"fleetsim-site-{id(self):x}")
         self._site_link.connect(settings.connect_timeout)
+        self._site_link.subscribe(self._own_topic("master/connection"), qos=1)
         self._site_link.publish(self._own_topic("site"), self._site(fleet, layout), qos=1, retain=True)
         for vid in sorted(fleet.vehicles):
             serial = str(vid)
@@ -282,7 +330,7 @@ class Vda5050Fleet:
         for vehicle in self.vehicles.values():
             self._announce(vehicle, fleet)  # the tasks it is to dispatch
         while not any(v.link.pending for v in self.vehicles.values()):
-            self._check_master(0.0)
+            self._check_master(fleet)
             left = deadline - time.monotonic()
             if left <= 0:
                 assert self.address is not None
@@ -297,14 +345,44 @@ class Vda5050Fleet:
             next(iter(self.vehicles.values())).link.wait(min(1.0, left))
         self.started = time.monotonic()
 
-    def _check_master(self, now: float) -> None:
-        """A master control started with ``exec=`` that has exited ends the run, naming its status."""
-        if self.master is None or self.master.poll() is None:
-            return
-        status = self.master.returncode
-        self.master = None
-        msg = f"the master control exited with status {status} at t = {now:.1f} s; the run cannot go on without it"
-        raise RuntimeError(msg)
+    def _check_master(self, fleet: FleetSnapshot) -> None:
+        """A master control that has gone ends the run, naming how: started with ``exec=`` and exited, or
+        announced on ``master/connection`` and then CONNECTIONBROKEN (its last will: it crashed or its
+        network failed) or OFFLINE while tasks are queued. Retained messages from before the run are
+        history: only a retained ONLINE counts (the master control connected before the vehicles)."""
+        now = fleet.time
+        if self.master is not None and self.master.poll() is not None:
+            status = self.master.returncode
+            self.master = None
+            msg = f"the master control exited with status {status} at t = {now:.1f} s; the run cannot go on without it"
+            raise RuntimeError(msg)
+        assert self._site_link is not None
+        where = self._own_topic("master/connection")
+        for inbound in self._site_link.drain():
+            try:
+                said = decode_connection(inbound.payload, self.settings.version)
+            except MessageInvalid as invalid:
+                problems = "; ".join(e.error_description for e in invalid.errors)
+                print(f"fleetsim: ignored a message on {where} that is not a connection: {problems}", file=sys.stderr)
+                continue
+            state = said.connection_state
+            if inbound.retained and state is not ConnectionState.ONLINE:
+                continue  # a master control of an earlier run
+            name = said.serial_number or self.master_name or "?"
+            if state is ConnectionState.ONLINE:
+                self.master_name, self.master_left = name, ""
+                continue
+            queued = sum(len(queue) for queue in fleet.tasks.values())
+            if state is ConnectionState.CONNECTIONBROKEN:
+                msg = (
+                    f"the master control {name!r} lost its connection at t = {now:.1f} s (its last will on {where}: "
+                    f"CONNECTIONBROKEN) with {queued} task(s) queued; the run cannot go on without it"
+                )
+                raise RuntimeError(msg)
+            if queued:
+                msg = f"the master control {name!r} went OFFLINE at t = {now:.1f} s with {queued} task(s) queued"
+                raise RuntimeError(msg)
+            self.master_left = f"the master control {name!r} went OFFLINE at t = {now:.1f} s"
 
     # -- each step ----------------------------------------------------------------------------------
 
@@ -354,6 +432,7 @@ class Vda5050Fleet:
     def _intake(self, vehicle: _Vehicle, fleet: FleetSnapshot, layout: Layout) -> list[Rejection]:
         refused: list[Rejection] = []
         for inbound in vehicle.link.drain():
+            vehicle.heard = fleet.time
             name = inbound.topic.rsplit("/", 1)[-1]
             if name == "instantActions":
                 refused += self._instant(vehicle, inbound.payload, fleet)

@@ -53,11 +53,13 @@ class Will:
 
 @dataclass(frozen=True, slots=True)
 class Inbound:
-    """A message as it arrived: ``received`` is ``time.monotonic()`` when paho handed it over."""
+    """A message as it arrived: ``received`` is ``time.monotonic()`` when paho handed it over; ``retained``:
+    the broker kept it from before the subscription (history, not news)."""
 
     topic: str
     payload: bytes
     received: float
+    retained: bool = False
 
 
 class MqttLink:
@@ -308,7 +310,7 @@ class MqttLink:
             self._acked.notify_all()
 
     def _on_message(self, client: Client, userdata: Any, message: MQTTMessage) -> None:
-        item = Inbound(message.topic, bytes(message.payload), time.monotonic())
+        item = Inbound(message.topic, bytes(message.payload), time.monotonic(), bool(message.retain))
         with self._arrived:
             if not any(topic_matches_sub(sub, item.topic) for sub in self._filters):
                 self._unsolicited += 1

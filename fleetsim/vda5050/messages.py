@@ -39,12 +39,13 @@ from fleetsim.vda5050.model import (
     Order,
     VdaError,
 )
-from fleetsim.vda5050.state_model import SINCE_2_1, Connection, Factsheet, State, Visualization
+from fleetsim.vda5050.state_model import SINCE_2_1, Connection, ConnectionState, Factsheet, State, Visualization
 
 __all__ = [
     "KEY_REFERENCE",
     "TOPICS",
     "MessageInvalid",
+    "decode_connection",
     "decode_instant_actions",
     "decode_order",
     "encode",
@@ -367,6 +368,22 @@ def decode_instant_actions(payload: bytes, version: str) -> InstantActions:
     if reader.problems:
         raise MessageInvalid("instantActions", reader.errors())
     return InstantActions(header, actions)
+
+
+def decode_connection(payload: bytes, version: str) -> Connection:
+    """A ``connection`` message in ``payload`` (a master control tells its own on fleetsim's
+    ``master/connection`` topic); raises :class:`MessageInvalid` with every problem."""
+    reader, document = _load(payload, version)
+    if document is None:
+        raise MessageInvalid("connection", reader.errors())
+    header = _header(reader, document)
+    words = [state.value for state in ConnectionState]
+    connection_state = reader.get(document, "connectionState", "", "string", words=words)
+    if reader.problems:
+        raise MessageInvalid("connection", reader.errors())
+    return Connection(
+        header.header_id, header.timestamp, header.manufacturer, header.serial_number, ConnectionState(connection_state)
+    )
 
 
 # Enumerated words the outgoing models hold as plain strings, by class and field.

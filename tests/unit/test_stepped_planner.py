@@ -95,3 +95,50 @@ def test_a_begin_step_that_raises_fails_the_run_as_a_planner_error() -> None:
     [failure] = result.failures
     assert failure.kind == "planner-error" and "begin_step raised ValueError: the broker went away" in failure.message
     assert "Traceback" in failure.details["traceback"]
+
+
+class Idle(Watching):
+    """Plans nothing, so the fleet stands until the deadlock timer ends the run; explains each wait."""
+
+    def __init__(self, explain: bool = True, broken: bool = False) -> None:
+        super().__init__()
+        self.explain, self.broken = explain, broken
+
+    def plan_routes(self, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
+        return []
+
+    def __getattr__(self, name: str) -> object:
+        if name == "explain_wait" and self.explain:
+            return self._explain
+        raise AttributeError(name)
+
+    def _explain(self, vehicle_id: int, now: float) -> str:
+        if self.broken and vehicle_id == 2:
+            raise KeyError(vehicle_id)
+        return f"no order for vehicle {vehicle_id} by t = {now:.1f} s" if vehicle_id == 1 else ""
+
+
+def test_a_stepped_planners_word_on_a_wait_ends_that_vehicles_finding_and_its_root_cause() -> None:
+    result = run_scenario(_crossing(), Idle())
+    assert result.ended == "deadlock" and result.diagnosis is not None
+    first, second = result.diagnosis.findings
+    said = f"no order for vehicle 1 by t = {result.diagnosis.time:.1f} s"  # asked when the run ended
+    assert first.note == said and first.text().endswith("; " + said)
+    assert first.to_dict()["note"] == first.note
+    assert second.note == "" and "note" not in second.to_dict()  # an empty word adds nothing
+    root = next(r for r in result.diagnosis.roots if r.vehicles == (1,))
+    assert root.text().endswith("; " + said)
+
+
+def test_a_planner_without_explain_wait_leaves_the_findings_as_they_were() -> None:
+    result = run_scenario(_crossing(), Idle(explain=False))
+    assert result.diagnosis is not None
+    assert all(f.note == "" and "note" not in f.to_dict() for f in result.diagnosis.findings)
+
+
+def test_an_explain_wait_that_raises_is_named_in_the_note_and_the_diagnosis_goes_on() -> None:
+    result = run_scenario(_crossing(), Idle(broken=True))
+    assert result.ended == "deadlock" and result.diagnosis is not None
+    first, second = result.diagnosis.findings
+    assert first.note.startswith("no order for vehicle 1")
+    assert second.note == "(the planner's explain_wait raised KeyError: 2)"

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import itertools
 import json
+import socket
 import threading
 import time
 from collections.abc import Callable
@@ -32,6 +33,7 @@ class ScriptedMaster:
         version: str = "2.0.0",
         one_at_a_time: bool = True,
         tamper: Tamper | None = None,
+        announce: str | None = None,
     ) -> None:
         self.interface, self.manufacturer, self.version = interface, manufacturer, version
         self.one_at_a_time = one_at_a_time
@@ -48,7 +50,12 @@ class ScriptedMaster:
             callback_api_version=CallbackAPIVersion.VERSION2, client_id="scripted-master", protocol=MQTTv311
         )
         self.client.on_message = self._on_message
+        self.announce = announce
+        if announce is not None:  # fleetsim's master/connection: ONLINE now, CONNECTIONBROKEN as the last will
+            self.client.will_set(self._presence, self._connection("CONNECTIONBROKEN"), qos=1, retain=True)
         self.client.connect(host, port)
+        if announce is not None:
+            self.client.publish(self._presence, self._connection("ONLINE"), qos=1, retain=True)
         self.wire: list[tuple[str, dict[str, Any]]] = []  # every VDA 5050 message a vehicle published
         self.client.subscribe([(f"{interface}/fleetsim/#", 1), (f"{interface}/v2/{manufacturer}/+/+", 0)])
         self.client.loop_start()
@@ -57,8 +64,36 @@ class ScriptedMaster:
         self.client.loop_stop()
         self.client.disconnect()
 
+    @property
+    def _presence(self) -> str:
+        return f"{self.interface}/fleetsim/master/connection"
+
+    def _connection(self, state: str) -> bytes:
+        now = datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%S.%f")[:-4] + "Z"
+        message = {
+            "headerId": 0,
+            "timestamp": now,
+            "version": self.version,
+            "manufacturer": self.manufacturer,
+            "serialNumber": self.announce or "",
+            "connectionState": state,
+        }
+        return json.dumps(message).encode()
+
+    def leave(self) -> None:
+        """Say OFFLINE on master/connection and disconnect cleanly (no last will)."""
+        self.client.publish(self._presence, self._connection("OFFLINE"), qos=1, retain=True).wait_for_publish(5.0)
+        self.close()
+
+    def crash(self) -> None:
+        """Drop the connection without DISCONNECT, as a crashed process would: the broker sends the will."""
+        sock = self.client.socket()
+        if isinstance(sock, socket.socket):
+            socket.socket.shutdown(sock, socket.SHUT_RDWR)
+        self.client.loop_stop()
+
     def _on_message(self, client: Client, userdata: Any, message: MQTTMessage) -> None:
-        if message.topic.rsplit("/", 1)[-1] in ("order", "instantActions"):
+        if message.topic.rsplit("/", 1)[-1] in ("order", "instantActions") or message.topic == self._presence:
             return  # our own
         document = json.loads(message.payload)
         with self.lock:

@@ -19,6 +19,7 @@ from hypothesis import strategies as st
 from fleetsim.vda5050.messages import (
     KEY_REFERENCE,
     MessageInvalid,
+    decode_connection,
     decode_instant_actions,
     decode_order,
     encode,
@@ -980,3 +981,21 @@ def test_a_header_with_a_bad_timestamp_or_a_foreign_major_version_is_named() -> 
     )
     assert found["version"].error_description.startswith("version: '1.1.0' is not a VDA 5050 2.x version")
     assert decode_order(payload({**document, "timestamp": "2026-12-03T13:00:00+02:00", "version": "2.1.0"}), "2.0")
+
+
+@pytest.mark.parametrize("version", VERSIONS)
+@pytest.mark.parametrize("state", list(ConnectionState))
+def test_a_connection_reads_back_what_was_written(version: str, state: ConnectionState) -> None:
+    written = Connection(**HEADER, connection_state=state)
+    assert decode_connection(encode(written, version), version) == written
+
+
+def test_a_connection_state_outside_the_standards_words_is_a_validation_error_naming_it() -> None:
+    document = json.loads(encode(Connection(**HEADER, connection_state=ConnectionState.ONLINE), "2.0"))
+    document["connectionState"] = "GONE"
+    with pytest.raises(MessageInvalid) as raised:
+        decode_connection(payload(document), "2.0")
+    [error] = raised.value.errors
+    assert "'GONE' is not one of ONLINE, OFFLINE, CONNECTIONBROKEN" in error.error_description
+    with pytest.raises(MessageInvalid, match="not JSON"):
+        decode_connection(b"{", "2.0")
