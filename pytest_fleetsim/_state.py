@@ -51,6 +51,7 @@ NO_PLANNER = (
 )
 OUTCOME_WORDS = ("passed", "failed", "interrupted", "xfailed", "xpassed", "load error")
 NOT_RECORDED = "not recorded"  # the hash cell of a run whose hash no lock file holds yet
+_PACING_SHOWN = 10  # paced scenarios whose pace and order latency the summary shows
 NOT_GATED = "not gated"  # the hash cell of a run a wall clock paced (a VDA 5050 master control)
 RecordMode = Literal["failed", "all", "none"]
 
@@ -337,6 +338,7 @@ class FleetsimState:
             else {"hash": record.hash, "steps": record.steps, "checkpoints": list(record.checkpoints)},
             "unrecorded": None if unrecorded is None else list(unrecorded),
             "only_unrecorded": bool(result.failures) and all(f.kind == "hash-missing" for f in result.failures),
+            "pacing": None if result.pacing is None else result.pacing.to_dict(),
         }
 
     def _describe_unrun(self, item: ScenarioItem, identity: str, *, load_error: bool) -> None:
@@ -531,13 +533,34 @@ class FleetsimState:
                 "",
                 f"{_plural(len(paced), 'scenario', 'scenarios')} paced by a wall clock (a VDA 5050 master control in "
                 "another process): a trace hash does not repeat there, so it is not gated; the checks decide",
+                *(_pacing_line(o) for o in paced[:_PACING_SHOWN] if o.payload.get("pacing") is not None),
             ]
+            if len(paced) > _PACING_SHOWN:
+                lines.append(f"  ... and {len(paced) - _PACING_SHOWN} more (each result.json's pacing)")
         if self.comparison is not None:
             source = f" with {_relative(self.config, self.baseline_path)}" if self.baseline_path else ""
             lines += ["", f"compared{source}:", *self.comparison.lines()]
         if self.notes:
             lines += ["", *self.notes]
         return lines
+
+
+def _pacing_line(outcome: _Outcome) -> str:
+    """``  crossing: paced at 20x; order latency median 4 ms, max 12 ms (3 orders); the pace was kept``."""
+    pacing = outcome.payload["pacing"]
+    latency = pacing["order_latency"]
+    said = (
+        "no order arrived"
+        if latency is None
+        else f"order latency median {latency['median'] * 1000:.0f} ms, max {latency['max'] * 1000:.0f} ms "
+        f"({_plural(latency['orders'], 'order', 'orders')})"
+    )
+    kept = (
+        "the pace was kept"
+        if pacing["late_steps"] == 0
+        else f"{_plural(pacing['late_steps'], 'step', 'steps')} began late, by up to {pacing['lag_max']:.2f} s"
+    )
+    return f"  {outcome.payload['scenario']}: paced at {pacing['speed']:g}x; {said}; {kept}"
 
 
 def _plural(count: int, one: str, many: str) -> str:

@@ -44,7 +44,17 @@ from fleetsim.sim.diagnosis import Diagnosis, StuckFacts, diagnose
 from fleetsim.sim.disturbances import Disturber
 from fleetsim.sim.guard import PlannerFault, PlannerGuard
 from fleetsim.sim.interrupt import PlannerInterrupted, StopSignals, signal_name
-from fleetsim.sim.result import AlertEvent, DeadlockReport, Ending, Failure, Metrics, RejectionEvent, RunResult, judge
+from fleetsim.sim.result import (
+    AlertEvent,
+    DeadlockReport,
+    Ending,
+    Failure,
+    Metrics,
+    Pacing,
+    RejectionEvent,
+    RunResult,
+    judge,
+)
 from fleetsim.sim.trace import Trace, TraceFile, plan_record
 
 __all__ = ["RunProgress", "run_scenario"]
@@ -510,8 +520,22 @@ def _simulate(
         checkpoints=tuple(run.trace.checkpoints),
         disturbances=run.disturber.happened() if run.disturber is not None else (),
         paced=_paced(planner),
+        pacing=_pacing(planner),
         trace=run.trace if keep_trace else None,
     )
+
+
+def _pacing(planner: Planner) -> Pacing | None:
+    """How a planner on a wall clock kept the pace (its ``pacing()``), else None; one that raises or answers
+    something else is left out: these figures judge nothing."""
+    asked = getattr(planner, "pacing", None)
+    if not callable(asked):
+        return None
+    try:
+        pacing = asked()
+    except Exception:
+        return None
+    return pacing if isinstance(pacing, Pacing) else None
 
 
 def _paced(planner: Planner) -> float | None:

@@ -9,6 +9,8 @@ did not happen).
 
 from __future__ import annotations
 
+import math
+import statistics
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
@@ -28,6 +30,7 @@ __all__ = [
     "DeadlockReport",
     "Failure",
     "Metrics",
+    "Pacing",
     "RejectionEvent",
     "RunResult",
     "judge",
@@ -202,6 +205,45 @@ class Metrics:
 
 
 @dataclass(frozen=True, slots=True)
+class Pacing:
+    """How a run that a wall clock paced kept its pace, and how soon its planner's orders took effect (a VDA
+    5050 master control's): figures of the wall clock, so they vary from run to run and enter no hash.
+
+    Attributes:
+        speed: The multiple of real time the run was paced at.
+        lag: The most wall seconds a step began behind its paced time (0: the pace was kept throughout).
+        late_steps: Steps that began more than one step's wall time behind.
+        latencies: Wall seconds from each order's arrival at its vehicle to fleetsim's verdict on its plan,
+            in arrival order.
+    """
+
+    speed: float
+    lag: float
+    late_steps: int
+    latencies: tuple[float, ...]
+
+    def to_dict(self) -> dict[str, Any]:
+        """``pacing`` in ``result.json``: latencies as their count, median, 90th percentile and maximum."""
+        ordered = sorted(self.latencies)
+        latency = (
+            None
+            if not ordered
+            else {
+                "orders": len(ordered),
+                "median": round(statistics.median(ordered), 6),
+                "p90": round(ordered[min(len(ordered) - 1, math.ceil(0.9 * len(ordered)) - 1)], 6),
+                "max": round(ordered[-1], 6),
+            }
+        )
+        return {
+            "speed": self.speed,
+            "lag_max": round(self.lag, 6),
+            "late_steps": self.late_steps,
+            "order_latency": latency,
+        }
+
+
+@dataclass(frozen=True, slots=True)
 class RunResult:
     """Everything a run produced; ``to_dict`` is its JSON document (``schemas/result.schema.json``): a
     line of ``fleetsim run --json``, a run's ``result.json``, a sweep's record.
@@ -229,6 +271,8 @@ class RunResult:
         disturbances: The disturbances that happened, in the order they began.
         paced: The multiple of real time the run was paced at when its planner runs on a wall clock (a VDA
             5050 master control), else ``None``. Such a run's hash is not repeatable, so it is not gated.
+        pacing: How such a run kept its pace and how soon its orders took effect
+            ([`Pacing`][fleetsim.sim.result.Pacing]), else ``None``.
         artifacts: Files the run left (recording, picture, trace), by kind; empty unless a caller
             recorded them.
         trace: The trace itself (every step's lines), unless the run was asked not to keep it.
@@ -254,6 +298,7 @@ class RunResult:
     checkpoints: tuple[tuple[int, str], ...] = ()
     disturbances: tuple[DisturbanceEvent, ...] = ()  # those that happened, in the order they began
     paced: float | None = None  # paced at this many times real time by a planner on a wall clock
+    pacing: Pacing | None = None  # how that pace was kept, and the planner's order latencies
     artifacts: Mapping[str, str] = field(default_factory=lambda: MappingProxyType({}))
     trace: Trace | None = field(default=None, compare=False, repr=False)
 
@@ -284,31 +329,35 @@ class RunResult:
     def to_dict(self) -> dict[str, Any]:
         """The run's JSON document, as ``schemas/result.schema.json`` describes it (``trace_hash`` is
         ``None`` for a run that never ran)."""
-        return {
-            "scenario": self.scenario,
-            "planner": self.planner,
-            "status": self.status,
-            "failures": [f.to_dict() for f in self.failures],
-            "trace_hash": self.trace_hash or None,  # None: nothing ran
-            "sim_time": round(self.sim_time, 6),
-            "steps": self.steps,
-            "tasks": {"total": self.tasks_total, "completed": self.tasks_completed},
-            "rejections": [r.to_dict() for r in self.rejections],
-            "collisions": [c.to_dict() for c in self.collisions],
-            "route_errors": list(self.route_errors),
-            "ended": self.ended,
-            "deadlock": None
-            if self.deadlock is None
-            else {
-                "time": round(self.deadlock.time, 6),
-                "waiting": list(self.deadlock.waiting),
-                "cycle": list(self.deadlock.cycle),
-                "cycles": [list(cycle) for cycle in self.deadlock.diagnosis.cycles],
-            },
-            "metrics": self.metrics.to_dict(),
-            "disturbances": [d.to_dict() for d in self.disturbances],
-            "artifacts": dict(self.artifacts),
-        } | ({} if self.paced is None else {"paced": self.paced})
+        return (
+            {
+                "scenario": self.scenario,
+                "planner": self.planner,
+                "status": self.status,
+                "failures": [f.to_dict() for f in self.failures],
+                "trace_hash": self.trace_hash or None,  # None: nothing ran
+                "sim_time": round(self.sim_time, 6),
+                "steps": self.steps,
+                "tasks": {"total": self.tasks_total, "completed": self.tasks_completed},
+                "rejections": [r.to_dict() for r in self.rejections],
+                "collisions": [c.to_dict() for c in self.collisions],
+                "route_errors": list(self.route_errors),
+                "ended": self.ended,
+                "deadlock": None
+                if self.deadlock is None
+                else {
+                    "time": round(self.deadlock.time, 6),
+                    "waiting": list(self.deadlock.waiting),
+                    "cycle": list(self.deadlock.cycle),
+                    "cycles": [list(cycle) for cycle in self.deadlock.diagnosis.cycles],
+                },
+                "metrics": self.metrics.to_dict(),
+                "disturbances": [d.to_dict() for d in self.disturbances],
+                "artifacts": dict(self.artifacts),
+            }
+            | ({} if self.paced is None else {"paced": self.paced})
+            | ({} if self.pacing is None else {"pacing": self.pacing.to_dict()})
+        )
 
 
 def _first(events: tuple[RejectionEvent, ...] | tuple[AlertEvent, ...]) -> float:

@@ -45,6 +45,7 @@ from fleetsim.planning.plans import FleetLeg, FleetPlan, Response
 from fleetsim.planning.snapshot import FleetSnapshot, VehicleState
 from fleetsim.scenario import Task
 from fleetsim.sim.planner_spec import PlannerSpecError
+from fleetsim.sim.result import Pacing
 from fleetsim.vda5050.broker import BrokerAddress, EmbeddedBroker
 from fleetsim.vda5050.link import MqttLink, Will
 from fleetsim.vda5050.messages import (
@@ -194,6 +195,10 @@ class Vda5050Fleet:
             self._announce(vehicle, fleet)
             self._report(vehicle, fleet)
         return refused
+
+    def pacing(self) -> Pacing:
+        """How the run kept its pace and how soon orders took effect, for the run's result."""
+        return Pacing(self.settings.speed, self.lag, self.late_steps, tuple(self.latencies))
 
     def paused(self) -> set[int]:
         """The vehicles a ``startPause`` holds still (the harness brakes them)."""

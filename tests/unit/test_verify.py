@@ -16,6 +16,7 @@ from fleetsim.planning.plans import FleetPlan
 from fleetsim.recording.artifacts import artifact_folder, write_run_artifacts
 from fleetsim.scenario import Scenario
 from fleetsim.sim.report import broken_expectation, failure_report
+from fleetsim.sim.result import Pacing
 
 SUITE = Path(__file__).resolve().parents[2] / "scenario_suites" / "examples.fleetsim.yaml"
 HINT = "pytest x.fleetsim.yaml::crossing --fleetsim-update-hashes"
@@ -171,3 +172,14 @@ def test_run_checked_reports_planner_garbage_as_a_planner_error() -> None:
     result = gated(crossing(), Garbage).result
     assert result.ended == "planner-error"
     assert "plan_routes() for vehicle 1 returned {'plan':" in result.failures[0].message
+
+
+def test_pacing_says_the_order_latencies_as_count_median_p90_and_max() -> None:
+    document = Pacing(10.0, 0.25, 3, tuple(k / 100 for k in (5, 1, 9, 2, 7, 3, 8, 4, 6, 10))).to_dict()
+    assert document == {
+        "speed": 10.0,
+        "lag_max": 0.25,
+        "late_steps": 3,
+        "order_latency": {"orders": 10, "median": 0.055, "p90": 0.09, "max": 0.1},
+    }
+    assert Pacing(1.0, 0.0, 0, ()).to_dict()["order_latency"] is None  # no order arrived

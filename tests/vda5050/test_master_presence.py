@@ -14,6 +14,7 @@ from typing import Any
 import pytest
 from paho.mqtt.client import Client, MQTTv311
 from paho.mqtt.enums import CallbackAPIVersion
+from result_document import schema_errors
 from scripted_master import ScriptedMaster
 
 from fleetsim.load.scenario import load_scenario
@@ -75,6 +76,9 @@ def test_a_master_control_that_announced_itself_and_stays_completes_the_run(brok
         master.close()
     assert result.passed, [f.message for f in result.failures]
     assert result.tasks_completed == 2
+    document = result.to_dict()
+    assert schema_errors(document) == []  # paced and pacing as the published schema has them
+    assert document["paced"] == SPEED and document["pacing"]["order_latency"]["orders"] == 2
 
 
 def test_a_master_control_that_goes_offline_with_tasks_queued_fails_the_run(broker: BrokerAddress) -> None:

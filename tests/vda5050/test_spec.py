@@ -71,6 +71,10 @@ def test_fleetsim_run_drives_the_vehicles_with_a_master_control_it_starts(tmp_pa
     [result] = [json.loads(line) for line in done.stdout.splitlines()]
     assert result["status"] == "passed" and result["tasks"] == {"total": 2, "completed": 2}
     assert result["paced"] == 20.0  # the result says a wall clock paced it
+    pacing = result["pacing"]  # and how it kept the pace, and how soon the orders took effect
+    assert pacing["speed"] == 20.0 and pacing["late_steps"] >= 0 and pacing["lag_max"] >= 0
+    latency = pacing["order_latency"]
+    assert latency["orders"] >= 2 and 0 <= latency["median"] <= latency["p90"] <= latency["max"] < 5.0
     assert "VDA 5050 2.0 vehicles on mqtt://127.0.0.1:" in done.stderr  # where the broker is, said
 
 
@@ -86,6 +90,10 @@ def test_under_pytest_a_paced_run_is_judged_by_its_checks_and_its_hash_is_not_ga
     assert result.ret == pytest.ExitCode.OK, result.stdout.str()
     result.assert_outcomes(passed=1)
     result.stdout.fnmatch_lines(
-        ["crossing *passed *2/2 *not gated*", "*paced by a wall clock*not gated; the checks decide"]
+        [
+            "crossing *passed *2/2 *not gated*",
+            "*paced by a wall clock*not gated; the checks decide",
+            "  crossing: paced at 20x; order latency median * ms, max * ms (* orders); *",
+        ]
     )
     assert not (pytester.path / "examples.fleetsim.lock.json").exists()  # nothing recorded
