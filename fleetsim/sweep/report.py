@@ -1,7 +1,9 @@
 """What a sweep report says, computed once for both forms (HTML page, Markdown summary).
 
 Rows are taken in key order, so the report is the same whatever order the runs finished in or which
-worker ran them; only wall-clock figures (planner time per call) vary between sweeps.
+worker ran them; only wall-clock figures (planner time per call) vary between sweeps, and every figure of
+a planner that paces its runs by a wall clock (a ``vda5050:`` master control: the result's ``paced``),
+whose runs do not repeat to the step. The report says which planners those are.
 """
 
 from __future__ import annotations
@@ -12,10 +14,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from fleetsim.exec.spec import EXEC_PREFIX, VDA5050_PREFIX
 from fleetsim.sweep.gate import Verdict
 from fleetsim.sweep.stats import METRICS, Paired, PlannerSummary, paired, summarise, throughput
 
-__all__ = ["COMPARED", "Report", "Worst", "build_report", "markdown"]
+__all__ = ["COMPARED", "Report", "Worst", "build_report", "markdown", "paced_note", "short"]
 
 COMPARED = (
     "success",
@@ -52,6 +55,7 @@ class Report:
     comparisons: Mapping[str, tuple[Paired, ...]]  # candidate -> one per metric of COMPARED
     worst: Mapping[str, tuple[Worst, ...]]
     verdicts: tuple[Verdict, ...]
+    paced: Mapping[str, float]  # planner -> the multiple of real time its runs were paced at (a wall clock's)
 
 
 def build_report(
@@ -63,7 +67,21 @@ def build_report(
     candidates = tuple(s.planner for s in summaries if s.planner != baseline)
     comparisons = {c: tuple(paired(ordered, metric, c, baseline) for metric in COMPARED) for c in candidates}
     worst = {c: _worst(ordered, c, baseline, where) for c in candidates}
-    return Report(title, baseline, candidates, ordered, summaries, comparisons, worst, tuple(verdicts))
+    paced = {str(r["planner"]): float(r["paced"]) for r in ordered if r.get("paced") is not None}
+    return Report(title, baseline, candidates, ordered, summaries, comparisons, worst, tuple(verdicts), paced)
+
+
+def paced_note(report: Report) -> str | None:
+    """What the report says of planners whose runs a wall clock paced: their figures are judged as any,
+    but a sweep run again gives other ones (their trace hashes differ too, which says nothing)."""
+    if not report.paced:
+        return None
+    named = ", ".join(f"{short(planner)} ({speed:g}x real time)" for planner, speed in sorted(report.paced.items()))
+    return (
+        f"Paced by a wall clock: {named}. A master control in another process makes such runs unrepeatable "
+        "to the step, so their figures (and trace hashes) differ from sweep to sweep; the intervals judge "
+        "the runs as they came out."
+    )
 
 
 def _worst(rows: Sequence[Mapping[str, Any]], candidate: str, baseline: str, where: Path) -> tuple[Worst, ...]:
@@ -107,8 +125,9 @@ def _links(row: Mapping[str, Any], where: Path) -> dict[str, str]:
 
 
 def short(planner: str) -> str:
-    """``fleetsim.planners:ReservingPlanner`` -> ``ReservingPlanner``; exec: specs as they are."""
-    return planner if planner.startswith("exec:") else planner.rpartition(":")[2]
+    """``fleetsim.planners:ReservingPlanner`` -> ``ReservingPlanner``; ``exec:`` and ``vda5050:`` specs as
+    they are (their colons are not a module's: the command, the options, the broker's port)."""
+    return planner if planner.startswith((EXEC_PREFIX, VDA5050_PREFIX)) else planner.rpartition(":")[2]
 
 
 def figure(value: float | None, digits: int = 4) -> str:
@@ -170,6 +189,8 @@ def markdown(report: Report) -> str:
         "",
     ]
     lines += ["## Planners", "", *_markdown_table(*summary_table(report)), ""]
+    note = paced_note(report)
+    lines += [note, ""] if note is not None else []
     for candidate in report.candidates:
         lines += [f"## {short(candidate)} against {short(report.baseline)}", "",
                   "Paired by scenario; 95% percentile bootstrap interval of the mean difference (2000 resamples, fixed seed).", ""]  # fmt: skip

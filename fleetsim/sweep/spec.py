@@ -31,6 +31,7 @@ from pathlib import Path
 from typing import Any, Literal
 
 from fleetsim.errors import LoadError, Location, SuiteError
+from fleetsim.exec.spec import EXEC_PREFIX, VDA5050_PREFIX
 from fleetsim.gating.generated import check_generate_block
 from fleetsim.load.scenario_files import did_you_mean
 from fleetsim.load.suite import (
@@ -222,14 +223,16 @@ def _disturbances(raw: Any, locate: Locate) -> SweepDisturbances | None:
 def _planners(raw: Any, locate: Locate) -> tuple[str, ...]:
     if not isinstance(raw, list) or not raw:
         raise _error(
-            f"planners={raw!r} must be a non-empty list of planner specs (module:attr or exec:COMMAND)",
+            f"planners={raw!r} must be a non-empty list of planner specs (module:attr, exec:COMMAND or vda5050:...)",
             locate,
             ("planners",),
         )
     for index, spec in enumerate(raw):
-        if not isinstance(spec, str) or not (spec.startswith("exec:") or re.fullmatch(r"[\w.]+:[\w.]+", spec)):
+        if not isinstance(spec, str) or not (
+            spec.startswith((EXEC_PREFIX, VDA5050_PREFIX)) or re.fullmatch(r"[\w.]+:[\w.]+", spec)
+        ):
             raise _error(
-                f"planners[{index}]={spec!r} must be a planner spec: module:attr or exec:COMMAND",
+                f"planners[{index}]={spec!r} must be a planner spec: module:attr, exec:COMMAND or vda5050:...",
                 locate,
                 ("planners", index),
             )

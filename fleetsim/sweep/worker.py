@@ -7,6 +7,7 @@ hangs up: each fails its own run with a message saying what happened, in the rec
 
 from __future__ import annotations
 
+import hashlib
 import re
 import traceback
 from dataclasses import replace
@@ -21,9 +22,12 @@ from fleetsim.sim.result import Ending, Failure, RunResult
 from fleetsim.sweep.items import RunItem
 from fleetsim.sweep.payload import scenario_from_payload
 
-__all__ = ["failed_row", "result_row", "run_item"]
+__all__ = ["failed_row", "planner_folder", "result_row", "run_item"]
 
 _NAME = re.compile(r"(~d\d+)?(@\d+)?$")
+_MODULE_SPEC = re.compile(r"[\w.]+:[\w.]+")
+_UNSAFE = re.compile(r"[^A-Za-z0-9._=,-]+")  # a path's separators too: a command's path is no folder tree
+_FOLDER_LENGTH = 60
 
 
 def run_item(item: RunItem) -> dict[str, Any]:
@@ -57,8 +61,19 @@ def _folder(item: RunItem) -> Path | None:
     if item["record"] == "none":
         return None
     suite, _, name = item["id"].rpartition("::")
-    planner = item["planner"].replace(":", "-").replace(" ", "_")[:60]
-    return artifact_folder(Path(item["artifacts"]) / planner, Path(suite), name)
+    return artifact_folder(Path(item["artifacts"]) / planner_folder(item["planner"]), Path(suite), name)
+
+
+def planner_folder(planner: str) -> str:
+    """The folder of a planner's runs, one level below the sweep's: ``fleetsim.planners-ReservingPlanner``
+    for a ``module:attr`` spec; any other (``exec:``, ``vda5050:``: a command line, options) made
+    file-safe, cut, and told apart by a digest of the whole spec. Two planners must never share a folder:
+    a run starting empties its own, which would delete a run of the other one that a worker streams
+    there at the same time (two master controls behind one ``vda5050:speed=20,exec=python ...`` prefix)."""
+    if _MODULE_SPEC.fullmatch(planner) and len(planner) <= _FOLDER_LENGTH:
+        return planner.replace(":", "-")
+    safe = _UNSAFE.sub("_", planner.replace(":", "-")).strip("._")[: _FOLDER_LENGTH - 11]
+    return f"{safe}-{hashlib.sha256(planner.encode()).hexdigest()[:10]}"
 
 
 def _sweep_keys(item: RunItem, error: str | None) -> dict[str, Any]:
