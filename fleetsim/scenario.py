@@ -15,6 +15,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "DEFAULT_VEHICLE_TYPE",
+    "Checks",
     "Disturbance",
     "Expectations",
     "RandomDisturbances",
@@ -162,7 +163,27 @@ class RandomDisturbances:
     stop: tuple[float, float]
 
 
-StopOn = Literal["rejection", "collision"]
+StopOn = Literal["rejection", "collision", "contact"]
+
+
+@dataclass(frozen=True, slots=True)
+class Checks:
+    """Which judgements a run gets (a suite's or entry's ``checks``): the thesis's reservation rule, the
+    physical contact check, or both (the default).
+
+    Attributes:
+        reservations: Collision alerts where one vehicle's primary reservation overlaps another's (a
+            planning discipline: drive only on what you hold, exclusively).
+        contact: Contacts between the vehicles' footprints, checked continuously between steps, with the
+            run's clearance and near misses (the physical outcome).
+        safety_margin: Metres added to every side of each footprint for the contact check.
+        near_miss: Metres: pairs of footprints that came closer than this without touching are listed.
+    """
+
+    reservations: bool = True
+    contact: bool = True
+    safety_margin: float = 0.0
+    near_miss: float = 0.5
 
 
 @dataclass(frozen=True, slots=True)
@@ -185,6 +206,7 @@ class ScenarioSettings:
         conflict_model: How conflicting segments are found (``SWEPT`` or ``BBOX``).
         safety_margin: Metres added between two vehicles' circles when conflicts are found.
         allow_start_conflicts: Whether vehicles may start on conflicting segments (else a load error).
+        checks: Which judgements the run gets ([`Checks`][fleetsim.scenario.Checks]).
     """
 
     vehicle_type: str | None = None
@@ -198,6 +220,7 @@ class ScenarioSettings:
     conflict_model: ConflictModel = ConflictModel.SWEPT
     safety_margin: float = 0.0
     allow_start_conflicts: bool = False
+    checks: Checks = Checks()
 
 
 @dataclass(frozen=True, slots=True)
@@ -210,6 +233,8 @@ class Expectations:
         rejections: ``"none"``, ``"any"`` (at least one), or the check codes that must occur.
         deadlock: Whether the run must end in a deadlock.
         max_makespan: Seconds by which the last task must be completed, or ``None``.
+        contacts: ``"none"`` (a contact fails the run) or ``"any"`` (contacts are allowed).
+        clearance: Metres: the run fails when two footprints came closer than this, or ``None``.
     """
 
     tasks: Literal["all"] | int = "all"
@@ -217,6 +242,8 @@ class Expectations:
     rejections: Literal["none", "any"] | tuple[str, ...] = "none"
     deadlock: bool = False
     max_makespan: float | None = None
+    contacts: Literal["none", "any"] = "none"
+    clearance: float | None = None
 
 
 @dataclass(frozen=True, slots=True)

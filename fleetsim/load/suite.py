@@ -31,6 +31,7 @@ from fleetsim.load.suite_schema import SchemaCheck, raise_suite_errors, schema_c
 from fleetsim.load.yaml_source import Locate, load_yaml_with_marks
 from fleetsim.scenario import (
     DEFAULT_VEHICLE_TYPE,
+    Checks,
     Disturbance,
     Expectations,
     RandomDisturbances,
@@ -366,12 +367,24 @@ def _settings(
             value = tuple(value)
         elif key == "conflict_model":
             value = ConflictModel(value)
+        elif key == "checks":  # key by key over what the defaults say
+            value = _checks(base.checks, value)
         elif isinstance(value, (int, float)) and not isinstance(value, bool):
             value = float(value)
         changes[key] = value
     if base.vehicle_type is None and "vehicle_type" not in changes and types is not None and len(types) == 1:
         changes["vehicle_type"] = next(iter(types))  # a suite's only vehicle type is its default
     return replace(base, **changes)
+
+
+def _checks(base: Checks, raw: Mapping[str, Any]) -> Checks:
+    """``base`` with the keys of a ``checks`` block applied (the schema has checked them)."""
+    return Checks(
+        reservations=bool(raw.get("reservations", base.reservations)),
+        contact=bool(raw.get("contact", base.contact)),
+        safety_margin=float(raw.get("safety_margin", base.safety_margin)),
+        near_miss=float(raw.get("near_miss", base.near_miss)),
+    )
 
 
 def _word_or_tuple(value: Any) -> Any:
@@ -387,6 +400,8 @@ def _expectations(raw: Mapping[str, Any]) -> Expectations:
         rejections=_word_or_tuple(raw.get("rejections", "none")),
         deadlock=raw.get("deadlock", False),
         max_makespan=None if max_makespan is None else float(max_makespan),
+        contacts=raw.get("contacts", "none"),
+        clearance=None if raw.get("clearance") is None else float(raw["clearance"]),
     )
 
 

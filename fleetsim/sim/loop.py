@@ -31,6 +31,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from fleetsim.contact.monitor import Contact, ContactMonitor
 from fleetsim.errors import PlannerError
 from fleetsim.motion.driver import Driver
 from fleetsim.motion.fleet_cruise import FleetCruise, StateColumns
@@ -58,6 +59,9 @@ from fleetsim.sim.result import (
 from fleetsim.sim.trace import Trace, TraceFile, plan_record
 
 __all__ = ["RunProgress", "run_scenario"]
+
+# Metres: two footprints farther apart than this do not count towards a run's clearance (it is "more").
+_CLEARANCE_REACH = 2.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -113,6 +117,26 @@ class _Run:
         self.interrupted_planning = False
         self.stepped = planner if isinstance(planner, SteppedPlanner) else None
         self.paused: set[int] = set()  # the vehicles a stepped planner holds still
+        # The contact check (fleetsim.contact): every vehicle's pose, by index, kept up to date from what
+        # moved; contacts, clearance and near misses are judged from it and enter no trace.
+        checks = scenario.settings.checks
+        self.index = {vid: k for k, vid in enumerate(self.ids)}
+        self.poses = np.array(
+            [[states[v].x for v in self.ids], [states[v].y for v in self.ids], [states[v].heading for v in self.ids]]
+        )
+        types = {v.id: v.type for v in scenario.vehicles}
+        self.contact = (
+            ContactMonitor(
+                self.ids,
+                [types[v].length for v in self.ids],
+                [types[v].width for v in self.ids],
+                safety_margin=checks.safety_margin,
+                near_miss=checks.near_miss,
+                reach=max(_CLEARANCE_REACH, scenario.expect.clearance or 0.0),
+            )
+            if checks.contact
+            else None
+        )
 
     # -- the steps -----------------------------------------------------------------------------------
 
@@ -265,6 +289,23 @@ class _Run:
             controller.set_states([ids[i] for i in stepped_at], stepped)
             controller.set_states(cruised.ids, cruised.states)
         return stepped, cruised
+
+    def check_contacts(
+        self, start: float, end: float, stepped: list[VehicleState], cruised: StateColumns | None
+    ) -> list[Contact]:
+        """The contacts that began in the step from ``start`` to ``end``, the poses brought up to date
+        with what moved in it."""
+        assert self.contact is not None
+        poses = self.poses
+        moved = np.zeros(len(self.ids), dtype=bool)
+        if stepped:
+            rows = np.fromiter((self.index[state.id] for state in stepped), dtype=np.intp, count=len(stepped))
+            poses[:, rows] = np.array([[s.x for s in stepped], [s.y for s in stepped], [s.heading for s in stepped]])
+            moved[rows] = True
+        if cruised is not None and len(cruised.positions):
+            poses[:, cruised.positions] = cruised.motion[1:4]
+            moved[cruised.positions] = True
+        return self.contact.step(start, end, poses[0], poses[1], poses[2], moved)
 
     def diagnose(self, kind: Literal["deadlock", "timeout"], now: float) -> Diagnosis:
         """Why the vehicles with pending tasks have not finished them (at the run's end)."""
@@ -419,6 +460,8 @@ def _simulate(
     if run.disturber is not None:
         header["disturbances"] = run.disturber.header()
     run.trace.begin(header)
+    if run.contact is not None:
+        run.contact.begin(run.poses[0], run.poses[1], run.poses[2])
     ended: Ending = "time-limit"
     deadlock: DeadlockReport | None = None
     step = 0
@@ -436,8 +479,11 @@ def _simulate(
         if planned_ok and step % period == 0:
             planned_ok = run.plan(now, end, events, plans)
         rejected = any(e[0] == "reject" for e in events)
-        alerted = run.check_reservations(end, events) > 0 if planned_ok else False
+        alerted = run.check_reservations(end, events) > 0 if planned_ok and settings.checks.reservations else False
         moved, cruised = run.move(dt, end, events) if planned_ok else ([], None)
+        touched = (
+            bool(run.check_contacts(now, end, moved, cruised)) if planned_ok and run.contact is not None else False
+        )
         # The trace holds what changed; at step 0 that is everyone (the start), later only who moved.
         if step == 0:
             moved, cruised = [run.controller.state_of(v) for v in run.drivers], None
@@ -451,6 +497,8 @@ def _simulate(
             ended = "rejection"
         elif alerted and "collision" in settings.stop_on:
             ended = "collision"
+        elif touched and "contact" in settings.stop_on:
+            ended = "contact"
         elif end - run.last_activity >= settings.deadlock_after - 1e-9:
             ended = "deadlock"
             deadlock = DeadlockReport(end, run.diagnose("deadlock", end))
@@ -475,6 +523,7 @@ def _simulate(
     if ended in ("time-limit", "interrupted") and not run.controller.tasks.all_done():
         diagnosis = run.diagnose("timeout", sim_time)  # who is still driving, who waits for whom
     makespan = max(completed.values()) if completed and run.controller.tasks.all_done() else None
+    contact = run.contact.report() if run.contact is not None else None
     failures = judge(
         scenario.expect,
         ended=ended,
@@ -487,6 +536,7 @@ def _simulate(
         collisions=tuple(run.collisions),
         deadlock=deadlock,
         planner_error=run.planner_error,
+        contact=contact,
         diagnosis=diagnosis,
         interrupted_by=signal_name(stop.signum or 0) if ended == "interrupted" and stop is not None else None,
     )
@@ -498,6 +548,7 @@ def _simulate(
         planner_wall_time=guard.wall_time,
         wall_time=time.perf_counter() - started,
         sim_time=sim_time,
+        clearance=None if contact is None or contact.clearance is None else contact.clearance.distance,
     )
     return RunResult(
         scenario=scenario.name,
@@ -521,6 +572,7 @@ def _simulate(
         disturbances=run.disturber.happened() if run.disturber is not None else (),
         paced=_paced(planner),
         pacing=_pacing(planner),
+        contact=contact,
         trace=run.trace if keep_trace else None,
     )
 

@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any, Literal
 
+from fleetsim.contact.monitor import ContactReport
 from fleetsim.planning.checks import Rejection
 from fleetsim.planning.plans import FleetPlan
 from fleetsim.planning.reservations import CollisionAlert
@@ -45,6 +46,7 @@ Ending = Literal[
     "deadlock",
     "rejection",
     "collision",
+    "contact",
     "planner-error",
     "interrupted",
     "load-error",
@@ -62,7 +64,7 @@ class Failure:
     """One reason a run failed its scenario.
 
     Attributes:
-        kind: What went wrong: ``rejection``, ``collision``, ``timeout``, ``deadlock``,
+        kind: What went wrong: ``rejection``, ``collision``, ``contact``, ``timeout``, ``deadlock``,
             ``planner-error``, ``interrupted``, ``expectation`` (something the scenario's ``expect``
             required did not happen); when hashes are checked, ``hash-mismatch``, ``hash-missing`` or
             ``nondeterministic``; ``load-error`` for a scenario that did not load.
@@ -175,6 +177,8 @@ class Metrics:
         planner_wall_time: Wall-clock seconds spent inside the planner (never in the trace hash).
         wall_time: Wall-clock seconds for the whole run.
         sim_time: Seconds simulated.
+        clearance: The closest any two footprints came (metres), or ``None``: the contact check was off,
+            or no two came within its reach (2 m, or the expected clearance if more).
     """
 
     makespan: float | None
@@ -184,6 +188,7 @@ class Metrics:
     planner_wall_time: float
     wall_time: float
     sim_time: float
+    clearance: float | None = None
 
     @property
     def realtime_factor(self) -> float | None:
@@ -201,6 +206,7 @@ class Metrics:
             "wall_time": round(self.wall_time, 6),
             "realtime_factor": None if self.realtime_factor is None else round(self.realtime_factor, 3),
             "harness_share": None if self.wall_time <= 0 else round(harness / self.wall_time, 4),
+            "clearance": None if self.clearance is None else round(self.clearance, 4),
         }
 
 
@@ -271,6 +277,8 @@ class RunResult:
         disturbances: The disturbances that happened, in the order they began.
         paced: The multiple of real time the run was paced at when its planner runs on a wall clock (a VDA
             5050 master control), else ``None``. Such a run's hash is not repeatable, so it is not gated.
+        contact: What the contact check found (contacts, clearance, near misses:
+            [`ContactReport`][fleetsim.contact.monitor.ContactReport]), or ``None`` when it was off.
         pacing: How such a run kept its pace and how soon its orders took effect
             ([`Pacing`][fleetsim.sim.result.Pacing]), else ``None``.
         artifacts: Files the run left (recording, picture, trace), by kind; empty unless a caller
@@ -299,6 +307,7 @@ class RunResult:
     disturbances: tuple[DisturbanceEvent, ...] = ()  # those that happened, in the order they began
     paced: float | None = None  # paced at this many times real time by a planner on a wall clock
     pacing: Pacing | None = None  # how that pace was kept, and the planner's order latencies
+    contact: ContactReport | None = None  # contacts, clearance and near misses (None: the check was off)
     artifacts: Mapping[str, str] = field(default_factory=lambda: MappingProxyType({}))
     trace: Trace | None = field(default=None, compare=False, repr=False)
 
@@ -353,6 +362,7 @@ class RunResult:
                 },
                 "metrics": self.metrics.to_dict(),
                 "disturbances": [d.to_dict() for d in self.disturbances],
+                "contact": None if self.contact is None else self.contact.to_dict(),
                 "artifacts": dict(self.artifacts),
             }
             | ({} if self.paced is None else {"paced": self.paced})
@@ -379,6 +389,7 @@ def judge(
     planner_error: Failure | None,
     diagnosis: Diagnosis | None = None,
     interrupted_by: str | None = None,
+    contact: ContactReport | None = None,
 ) -> tuple[Failure, ...]:
     """Every way the run falls short of ``expect`` (SPEC §13), in a fixed order.
 
@@ -392,6 +403,7 @@ def judge(
         rest = judge(
             expect, ended="completed", end_time=end_time, tasks_total=tasks_total, tasks_completed=tasks_total, pending=(),
             makespan=makespan, rejections=rejections, collisions=collisions, deadlock=None, planner_error=planner_error,
+            contact=contact,
         )  # fmt: skip
         return (stopped, *(f for f in rest if f.kind != "expectation"))
     failures: list[Failure] = []
@@ -399,6 +411,7 @@ def judge(
         failures.append(planner_error)
     failures += _judge_rejections(expect, rejections)
     failures += _judge_collisions(expect, collisions)
+    failures += _judge_contact(expect, contact, end_time)
     if deadlock is not None and not expect.deadlock:
         stuck = {"waiting": list(deadlock.waiting), "cycle": list(deadlock.cycle), **deadlock.diagnosis.to_dict()}
         failures.append(Failure("deadlock", deadlock.time, deadlock.message, stuck))
@@ -486,6 +499,30 @@ def _judge_rejections(expect: Expectations, rejections: tuple[RejectionEvent, ..
         )
         for code in missing
     ]
+
+
+def _judge_contact(expect: Expectations, contact: ContactReport | None, end_time: float) -> list[Failure]:
+    """A contact each, unless contacts are expected; a clearance below the expected one."""
+    failures = []
+    if contact is not None and expect.contacts == "none":
+        for c in contact.contacts:
+            a, b = c.vehicles
+            deep = f", overlapping up to {c.depth:.3f} m" if c.depth > 0 else ""
+            msg = f"vehicles {a} and {b} touched at t = {c.time:.2f} s at ({c.x:.2f}, {c.y:.2f}){deep}"
+            failures.append(Failure("contact", c.time, msg, c.to_dict()))
+    if expect.clearance is not None:
+        if contact is None:
+            msg = f"the scenario expects a clearance of {expect.clearance:g} m, but its contact check is off (checks: contact)"
+            failures.append(Failure("expectation", end_time, msg, {"expect": "clearance"}))
+        elif contact.clearance is not None and contact.clearance.distance < expect.clearance:
+            closest = contact.clearance
+            a, b = closest.vehicles
+            msg = (
+                f"vehicles {a} and {b} came within {closest.distance:.3f} m of each other at t = {closest.time:.2f} s "
+                f"at ({closest.x:.2f}, {closest.y:.2f}); the scenario expects a clearance of {expect.clearance:g} m"
+            )
+            failures.append(Failure("expectation", closest.time, msg, {"expect": "clearance", **closest.to_dict()}))
+    return failures
 
 
 def _judge_collisions(expect: Expectations, collisions: tuple[AlertEvent, ...]) -> list[Failure]:

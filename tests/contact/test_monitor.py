@@ -1,0 +1,147 @@
+"""The contact check on poses made by hand: contacts at the right moment and place, the continuous check
+between steps, the clearance and near misses, and what a safety margin changes."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from fleetsim.contact.geometry import Boxes, signed_distance
+from fleetsim.contact.monitor import ContactMonitor
+
+BOTH = np.array([True, True])
+
+
+def _xs(*values: float) -> np.ndarray:
+    return np.array(values, dtype=float)
+
+
+def _box(x: float, y: float, heading: float, length: float, width: float) -> Boxes:
+    return Boxes(_xs(x), _xs(y), _xs(heading), _xs(length / 2), _xs(width / 2))
+
+
+@pytest.mark.parametrize(
+    ("a", "b", "distance"),
+    [
+        ((0, 0, 0, 2, 1), (0, 1.1, 0, 2, 1), 0.1),  # side by side
+        ((0, 0, 0, 2, 1), (2.5, 0, 0, 2, 1), 0.5),  # nose to tail
+        ((0, 0, 0, 2, 1), (2, 1.5, 0, 2, 1), math.hypot(0, 0.5)),  # offset: corner to side
+        ((0, 0, 0, 2, 2), (3, 3, 0, 2, 2), math.hypot(1, 1)),  # corner to corner
+        ((0, 0, 0, 2, 1), (0, 0.8, 0, 2, 1), -0.2),  # overlapping by 0.2 m
+        ((0, 0, 0, 2, 1), (0, 0, math.pi / 2, 2, 1), -1.5),  # a cross: the least way out
+    ],
+)
+def test_the_signed_distance_of_two_footprints_is_exact(
+    a: tuple[float, ...], b: tuple[float, ...], distance: float
+) -> None:
+    found, _ = signed_distance(_box(*a), _box(*b))
+    assert found[0] == pytest.approx(distance, abs=1e-12)
+
+
+def test_a_rotated_footprint_is_measured_at_its_true_corners() -> None:
+    # A 2 x 2 square turned 45 degrees reaches sqrt(2) from its centre along +x.
+    found, where = signed_distance(_box(0, 0, math.pi / 4, 2, 2), _box(3, 0, 0, 2, 2))
+    assert found[0] == pytest.approx(2 - math.sqrt(2))
+    assert where[0] == pytest.approx([(math.sqrt(2) + 2) / 2, 0.0])
+
+
+def _lanes(gap: float, margin: float = 0.0) -> ContactMonitor:
+    """Two 1 x 0.5 m vehicles on parallel lanes ``gap`` metres apart, driving side by side for a second."""
+    monitor = ContactMonitor([1, 2], [1.0, 1.0], [0.5, 0.5], safety_margin=margin)
+    y = 0.5 + gap
+    monitor.begin(_xs(0, 0), _xs(0, y), _xs(0, 0))
+    for k in range(10):
+        x = 0.1 * (k + 1)
+        monitor.step(0.1 * k, 0.1 * (k + 1), _xs(x, x), _xs(0, y), _xs(0, 0), BOTH)
+    return monitor
+
+
+def test_parallel_lanes_a_tenth_apart_never_touch_and_their_clearance_is_that_tenth() -> None:
+    report = _lanes(0.1).report()
+    assert report.contacts == ()
+    assert report.clearance is not None and report.clearance.distance == pytest.approx(0.1)
+    assert report.clearance.vehicles == (1, 2)
+    assert [m.vehicles for m in report.near_misses] == [(1, 2)]  # 0.1 m is under the 0.5 m default
+
+
+def test_a_safety_margin_turns_that_near_miss_into_a_contact() -> None:
+    assert _lanes(0.1, margin=0.04).report().contacts == ()  # 0.1 - 2 x 0.04 = 0.02 m apart still
+    [contact] = _lanes(0.1, margin=0.06).report().contacts  # 0.1 - 2 x 0.06 < 0: they touch
+    assert contact.time == 0.0 and contact.depth == pytest.approx(0.02)
+
+
+def test_head_on_at_5_m_s_with_half_second_steps_the_continuous_check_catches_what_no_step_shows() -> None:
+    monitor = ContactMonitor([1, 2], [1.0, 1.0], [0.5, 0.5])
+    # At t = 0 they are 1.8 m apart nose to nose; after one 0.5 s step each has driven 2.5 m: they have
+    # passed through each other, and at both sampled moments their footprints are apart.
+    assert monitor.begin(_xs(-1.4, 1.4), _xs(0, 0), _xs(0, math.pi)) == []
+    before, _ = signed_distance(_box(-1.4, 0, 0, 1, 0.5), _box(1.4, 0, math.pi, 1, 0.5))
+    after, _ = signed_distance(_box(1.1, 0, 0, 1, 0.5), _box(-1.1, 0, math.pi, 1, 0.5))
+    assert before[0] > 0 and after[0] > 0
+    [contact] = monitor.step(0.0, 0.5, _xs(1.1, -1.1), _xs(0, 0), _xs(0, math.pi), BOTH)
+    # Noses meet when the centres are 1 m apart: 2.8 - 10 t = 1, t = 0.18 s, at x = 0.
+    assert contact.time == pytest.approx(0.18, abs=1e-3)
+    assert (contact.x, contact.y) == pytest.approx((0.0, 0.0), abs=1e-3)
+    # At the deepest their centres met: the least way out is sideways, the width.
+    assert contact.depth == pytest.approx(0.5, abs=0.01)
+    assert monitor.report().contacts[0].until == 0.5
+
+
+def test_the_same_pass_slowly_enough_apart_is_no_contact() -> None:
+    monitor = ContactMonitor([1, 2], [1.0, 1.0], [0.5, 0.5])
+    monitor.begin(_xs(-1.4, 1.4), _xs(0, 0.55), _xs(0, math.pi))  # lanes 0.05 m apart: they pass by
+    assert monitor.step(0.0, 0.5, _xs(1.1, -1.1), _xs(0, 0.55), _xs(0, math.pi), BOTH) == []
+    clearance = monitor.report().clearance
+    assert clearance is not None and clearance.distance == pytest.approx(0.05, abs=1e-3)
+
+
+def test_a_turn_in_place_clips_a_standing_vehicles_corner() -> None:
+    monitor = ContactMonitor([1, 2], [2.0, 1.0], [0.5, 0.5])
+    # Vehicle 1 (2 m long) turns 90 degrees on the spot in one step; vehicle 2 stands beside it, its near
+    # side at y = 0.95: clear of vehicle 1 at both ends of the turn, not in between.
+    assert monitor.begin(_xs(0, 0), _xs(0, 1.2), _xs(0, 0)) == []
+    [contact] = monitor.step(0.0, 0.1, _xs(0, 0), _xs(0, 1.2), _xs(math.pi / 2, 0), np.array([True, False]))
+    # Vehicle 1's corner (1, 0.25) reaches y = 0.95 when sin(a) + 0.25 cos(a) = 0.95.
+    angle = next(a for a in np.linspace(0, math.pi / 2, 100001) if math.sin(a) + 0.25 * math.cos(a) >= 0.95)
+    assert contact.time == pytest.approx(0.1 * angle / (math.pi / 2), abs=1e-3)
+    assert contact.y == pytest.approx(0.95, abs=1e-3)
+    apart = ContactMonitor([1, 2], [2.0, 1.0], [0.5, 0.5])
+    apart.begin(_xs(0, 0), _xs(0, 1.3), _xs(0, 0))  # standing 0.1 m farther: the corner passes clear
+    assert apart.step(0.0, 0.1, _xs(0, 0), _xs(0, 1.3), _xs(math.pi / 2, 0), np.array([True, False])) == []
+
+
+def test_a_contact_ends_when_they_part_and_a_new_touch_is_a_new_contact() -> None:
+    monitor = ContactMonitor([1, 2], [1.0, 1.0], [0.5, 0.5])
+    monitor.begin(_xs(0, 2), _xs(0, 0), _xs(0, 0))
+    path = [0.5, 1.2, 1.4, 0.5, 1.2]  # vehicle 1 drives in, stays in, backs out, drives in again
+    for k, x in enumerate(path):
+        monitor.step(0.1 * k, 0.1 * (k + 1), _xs(x, 2), _xs(0, 0), _xs(0, 0), np.array([True, False]))
+    first, second = monitor.report().contacts
+    assert first.until == pytest.approx(0.4) and first.depth == pytest.approx(0.4)
+    assert second.time > first.until and second.until is None  # still touching at the end
+
+
+def test_vehicles_far_apart_have_no_clearance_within_reach_and_no_near_miss() -> None:
+    monitor = ContactMonitor([1, 2, 3], [1.0] * 3, [0.5] * 3)
+    monitor.begin(_xs(0, 10, 20), _xs(0, 0, 0), _xs(0, 0, 0))
+    monitor.step(0.0, 0.1, _xs(0.1, 10.1, 20.1), _xs(0, 0, 0), _xs(0, 0, 0), np.ones(3, dtype=bool))
+    report = monitor.report()
+    assert report.clearance is None and report.near_misses == () and report.contacts == ()
+
+
+def test_the_broad_phase_finds_the_one_close_pair_among_many() -> None:
+    rng = np.random.default_rng(7)
+    count = 400
+    x, y = np.arange(count) * 5.0, rng.uniform(0, 1, count)  # a row 5 m apart: nobody near anybody
+    x[300] = x[299] + 1.05  # but vehicle 300 sits 0.05 m behind vehicle 299
+    ids = list(range(1, count + 1))
+    monitor = ContactMonitor(ids, [1.0] * count, [0.5] * count)
+    y[300] = y[299]
+    monitor.begin(x, y, np.zeros(count))
+    candidates = monitor._candidates(monitor._poses, np.ones(count, dtype=bool), 0.0)  # type: ignore[arg-type]
+    assert len(candidates[0]) < 3 * count  # neighbours only, not all 79,800 pairs
+    clearance = monitor.report().clearance
+    assert clearance is not None and clearance.vehicles == (300, 301)
+    assert clearance.distance == pytest.approx(0.05)

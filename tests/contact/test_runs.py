@@ -1,0 +1,130 @@
+"""The contact check in whole runs: the shipped scenarios, the two judgements switched on and off, the
+expected clearance, ``stop_on: [contact]`` and the suite's ``checks`` block."""
+
+from __future__ import annotations
+
+import shutil
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+
+from fleetsim.errors import SuiteError
+from fleetsim.load.scenario import load_scenario
+from fleetsim.load.suite import load_suite
+from fleetsim.planners import BFSPlanner, ReservingPlanner
+from fleetsim.scenario import Checks, Expectations, Scenario
+from fleetsim.sim.loop import run_scenario
+
+SUITES = Path(__file__).resolve().parents[2] / "scenario_suites"
+
+
+def _scenario(suite: str, name: str) -> Scenario:
+    loaded = load_suite(SUITES / suite)
+    return load_scenario(next(s for s in loaded.scenarios if s.name == name), loaded)
+
+
+def _with(scenario: Scenario, **checks: object) -> Scenario:
+    settings = scenario.settings
+    return replace(scenario, settings=replace(settings, checks=replace(settings.checks, **checks)))
+
+
+def test_head_on_in_the_corridor_is_a_reservation_alert_and_a_contact() -> None:
+    result = run_scenario(_scenario("caught-bugs.fleetsim.yaml", "corridor-head-on"), BFSPlanner())
+    assert result.passed  # the suite expects both
+    assert result.collisions
+    assert result.contact is not None
+    contacts = result.contact.contacts
+    [contact] = contacts
+    assert contact.vehicles == (1, 2) and contact.time == pytest.approx(18.5)
+    assert contact.depth == pytest.approx(0.6)  # they drove right through: the least way out, a width
+    assert contact.until == pytest.approx(19.6)
+    assert result.metrics.clearance == 0.0
+
+
+def test_with_reservations_off_the_same_run_has_no_alert_and_fails_on_contact() -> None:
+    scenario = _with(_scenario("caught-bugs.fleetsim.yaml", "corridor-head-on"), reservations=False)
+    scenario = replace(scenario, expect=Expectations())  # nothing allowed
+    result = run_scenario(scenario, BFSPlanner())
+    assert not result.collisions
+    kinds = [f.kind for f in result.failures]
+    assert kinds.count("contact") == 1 and "collision" not in kinds
+    first = next(f for f in result.failures if f.kind == "contact")
+    assert first.message.startswith("vehicles 1 and 2 touched at t = ")
+    assert "overlapping up to" in first.message
+
+
+def test_with_contact_off_nothing_is_measured() -> None:
+    result = run_scenario(
+        _with(_scenario("caught-bugs.fleetsim.yaml", "corridor-head-on"), contact=False), BFSPlanner()
+    )
+    assert result.contact is None and result.metrics.clearance is None
+    assert result.to_dict()["contact"] is None and result.to_dict()["metrics"]["clearance"] is None
+    assert result.passed  # the alerts it expects are still there
+
+
+def test_stop_on_contact_ends_the_run_at_the_first_one() -> None:
+    scenario = _scenario("caught-bugs.fleetsim.yaml", "corridor-head-on")
+    scenario = replace(scenario, settings=replace(scenario.settings, stop_on=("contact",)))
+    result = run_scenario(scenario, BFSPlanner())
+    assert result.ended == "contact"
+    assert result.contact is not None and len(result.contact.contacts) == 1
+    assert result.sim_time == pytest.approx(result.contact.contacts[0].time, abs=0.1 + 1e-9)
+
+
+@pytest.mark.parametrize("name", ["crossing", "loop-one-way", "corridor-passing-bay", "mixed-shapes"])
+def test_the_reservation_rule_keeps_the_shipped_examples_out_of_contact_and_their_hashes_unchanged(name: str) -> None:
+    scenario = _scenario("examples.fleetsim.yaml", name)
+    checked, unchecked = (
+        run_scenario(scenario, ReservingPlanner()),
+        run_scenario(_with(scenario, contact=False), ReservingPlanner()),
+    )
+    assert checked.passed
+    assert checked.contact is not None and checked.contact.contacts == ()
+    assert checked.metrics.clearance is None or checked.metrics.clearance > 0
+    assert checked.trace_hash == unchecked.trace_hash  # contacts and clearances enter no hash
+
+
+def test_an_expected_clearance_fails_the_run_naming_the_closest_pair() -> None:
+    scenario = _scenario("examples.fleetsim.yaml", "corridor-passing-bay")
+    measured = run_scenario(scenario, ReservingPlanner()).contact
+    assert measured is not None and measured.clearance is not None
+    closest = measured.clearance.distance
+    strict = replace(scenario, expect=replace(scenario.expect, clearance=closest + 0.01))
+    [failure] = run_scenario(strict, ReservingPlanner()).failures
+    a, b = measured.clearance.vehicles
+    assert failure.kind == "expectation" and failure.details["expect"] == "clearance"
+    assert f"vehicles {a} and {b} came within {closest:.3f} m of each other" in failure.message
+    lenient = replace(scenario, expect=replace(scenario.expect, clearance=closest - 0.01))
+    assert run_scenario(lenient, ReservingPlanner()).passed
+
+
+def test_an_expected_clearance_with_the_contact_check_off_is_a_failure_that_says_so() -> None:
+    scenario = _with(_scenario("examples.fleetsim.yaml", "crossing"), contact=False)
+    scenario = replace(scenario, expect=replace(scenario.expect, clearance=0.3))
+    [failure] = run_scenario(scenario, ReservingPlanner()).failures
+    assert "its contact check is off" in failure.message
+
+
+def _suite(tmp_path: Path, defaults: str, entry: str) -> Path:
+    shutil.copytree(SUITES / "examples" / "crossing", tmp_path / "crossing")
+    path = tmp_path / "checks.fleetsim.yaml"
+    path.write_text(
+        "fleetsim: 1\nname: checks\n"
+        f"defaults:\n  {defaults}\n"
+        f"scenarios:\n  - name: one\n    dir: crossing/\n    {entry}\n",
+        encoding="utf-8",
+    )
+    return path
+
+
+def test_an_entrys_checks_override_the_defaults_key_by_key(tmp_path: Path) -> None:
+    path = _suite(tmp_path, "checks: {reservations: off, near_miss: 0.8}", "checks: {safety_margin: 0.1}")
+    [spec] = load_suite(path).scenarios
+    assert spec.settings.checks == Checks(reservations=False, contact=True, safety_margin=0.1, near_miss=0.8)
+
+
+def test_a_misspelt_check_is_named(tmp_path: Path) -> None:
+    path = _suite(tmp_path, "time_limit: 60", "checks: {contacts: false}")
+    with pytest.raises(SuiteError, match=r"unknown key 'contacts'; did you mean 'contact'\?"):
+        load_suite(path)
