@@ -1,7 +1,8 @@
 """The reference planner finishes what is solvable: every generated scenario ends completed, safely.
 
 Generated scenarios are solvable by construction (the vehicles could do their tasks one after another),
-so a deadlock, a timeout, a collision alert or a rejection here is the planner's fault. In CI the
+so a deadlock, a timeout, a collision alert or a rejection here is the planner's fault; and a planner
+that keeps the reservation rule never lets two footprints touch, so a contact would be the rule's. In CI the
 examples are derandomised, so a failure reproduces exactly; elsewhere every run hunts new ones.
 """
 
@@ -41,3 +42,6 @@ def test_the_reference_planner_completes_every_generated_scenario_without_alerts
     )
     assert result.ended == "completed", story
     assert (result.collisions, result.rejections) == ((), ()), story
+    # The reservation rule's own guarantee, judged physically: no two footprints ever touch.
+    assert result.contact is not None and result.contact.contacts == (), story
+    assert result.metrics.clearance is None or result.metrics.clearance > 0, story
