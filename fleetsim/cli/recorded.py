@@ -29,7 +29,13 @@ from fleetsim.recording.artifacts import (
     TRACE_FILE,
     stuck_overlay,
 )
-from fleetsim.recording.picture import failure_caption, failure_step, picture_overlays, render_frame_svg
+from fleetsim.recording.picture import (
+    contact_moment,
+    failure_caption,
+    failure_step,
+    picture_overlays,
+    render_frame_svg,
+)
 from fleetsim.recording.recorder import partial_path, record_mcap
 from fleetsim.recording.replay import Frame, TraceError, frame_at
 from fleetsim.recording.rviz import rviz_config
@@ -111,16 +117,19 @@ def render_step(args: argparse.Namespace) -> int:
             f"{run.trace_path}: --step={args.step!r} must be between 0 and {last_step} (the run's last step)"
         )
     frame = _frame(run, step)
-    stuck = rejected = None
+    stuck = rejected = contact = None
     if found is not None and found[0] == step:
         caption = failure_caption(found[1], failures, at=frame.time)
         stuck, rejected = picture_overlays(found[1])
+        contact = contact_moment(found[1], frame, _frame(run, step - 1) if step > 0 else None)
     else:
         caption = f"t = {frame.time:.2f} s \u2014 {scenario.name}, step {step} of {last_step}"
         if step == last_step and run.unfinished:
             caption += " (the trace ends here: the run did not end)"
     output = Path(args.output)
-    write_text_atomically(output, render_frame_svg(scenario, frame, caption=caption, stuck=stuck, rejected=rejected))
+    write_text_atomically(
+        output, render_frame_svg(scenario, frame, caption=caption, stuck=stuck, rejected=rejected, contact=contact)
+    )
     _print_notes(run, partial_path(run.trace_path.parent / MCAP_FILE))
     print(f"wrote {output} ({scenario.name}, step {step} of {last_step}, t = {frame.time:.2f} s)")
     return 0

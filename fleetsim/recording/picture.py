@@ -16,7 +16,7 @@ from dataclasses import replace
 from typing import Any
 from xml.sax.saxutils import escape
 
-from fleetsim.enums import Traverse
+from fleetsim.enums import Progress, Traverse
 from fleetsim.layout.segment import Point
 from fleetsim.recording.colours import (
     ALERT,
@@ -56,6 +56,7 @@ _CYCLE = hex_colour(CYCLE)
 _CONTESTED = hex_colour(CONTESTED)
 _REJECTED = hex_colour(REJECTED)
 _REJECTED_LEGEND = "magenta, dashed: the rejected plan (red outline: the leg that failed the check)"
+_CONTACT_LEGEND = "red outlines: the two footprints at the moment they touched \u00b7 red ring: where"
 _STUCK_KINDS = ("deadlock", "timeout", "interrupted")  # failures that explain who waits for whom
 _MIN_WIDTH = 480.0  # user units: room for a readable caption on the smallest maps
 _STUCK_LEGEND = (
@@ -72,6 +73,7 @@ def render_frame_svg(
     pixels_per_metre: float = 40.0,
     stuck: Mapping[str, Any] | None = None,
     rejected: Mapping[str, Any] | None = None,
+    contact: Mapping[str, Any] | None = None,
 ) -> str:
     """Draw ``frame`` of a run of ``scenario`` as an SVG document with ``caption`` on top.
 
@@ -79,12 +81,14 @@ def render_frame_svg(
     ``stuck``: the details of a deadlock or timeout failure (``vehicles``, ``cycles``, ``roots``, as in
     ``result.json``); who waits for whom is drawn over the fleet. ``rejected``: the details of a
     rejection (its ``plan`` and ``leg_index``); the refused plan is drawn with its offending leg marked.
+    ``contact``: a contact at its moment (:func:`contact_moment`): both footprints then, and the place.
     """
     font = 0.4 * pixels_per_metre
     legends = [
         _LEGEND,
         *([_STUCK_LEGEND] if stuck else []),
         *([_REJECTED_LEGEND] if rejected and rejected.get("plan") else []),
+        *([_CONTACT_LEGEND] if contact else []),
     ]
     legends += [_DISTURBED_LEGEND] if frame.disturbed else []
     view = _frame(scenario.layout, margin=1.5, pixels_per_metre=pixels_per_metre)
@@ -120,6 +124,7 @@ def render_frame_svg(
         *_labels_svg(scenario, view),
         *_vehicles_svg(scenario, frame, view, colours, font * 0.8),
         *(_waits_svg(scenario, frame, view, stuck) if stuck else []),
+        *(_contact_svg(scenario, view, contact) if contact else []),
         *text,
     ]
     return _document(view, f"{scenario.name}: step {frame.step}", body)
@@ -339,6 +344,55 @@ def _vehicles_svg(
     return parts
 
 
+def _contact_svg(scenario: Scenario, view: _Frame, contact: Mapping[str, Any]) -> list[str]:
+    """Both footprints at the moment of contact in red outline, and a red ring where they first touched."""
+    vehicles = {v.id: v for v in scenario.vehicles}
+    parts = [
+        f'<g class="contact" data-vehicles="{" ".join(str(f["vehicle"]) for f in contact["footprints"])}" fill="none">'
+    ]
+    for footprint in contact["footprints"]:
+        pose = Pose(0, Traverse.FORWARD, Progress.FORWARD, footprint["x"], footprint["y"], footprint["heading"], 0.0)
+        body, _ = _vehicle_outline(vehicles[footprint["vehicle"]], pose)
+        parts.append(
+            f'<polygon class="contact-footprint" data-vehicle="{footprint["vehicle"]}" points="{view.points(body)}" '
+            f'stroke="{_CYCLE}" stroke-width="{0.06 * view.scale:.2f}"/>'
+        )
+    cx, cy = view.point((contact["x"], contact["y"]))
+    parts += [
+        f'<circle class="contact-place" cx="{cx:.2f}" cy="{cy:.2f}" r="{0.35 * view.scale:.2f}" stroke="{_CYCLE}" '
+        f'stroke-width="{0.08 * view.scale:.2f}"/>',
+        "</g>",
+    ]
+    return parts
+
+
+def contact_moment(failure: Failure, frame: Frame, before: Frame | None) -> dict[str, Any] | None:
+    """For a ``contact`` failure pictured at ``frame`` (the end of the step it began in; ``before``: the
+    frame of the step before, None at the first step): the place and both footprints at the failure's
+    moment, the poses interpolated between the two frames as the contact check does (centre along the
+    straight line, heading along the shorter turn). None for any other failure."""
+    if failure.kind != "contact":
+        return None
+    details = failure.details
+    ids = [int(v) for v in details["vehicles"]]
+    span = frame.time - before.time if before is not None else 0.0
+    tau = 1.0 if before is None or span <= 0 else min(max((failure.time - before.time) / span, 0.0), 1.0)
+    footprints = []
+    for vid in ids:
+        end = frame.poses[vid]
+        start = before.poses[vid] if before is not None else end
+        turn = math.remainder(end.heading - start.heading, math.tau)
+        footprints.append(
+            {
+                "vehicle": vid,
+                "x": start.x + tau * (end.x - start.x),
+                "y": start.y + tau * (end.y - start.y),
+                "heading": start.heading + tau * turn,
+            }
+        )
+    return {"x": float(details["x"]), "y": float(details["y"]), "vehicles": ids, "footprints": footprints}
+
+
 def _disturbed_svg(vehicle: Vehicle, pose: Pose, view: _Frame, font: float, kind: str | None) -> list[str]:
     """A dashed outline round a disturbed vehicle and ``STOP``/``SLOW`` on its right (the id is on its left)."""
     if kind is None:
@@ -438,7 +492,9 @@ def failure_picture(scenario: Scenario, result: RunResult) -> tuple[int, str] | 
     frame = frame_at(scenario, lines, step)
     caption = failure_caption(failure, result.failures, at=frame.time)
     stuck, rejected = picture_overlays(failure)
-    return step, render_frame_svg(scenario, frame, caption=caption, stuck=stuck, rejected=rejected)
+    before = frame_at(scenario, lines, step - 1) if failure.kind == "contact" and step > 0 else None
+    contact = contact_moment(failure, frame, before)
+    return step, render_frame_svg(scenario, frame, caption=caption, stuck=stuck, rejected=rejected, contact=contact)
 
 
 def stuck_details(failure: Failure) -> Mapping[str, Any] | None:

@@ -3,18 +3,23 @@ expected clearance, ``stop_on: [contact]`` and the suite's ``checks`` block."""
 
 from __future__ import annotations
 
+import math
 import shutil
 from dataclasses import replace
 from pathlib import Path
 
 import pytest
 
+from fleetsim.enums import Progress, Traverse
 from fleetsim.errors import SuiteError
 from fleetsim.load.scenario import load_scenario
 from fleetsim.load.suite import load_suite
 from fleetsim.planners import BFSPlanner, ReservingPlanner
+from fleetsim.recording.picture import contact_moment, failure_picture
+from fleetsim.recording.replay import Frame, Pose
 from fleetsim.scenario import Checks, Expectations, Scenario
 from fleetsim.sim.loop import run_scenario
+from fleetsim.sim.result import Failure
 
 SUITES = Path(__file__).resolve().parents[2] / "scenario_suites"
 
@@ -128,3 +133,36 @@ def test_a_misspelt_check_is_named(tmp_path: Path) -> None:
     path = _suite(tmp_path, "time_limit: 60", "checks: {contacts: false}")
     with pytest.raises(SuiteError, match=r"unknown key 'contacts'; did you mean 'contact'\?"):
         load_suite(path)
+
+
+def test_a_contacts_picture_shows_both_footprints_at_its_moment_and_where() -> None:
+    scenario = _scenario("caught-bugs.fleetsim.yaml", "corridor-head-on")
+    scenario = replace(scenario, expect=Expectations(collisions="any"))  # contacts not allowed
+    result = run_scenario(scenario, BFSPlanner())
+    [failure] = result.failures
+    assert failure.kind == "contact"
+    found = failure_picture(scenario, result)
+    assert found is not None
+    step, svg = found
+    assert step == round(failure.time / scenario.settings.time_step) - 1
+    assert svg.count('class="contact-footprint"') == 2 and 'class="contact-place"' in svg
+    assert "contact: vehicles 1 and 2 touched at t = 18.50 s" in svg
+    passed = run_scenario(_scenario("caught-bugs.fleetsim.yaml", "corridor-head-on"), BFSPlanner())
+    assert passed.passed and failure_picture(scenario, passed) is None  # expected contacts: no picture
+
+
+def test_the_moment_of_a_contact_is_interpolated_between_the_frames() -> None:
+    def frame(time: float, x1: float, heading: float) -> Frame:
+        poses = {
+            1: Pose(1, Traverse.FORWARD, Progress.FORWARD, x1, 0.0, heading, 1.0),
+            2: Pose(2, Traverse.FORWARD, Progress.FORWARD, 5.0, 0.0, 0.0, 0.0),
+        }
+        return Frame(0, time, poses, {}, (), (), (), ())
+
+    failure = Failure("contact", 0.125, "touched", {"vehicles": [1, 2], "x": 4.0, "y": 0.0})
+    moment = contact_moment(failure, frame(0.2, 4.0, 3.0), frame(0.1, 2.0, -3.0))
+    assert moment is not None
+    one = moment["footprints"][0]
+    assert one["x"] == pytest.approx(2.5)  # a quarter of the way
+    assert math.remainder(one["heading"] - (-3.0 - 0.25 * (2 * math.pi - 6.0)), math.tau) == pytest.approx(0.0)
+    assert contact_moment(replace(failure, kind="collision"), frame(0.2, 4.0, 0.0), None) is None
