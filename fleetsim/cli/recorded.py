@@ -177,8 +177,14 @@ def record(args: argparse.Namespace) -> int:
     partial = partial_path(output)
     left_over = partial.exists()
     try:  # a trace that does not fit the scenario stops the writer, which then leaves nothing behind
+        contacts = [f.details for f in run.failures if f.kind == "contact"]  # the contacts that failed the run
         written = record_mcap(
-            output, run.scenario, run.lines, every=args.record_every, stuck=stuck_overlay(run.failures)
+            output,
+            run.scenario,
+            run.lines,
+            every=args.record_every,
+            stuck=stuck_overlay(run.failures),
+            contacts=contacts,
         )
     except TraceError as error:
         raise UsageError(f"{run.trace_path}: {error}; name the run's scenario with --suite SUITE::SCENARIO") from None

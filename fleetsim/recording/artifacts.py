@@ -142,7 +142,12 @@ def write_run_artifacts(
         _write_result(folder, result, paths, extra)  # in case the recording is cut short
         paths["mcap"] = str(
             record_mcap(
-                folder / MCAP_FILE, scenario, lines, every=record_every, stuck=stuck_overlay(result.failures)
+                folder / MCAP_FILE,
+                scenario,
+                lines,
+                every=record_every,
+                stuck=stuck_overlay(result.failures),
+                contacts=[c.to_dict() for c in result.contact.contacts] if result.contact is not None else (),
             ).path
         )
         write_text_atomically(folder / RVIZ_FILE, rviz_config(scenario, RVIZ_CONFIG.read_text(encoding="utf-8")))

@@ -25,8 +25,10 @@ Topics:
   for whom (namespace ``wait_for``, arrows; ``wait_for_cycle`` red; ``planned_near`` thin), the root-cause
   vehicles (``root_cause``, red discs), the contested segments (``contested``, purple) and the headline
   (``stuck_text``).
-- ``/rosout``: rejections, route errors, alerts and an interruption (warnings), planner errors (errors),
-  completed tasks.
+- ``/fleetsim/contacts``: a red disc where each contact began (``contact``) and ``contact 1 ⟂ 2`` above it
+  (``contact_label``), from the step the contact began in on (the contact check of :mod:`fleetsim.contact`).
+- ``/rosout``: rejections, route errors, alerts and an interruption (warnings), planner errors and
+  contacts (errors), completed tasks.
 
 The file is written under a temporary name and renamed when complete, so an interrupted recording never
 leaves a half-written file where a reviewer looks.
@@ -92,6 +94,7 @@ TOPICS: dict[str, tuple[str, bool]] = {
     "/fleetsim/sim_time": (_ARRAY, False),
     "/fleetsim/stuck": (_ARRAY, False),
     "/fleetsim/disturbed": (_ARRAY, False),
+    "/fleetsim/contacts": (_ARRAY, False),
     "/rosout": ("rcl_interfaces/msg/Log", False),
 }
 
@@ -196,7 +199,12 @@ def _with_last(frames: Iterable[Frame]) -> Iterator[tuple[Frame, bool]]:
 
 
 def _write_frames(
-    bag: _Bag, scenario: Scenario, frames: Iterable[Frame], every: int, stuck: Mapping[str, Any] | None = None
+    bag: _Bag,
+    scenario: Scenario,
+    frames: Iterable[Frame],
+    every: int,
+    stuck: Mapping[str, Any] | None = None,
+    contacts: Sequence[Mapping[str, Any]] = (),
 ) -> int:
     """Write the frames; the number written in full (with ``/tf``).
 
@@ -207,14 +215,28 @@ def _write_frames(
     scene = Scene(scenario)
     full = 0
     shown_alerts: tuple[CollisionAlert, ...] | None = None
+    pending = sorted(contacts, key=lambda c: float(c["time"]))
+    shown = 0  # contacts marked so far
     for frame, last in _with_last(frames):
         first = shown_alerts is None
         tick = first or last or frame.step % every == 0
         alerts_changed = frame.alerts != shown_alerts
-        if tick or frame.plans_changed or frame.events or alerts_changed:
+        due = shown
+        while due < len(pending) and float(pending[due]["time"]) <= frame.time + 1e-9:
+            due += 1  # a contact belongs to the step it began in: the one that ends at or after it
+        if tick or frame.plans_changed or frame.events or alerts_changed or due > shown:
             _write_frame(bag, scene, frame, first=first, tick=tick, alerts_changed=alerts_changed)
             shown_alerts = frame.alerts
             full += tick
+        if due > shown:
+            time_ns = round(frame.time * 1e9)
+            time = m.stamp(time_ns)
+            bag.write("/fleetsim/contacts", time_ns, scene.contacts(time, pending[:due]))
+            for contact in pending[shown:due]:
+                a, b = contact["vehicles"]
+                words = f"contact: vehicles {a} and {b} touched at t = {float(contact['time']):.2f} s at ({float(contact['x']):.2f}, {float(contact['y']):.2f})"
+                bag.write("/rosout", time_ns, m.log(time, _ERROR, words))
+            shown = due
         if last and stuck:
             time_ns = round(frame.time * 1e9)
             time = m.stamp(time_ns)
@@ -266,13 +288,15 @@ def record_mcap(
     *,
     every: int = 1,
     stuck: Mapping[str, Any] | None = None,
+    contacts: Sequence[Mapping[str, Any]] = (),
 ) -> Recording:
     """Write the run of ``scenario`` whose trace is ``trace_lines`` to ``path`` (``.mcap``).
 
     ``every``: record every N-th step in full (the first and the last always); the steps between write
     only what changed in them (plans, alerts, log lines), so no change is lost at a lower rate.
     ``stuck``: the details of the run's deadlock or timeout failure (as in ``result.json``, with its
-    ``headline``); who waits for whom is drawn on ``/fleetsim/stuck`` at the last step.
+    ``headline``); who waits for whom is drawn on ``/fleetsim/stuck`` at the last step. ``contacts``: the
+    run's contacts (as in ``result.json``), each marked on ``/fleetsim/contacts`` from the step it began in.
     """
     if every < 1:
         msg = f"every={every!r} must be a whole number of steps >= 1"
@@ -282,7 +306,7 @@ def record_mcap(
     try:
         with partial.open("wb") as stream:
             bag = _Bag(stream)
-            frames = _write_frames(bag, scenario, replay(scenario, trace_lines), every, stuck)
+            frames = _write_frames(bag, scenario, replay(scenario, trace_lines), every, stuck, contacts)
             bag.writer.finish()  # type: ignore[no-untyped-call]  # mcap's Writer.finish has no annotations
         os.replace(partial, path)
     finally:

@@ -211,6 +211,20 @@ class Scene:
             )
         return m.marker_array(markers)
 
+    def contacts(self, time: m.Stamp, contacts: Sequence[Mapping[str, Any]]) -> m.MarkerArray:
+        """A red disc where each contact so far began, and ``contact 1 ⟂ 2`` above it."""
+        markers = [m.delete_all(time, "")]
+        for index, contact in enumerate(contacts):
+            x, y = float(contact["x"]), float(contact["y"])
+            a, b = contact["vehicles"]
+            markers.append(m.disc(time, "contact", index, (x, y, 0.06), 0.7, CYCLE))
+            markers.append(
+                m.text_marker(
+                    time, "map", "contact_label", index, f"contact {a} \u27c2 {b}", (x, y, 1.2), self.letter, CYCLE
+                )
+            )
+        return m.marker_array(markers)
+
     def sim_time(self, time: m.Stamp, seconds: float) -> m.MarkerArray:
         x, y = self.top_left
         return m.marker_array(

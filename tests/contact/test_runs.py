@@ -9,12 +9,14 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
+from mcap.reader import make_reader
 
 from fleetsim.enums import Progress, Traverse
 from fleetsim.errors import SuiteError
 from fleetsim.load.scenario import load_scenario
 from fleetsim.load.suite import load_suite
 from fleetsim.planners import BFSPlanner, ReservingPlanner
+from fleetsim.recording.artifacts import write_run_artifacts
 from fleetsim.recording.picture import contact_moment, failure_picture
 from fleetsim.recording.replay import Frame, Pose
 from fleetsim.scenario import Checks, Expectations, Scenario
@@ -166,3 +168,21 @@ def test_the_moment_of_a_contact_is_interpolated_between_the_frames() -> None:
     assert one["x"] == pytest.approx(2.5)  # a quarter of the way
     assert math.remainder(one["heading"] - (-3.0 - 0.25 * (2 * math.pi - 6.0)), math.tau) == pytest.approx(0.0)
     assert contact_moment(replace(failure, kind="collision"), frame(0.2, 4.0, 0.0), None) is None
+
+
+def test_the_recording_marks_each_contact_at_its_step_for_an_independent_reader(tmp_path: Path) -> None:
+    scenario = _scenario("caught-bugs.fleetsim.yaml", "corridor-head-on")
+    result = run_scenario(scenario, BFSPlanner())
+    assert result.contact is not None
+    [contact] = result.contact.contacts
+    paths = write_run_artifacts(tmp_path / "run", result, scenario=scenario)
+    with open(paths["mcap"], "rb") as stream:
+        messages = [
+            (c.topic, msg.log_time) for _, c, msg in make_reader(stream).iter_messages(topics=["/fleetsim/contacts"])
+        ]
+    [(_, log_time)] = messages
+    step_end = math.ceil(contact.time / scenario.settings.time_step - 1e-9) * scenario.settings.time_step
+    assert log_time == pytest.approx(step_end * 1e9, abs=1e3)  # the end of the step it began in
+    with open(paths["mcap"], "rb") as stream:
+        logs = [bytes(msg.data) for _, c, msg in make_reader(stream).iter_messages(topics=["/rosout"])]
+    assert any(b"contact: vehicles 1 and 2 touched at t = 18.50 s" in data for data in logs)
