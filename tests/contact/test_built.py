@@ -1,0 +1,73 @@
+"""Runs built on purpose, through real maps (written as Tiled JSON and loaded as a user's are): a junction
+crossed 30 s apart, judged by both disciplines."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+
+from fleetsim.enums import Direction, Shape
+from fleetsim.layout import Segment
+from fleetsim.load.scenario import load_scenario_dir
+from fleetsim.load.tiled_writer import write_map
+from fleetsim.planners import BFSPlanner
+from fleetsim.scenario import Checks, Scenario, ScenarioSettings
+from fleetsim.sim.loop import run_scenario
+
+
+def _crossing_apart(tmp_path: Path, checks: Checks) -> Scenario:
+    """A + junction at the origin. Vehicle 1 drives east from (-10, 0) and stops at (2, 0), just past
+    it; vehicle 2 comes north from (0, -40), so it reaches the junction some 30 s after vehicle 1 has
+    crossed it, and passes 2 m from where vehicle 1 stands."""
+    segments = (
+        Segment(1, Shape.STRAIGHT, Direction.BOTH, ((-10.0, 0.0), (0.0, 0.0))),
+        Segment(2, Shape.STRAIGHT, Direction.BOTH, ((0.0, 0.0), (2.0, 0.0))),
+        Segment(5, Shape.STRAIGHT, Direction.BOTH, ((0.0, -40.0), (0.0, -10.0))),
+        Segment(3, Shape.STRAIGHT, Direction.BOTH, ((0.0, -10.0), (0.0, 0.0))),
+        Segment(4, Shape.STRAIGHT, Direction.BOTH, ((0.0, 0.0), (0.0, 10.0))),
+    )
+    write_map(tmp_path / "map.json", segments)
+    (tmp_path / "vehicles.csv").write_text(
+        "vehicle_id,start_segment_id,segment_orientation,progress_direction\n1,1,forward,forward\n2,5,forward,forward\n"
+    )
+    (tmp_path / "tasks.csv").write_text("vehicle_id,goal_segment_id,goal_progress_direction\n1,2,\n2,4,\n")
+    settings = ScenarioSettings(stop_on=(), time_limit=120.0, checks=checks)
+    return load_scenario_dir(tmp_path, settings=settings)
+
+
+def test_a_junction_crossed_30_s_apart_is_a_reservation_alert_but_no_contact(tmp_path: Path) -> None:
+    result = run_scenario(_crossing_apart(tmp_path, Checks()), BFSPlanner())
+    assert result.collisions  # both routes reserve the junction from the start: the rule says no
+    assert result.contact is not None and result.contact.contacts == ()
+    assert [f.kind for f in result.failures] == ["collision"] * len(result.collisions)
+
+
+def test_with_reservations_off_the_same_run_passes_and_its_clearance_is_as_computed_by_hand(tmp_path: Path) -> None:
+    result = run_scenario(_crossing_apart(tmp_path, Checks(reservations=False)), BFSPlanner())
+    assert result.passed, [f.message for f in result.failures]
+    assert not result.collisions and result.tasks_completed == 2
+    # Vehicle 1 (1.0 x 0.6 m) stands centred at (2, 0) facing east: its tail at x = 1.5. Vehicle 2 comes
+    # north along x = 0, 0.3 m to either side: the closest is 1.5 - 0.3 = 1.2 m, across y in -0.3..0.3.
+    assert result.contact is not None
+    clearance = result.contact.clearance
+    assert clearance is not None and clearance.vehicles == (1, 2)
+    assert clearance.distance == pytest.approx(1.2, abs=1e-6)
+    assert result.metrics.clearance == pytest.approx(1.2, abs=1e-6)
+    assert result.contact.near_misses == ()  # 1.2 m is no near miss at 0.5 m
+    assert clearance.time > 30.0  # when vehicle 2 came by, long after vehicle 1 had crossed
+
+
+def test_a_near_miss_distance_above_the_clearance_lists_the_pair(tmp_path: Path) -> None:
+    result = run_scenario(_crossing_apart(tmp_path, Checks(reservations=False, near_miss=1.5)), BFSPlanner())
+    assert result.contact is not None
+    [miss] = result.contact.near_misses
+    assert miss.vehicles == (1, 2) and miss.distance == pytest.approx(1.2, abs=1e-6)
+
+
+def test_an_expected_clearance_above_what_the_run_kept_fails_it(tmp_path: Path) -> None:
+    scenario = _crossing_apart(tmp_path, Checks(reservations=False))
+    strict = replace(scenario, expect=replace(scenario.expect, clearance=1.25))
+    [failure] = run_scenario(strict, BFSPlanner()).failures
+    assert failure.details["expect"] == "clearance" and "came within 1.200 m" in failure.message
