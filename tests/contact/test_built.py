@@ -71,3 +71,32 @@ def test_an_expected_clearance_above_what_the_run_kept_fails_it(tmp_path: Path) 
     strict = replace(scenario, expect=replace(scenario.expect, clearance=1.25))
     [failure] = run_scenario(strict, BFSPlanner()).failures
     assert failure.details["expect"] == "clearance" and "came within 1.200 m" in failure.message
+
+
+def test_two_vehicles_meeting_at_a_junction_touch_at_the_moment_and_place_computed_by_hand(tmp_path: Path) -> None:
+    segments = (
+        Segment(1, Shape.STRAIGHT, Direction.BOTH, ((-10.0, 0.0), (0.0, 0.0))),
+        Segment(2, Shape.STRAIGHT, Direction.BOTH, ((0.0, 0.0), (10.0, 0.0))),
+        Segment(3, Shape.STRAIGHT, Direction.BOTH, ((0.0, -10.0), (0.0, 0.0))),
+        Segment(4, Shape.STRAIGHT, Direction.BOTH, ((0.0, 0.0), (0.0, 10.0))),
+    )
+    write_map(tmp_path / "map.json", segments)
+    (tmp_path / "vehicles.csv").write_text(
+        "vehicle_id,start_segment_id,segment_orientation,progress_direction\n1,1,forward,forward\n2,3,forward,forward\n"
+    )
+    (tmp_path / "tasks.csv").write_text("vehicle_id,goal_segment_id,goal_progress_direction\n1,2,\n2,4,\n")
+    settings = ScenarioSettings(
+        stop_on=(), time_limit=60.0, allow_start_conflicts=True, checks=Checks(reservations=False)
+    )
+    result = run_scenario(load_scenario_dir(tmp_path, settings=settings), BFSPlanner())
+    assert result.contact is not None
+    [contact] = result.contact.contacts
+    # Both drive alike, 10 m from the junction: 1.0 x 0.6 m footprints first touch when each centre is
+    # 0.5 + 0.3 = 0.8 m from it, corner to corner at (-0.3, -0.3). At 0.5 m/s² up to 1 m/s that is after
+    # 1 m in 2 s, then 8.2 m in 8.2 s: t = 10.2 s.
+    assert contact.vehicles == (1, 2)
+    assert contact.time == pytest.approx(10.2, abs=0.1)  # within a step
+    assert (contact.x, contact.y) == pytest.approx((-0.3, -0.3), abs=0.02)
+    assert contact.depth > 0.5  # they drove on through each other
+    [failure] = [f for f in result.failures if f.kind == "contact"]
+    assert failure.time == contact.time
