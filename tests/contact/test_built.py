@@ -3,6 +3,7 @@ crossed 30 s apart, judged by both disciplines."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 from pathlib import Path
 
@@ -13,7 +14,7 @@ from fleetsim.layout import Segment
 from fleetsim.load.scenario import load_scenario_dir
 from fleetsim.load.tiled_writer import write_map
 from fleetsim.planners import BFSPlanner
-from fleetsim.scenario import Checks, Scenario, ScenarioSettings
+from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Checks, Scenario, ScenarioSettings
 from fleetsim.sim.loop import run_scenario
 
 
@@ -100,3 +101,37 @@ def test_two_vehicles_meeting_at_a_junction_touch_at_the_moment_and_place_comput
     assert contact.depth > 0.5  # they drove on through each other
     [failure] = [f for f in result.failures if f.kind == "contact"]
     assert failure.time == contact.time
+
+
+def test_head_on_at_5_m_s_with_half_second_steps_is_caught_between_the_steps(tmp_path: Path) -> None:
+    # A corridor; vehicle 1 starts at its west end facing east, vehicle 2 at its east end facing west,
+    # each to drive the whole corridor at 5 m/s with 0.5 s steps: they close 5 m a step, five times
+    # their length, and at each step's end their footprints are apart.
+    start = 3.7375  # metres from the middle: the steps' ends fall 2.5 m before and after they meet
+    segments = (
+        Segment(1, Shape.STRAIGHT, Direction.BOTH, ((-start, 0.0), (-0.5, 0.0))),
+        Segment(2, Shape.STRAIGHT, Direction.BOTH, ((-0.5, 0.0), (0.5, 0.0))),
+        Segment(3, Shape.STRAIGHT, Direction.BOTH, ((0.5, 0.0), (start, 0.0))),
+        Segment(4, Shape.STRAIGHT, Direction.BOTH, ((start, 0.0), (start + 20.0, 0.0))),
+        Segment(5, Shape.STRAIGHT, Direction.BOTH, ((-start - 20.0, 0.0), (-start, 0.0))),
+    )
+    write_map(tmp_path / "map.json", segments)
+    (tmp_path / "vehicles.csv").write_text(
+        "vehicle_id,start_segment_id,segment_orientation,progress_direction\n1,1,forward,forward\n2,3,backward,forward\n"
+    )
+    (tmp_path / "tasks.csv").write_text("vehicle_id,goal_segment_id,goal_progress_direction\n1,4,\n2,5,\n")
+    fast = replace(DEFAULT_VEHICLE_TYPE, max_speed=5.0, acceleration=1000.0)
+    settings = ScenarioSettings(
+        time_step=0.5, planning_period=0.5, stop_on=(), time_limit=30.0, allow_start_conflicts=True,
+        checks=Checks(reservations=False),
+    )  # fmt: skip
+    scenario = load_scenario_dir(tmp_path, vehicle_types={"default": fast}, settings=settings)
+    result = run_scenario(scenario, BFSPlanner())
+    assert result.contact is not None
+    [contact] = result.contact.contacts
+    # Begun and ended within one step: no step's end shows them overlapping, only the continuous check.
+    step_end = math.ceil(contact.time / 0.5 - 1e-9) * 0.5
+    assert contact.until == pytest.approx(step_end)
+    assert contact.until - contact.time < 0.5
+    # Noses meet in the middle, face to face: the place is a point of the touching faces.
+    assert contact.x == pytest.approx(0.0, abs=0.05) and abs(contact.y) <= 0.3 + 1e-9
