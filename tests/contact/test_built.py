@@ -135,3 +135,37 @@ def test_head_on_at_5_m_s_with_half_second_steps_is_caught_between_the_steps(tmp
     assert contact.until - contact.time < 0.5
     # Noses meet in the middle, face to face: the place is a point of the touching faces.
     assert contact.x == pytest.approx(0.0, abs=0.05) and abs(contact.y) <= 0.3 + 1e-9
+
+
+def _lanes(tmp_path: Path, margin: float) -> Scenario:
+    """Two parallel one-way lanes 0.7 m apart, centre to centre: 0.6 m wide vehicles side by side, 0.1 m
+    between them, driving their lanes at the same pace."""
+    segments = (
+        Segment(1, Shape.STRAIGHT, Direction.FORWARD, ((-10.0, 0.0), (0.0, 0.0))),
+        Segment(2, Shape.STRAIGHT, Direction.FORWARD, ((0.0, 0.0), (10.0, 0.0))),
+        Segment(3, Shape.STRAIGHT, Direction.FORWARD, ((-10.0, 0.7), (0.0, 0.7))),
+        Segment(4, Shape.STRAIGHT, Direction.FORWARD, ((0.0, 0.7), (10.0, 0.7))),
+    )
+    write_map(tmp_path / "map.json", segments)
+    (tmp_path / "vehicles.csv").write_text(
+        "vehicle_id,start_segment_id,segment_orientation,progress_direction\n1,1,forward,forward\n2,3,forward,forward\n"
+    )
+    (tmp_path / "tasks.csv").write_text("vehicle_id,goal_segment_id,goal_progress_direction\n1,2,\n2,4,\n")
+    settings = ScenarioSettings(
+        stop_on=(), time_limit=60.0, allow_start_conflicts=True, checks=Checks(reservations=False, safety_margin=margin)
+    )
+    return load_scenario_dir(tmp_path, settings=settings)
+
+
+def test_parallel_lanes_a_tenth_apart_never_touch_and_a_safety_margin_turns_that_into_a_contact(tmp_path: Path) -> None:
+    plain = run_scenario(_lanes(tmp_path, 0.0), BFSPlanner())
+    assert plain.passed, [f.message for f in plain.failures]
+    assert plain.contact is not None and plain.contact.contacts == ()
+    assert plain.metrics.clearance == pytest.approx(0.1, abs=1e-9)
+    assert [m.vehicles for m in plain.contact.near_misses] == [(1, 2)]
+    narrow = run_scenario(_lanes(tmp_path, 0.04), BFSPlanner())  # 0.1 - 2 x 0.04: 0.02 m to spare
+    assert narrow.passed and narrow.metrics.clearance == pytest.approx(0.02, abs=1e-9)
+    wide = run_scenario(_lanes(tmp_path, 0.06), BFSPlanner())  # 0.1 - 2 x 0.06 < 0: a contact from the start
+    [failure] = wide.failures
+    assert failure.kind == "contact" and failure.time == 0.0
+    assert failure.details["depth"] == pytest.approx(0.02, abs=1e-4)
