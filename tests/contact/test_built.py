@@ -169,3 +169,44 @@ def test_parallel_lanes_a_tenth_apart_never_touch_and_a_safety_margin_turns_that
     [failure] = wide.failures
     assert failure.kind == "contact" and failure.time == 0.0
     assert failure.details["depth"] == pytest.approx(0.02, abs=1e-4)
+
+
+def _corner(tmp_path: Path, offset: float) -> Scenario:
+    """Vehicle 1 drives east to a corner at the origin, turns 90 degrees on the spot and drives north;
+    vehicle 2 stands (no task) facing east with its rear left corner at (offset, offset), clear of
+    vehicle 1 before and after the turn (0.1 m at ``offset`` 0.4)."""
+    segments = (
+        Segment(1, Shape.STRAIGHT, Direction.BOTH, ((-5.0, 0.0), (0.0, 0.0))),
+        Segment(2, Shape.STRAIGHT, Direction.BOTH, ((0.0, 0.0), (0.0, 5.0))),
+        Segment(4, Shape.STRAIGHT, Direction.BOTH, ((0.0, 5.0), (0.0, 10.0))),  # its goal: the turn is whole
+        # Vehicle 2's start leg, which it drives to its end: 5 cm, ending where it is to stand.
+        Segment(3, Shape.STRAIGHT, Direction.BOTH, ((offset + 0.45, offset + 0.3), (offset + 0.5, offset + 0.3))),
+    )
+    tmp_path.mkdir()
+    write_map(tmp_path / "map.json", segments)
+    (tmp_path / "vehicles.csv").write_text(
+        "vehicle_id,start_segment_id,segment_orientation,progress_direction\n1,1,forward,forward\n2,3,forward,forward\n"
+    )
+    (tmp_path / "tasks.csv").write_text("vehicle_id,goal_segment_id,goal_progress_direction\n1,4,\n")
+    settings = ScenarioSettings(
+        stop_on=(), time_limit=60.0, allow_start_conflicts=True, checks=Checks(reservations=False)
+    )
+    return load_scenario_dir(tmp_path, settings=settings)
+
+
+def test_a_turn_in_place_clips_a_standing_vehicles_corner(tmp_path: Path) -> None:
+    result = run_scenario(_corner(tmp_path / "near", 0.4), BFSPlanner())
+    assert result.contact is not None
+    # Vehicle 1 turns at the origin: its corners sweep a circle of radius hypot(0.5, 0.3) that reaches
+    # past (0.4, 0.4). Both of its front corners pass that corner of vehicle 2: the left one about 14
+    # degrees into the turn, the right one about 76 degrees in, each clipping it briefly.
+    first, second = result.contact.contacts
+    for contact in (first, second):
+        assert contact.vehicles == (1, 2)
+        assert (contact.x, contact.y) == pytest.approx((0.4, 0.4), abs=0.05)
+        assert contact.until is not None and 0 < contact.until - contact.time <= 0.1 + 1e-9
+        assert 0 < contact.depth < 0.02
+    turn_rate = math.radians(DEFAULT_VEHICLE_TYPE.turn_rate)
+    assert second.time - first.time == pytest.approx(math.radians(76 - 14) / turn_rate, abs=0.1)
+    apart = run_scenario(_corner(tmp_path / "far", 0.55), BFSPlanner())  # beyond the swept circle
+    assert apart.contact is not None and apart.contact.contacts == () and apart.passed
