@@ -13,7 +13,7 @@ from __future__ import annotations
 import json
 import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from dataclasses import asdict, dataclass, fields
+from dataclasses import MISSING, asdict, dataclass, fields
 from itertools import pairwise
 from operator import attrgetter
 from pathlib import Path
@@ -75,6 +75,10 @@ class ScenarioMetrics:
     sim_time: float
     realtime_factor: float | None
     trace_hash: str
+    # Added with the contact check: a baseline written before has neither, and reads as no contacts and
+    # no clearance measured.
+    contacts: int = 0
+    clearance: float | None = None  # metres: the closest two footprints came (None: not within reach, or off)
 
     @classmethod
     def from_result(cls, id: str, outcome: Outcome, result: RunResult) -> ScenarioMetrics:
@@ -97,6 +101,8 @@ class ScenarioMetrics:
             sim_time=round(m.sim_time, 6),
             realtime_factor=_round(m.realtime_factor),
             trace_hash=result.trace_hash,
+            contacts=len(result.contact.contacts) if result.contact is not None else 0,
+            clearance=_round(m.clearance),
         )
 
     def to_dict(self) -> dict[str, Any]:
@@ -125,6 +131,8 @@ class ScenarioMetrics:
             sim_time=float(document["sim_time"]),
             realtime_factor=_round(m["realtime_factor"]),
             trace_hash=document["trace_hash"] or "",
+            contacts=len((document.get("contact") or {}).get("contacts", ())),
+            clearance=_round(m.get("clearance")),
         )
 
     @classmethod
@@ -135,6 +143,8 @@ class ScenarioMetrics:
             raise BaselineError(msg)
         values: dict[str, Any] = {}
         for f in fields(cls):
+            if f.name not in data and f.default is not MISSING:
+                continue  # a figure added later: its default
             if f.name not in data:
                 msg = f"{where}: field {f.name!r} is missing"
                 raise BaselineError(msg)
@@ -266,6 +276,9 @@ class Metric(NamedTuple):
 
     read: Callable[[ScenarioMetrics], float | None]
     better: Literal["lower", "higher"]
+    # What a figure the run no longer produces means: worse (makespan: tasks left undone) or better
+    # (clearance: no two footprints came within reach any more).
+    missing: Literal["worse", "better"] = "worse"
 
 
 METRICS: Mapping[str, Metric] = MappingProxyType(
@@ -280,6 +293,8 @@ METRICS: Mapping[str, Metric] = MappingProxyType(
         "rejections": Metric(attrgetter("rejections"), "lower"),
         "tasks_completed": Metric(attrgetter("tasks_completed"), "higher"),
         "realtime_factor": Metric(attrgetter("realtime_factor"), "higher"),
+        "contacts": Metric(attrgetter("contacts"), "lower"),
+        "clearance": Metric(attrgetter("clearance"), "higher", missing="better"),
     }
 )
 _KNOWN = ", ".join(sorted(METRICS))
@@ -408,6 +423,8 @@ def _regression(sid: str, before: ScenarioMetrics, now: ScenarioMetrics, thresho
     old, new = metric.read(before), metric.read(now)
     if old is None:
         return None  # nothing to compare against
+    if new is None and metric.missing == "better":
+        return None
     if new is not None:
         worse = new - old if metric.better == "lower" else old - new
         allowed = abs(old) * threshold.limit / 100 if threshold.relative else threshold.limit

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pytest
 
+from fleetsim.contact.monitor import Approach, Contact, ContactReport
 from fleetsim.errors import FleetsimError
 from fleetsim.gating.baseline import (
     METRICS,
@@ -238,8 +239,9 @@ def test_the_catalogue_knows_which_way_is_better() -> None:
     assert {name for name, metric in METRICS.items() if metric.better == "higher"} == {
         "tasks_completed",
         "realtime_factor",
+        "clearance",
     }
-    assert len(METRICS) == 10
+    assert len(METRICS) == 12
     assert METRICS["makespan"].read(ROW) == 22.0
 
 
@@ -276,7 +278,7 @@ def test_a_bad_threshold_names_the_text_the_problem_and_the_known_metrics(text: 
         parse_threshold(text)
     message = str(caught.value)
     assert message.startswith(f"--fleetsim-compare-fail={text!r}: {problem}; ")
-    known = "alerts, distance, makespan, planner_calls, planner_wall_time, realtime_factor, rejections, tasks_completed, waiting_time, wall_time"
+    known = "alerts, clearance, contacts, distance, makespan, planner_calls, planner_wall_time, realtime_factor, rejections, tasks_completed, waiting_time, wall_time"
     assert message.endswith(f"; known: {known}")
 
 
@@ -296,6 +298,8 @@ def test_a_threshold_made_directly_is_checked_too() -> None:
         ("distance", 10.0, 12.5, 12.51, "distance:2.5"),  # lower is better, absolute
         ("realtime_factor", 100.0, 95.01, 94.99, "realtime_factor:5%"),  # higher is better, relative
         ("tasks_completed", 4, 3, 2, "tasks_completed:1"),  # higher is better, absolute
+        ("clearance", 0.5, 0.45, 0.44, "clearance:0.05"),  # metres; closer is worse
+        ("contacts", 0, 0, 1, "contacts:0"),
     ],
 )
 def test_a_metric_regresses_only_beyond_its_limit(
@@ -324,6 +328,30 @@ def test_a_makespan_no_longer_reached_is_a_regression() -> None:
     (regression,) = _compare("makespan", 22.0, None, "makespan:50%").regressions
     assert regression.current is None
     assert str(regression) == f"{CROSSING}: makespan 22.0 -> not reached (limit 50%)"
+
+
+def test_a_clearance_no_longer_measured_is_no_regression() -> None:
+    # None now: no two footprints came within reach, farther apart than any measured clearance.
+    assert _compare("clearance", 0.4, None, "clearance:0").regressions == ()
+
+
+def test_a_baseline_written_before_contacts_and_clearance_reads_as_none_and_unmeasured(tmp_path: Path) -> None:
+    older = {key: value for key, value in ROW.to_dict().items() if key not in ("contacts", "clearance")}
+    path = tmp_path / "metrics.json"
+    path.write_text(json.dumps({"format": "fleetsim-metrics/1", "scenarios": [older]}), encoding="utf-8")
+    row = read_metrics(path)[CROSSING]
+    assert (row.contacts, row.clearance) == (0, None)
+
+
+def test_a_row_counts_contacts_and_takes_the_clearance() -> None:
+    contact = ContactReport(
+        (Contact(1.0, (1, 2), 0.0, 0.0, 0.1),), Approach((1, 2), 0.0, 1.0, 0.0, 0.0), (), 2.0, 0.5, 0.0
+    )
+    result = _result()
+    result = replace(result, contact=contact, metrics=replace(result.metrics, clearance=0.0))
+    row = ScenarioMetrics.from_result(CROSSING, "failed", result)
+    assert (row.contacts, row.clearance) == (1, 0.0)
+    assert (ROW.contacts, ROW.clearance) == (0, None)  # the contact check off: nothing
 
 
 def test_a_baseline_without_a_value_has_nothing_to_compare() -> None:
