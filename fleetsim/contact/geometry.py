@@ -25,7 +25,7 @@ from typing import NamedTuple
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["Boxes", "interpolate", "motion_bound", "signed_distance"]
+__all__ = ["Boxes", "interpolate", "motion_bound", "separation", "signed_distance"]
 
 Floats = npt.NDArray[np.float64]
 
@@ -72,6 +72,24 @@ def _corner_to_sides(points: Floats, corners: Floats) -> tuple[Floats, Floats]:
     return distance[rows, best], 0.5 * (closest + point)
 
 
+def _separation(a: Boxes, b: Boxes, cos_a: Floats, sin_a: Floats, cos_b: Floats, sin_b: Floats) -> Floats:
+    """The separating-axis test on the four side normals: the largest separation (negative: the overlap)."""
+    dx, dy = b.x - a.x, b.y - a.y
+    separation = np.full(len(a.x), -np.inf)
+    for ux, uy in ((cos_a, sin_a), (-sin_a, cos_a), (cos_b, sin_b), (-sin_b, cos_b)):
+        reach_a = a.half_length * np.abs(cos_a * ux + sin_a * uy) + a.half_width * np.abs(-sin_a * ux + cos_a * uy)
+        reach_b = b.half_length * np.abs(cos_b * ux + sin_b * uy) + b.half_width * np.abs(-sin_b * ux + cos_b * uy)
+        np.maximum(separation, np.abs(dx * ux + dy * uy) - reach_a - reach_b, out=separation)
+    return separation
+
+
+def separation(a: Boxes, b: Boxes) -> Floats:
+    """For each pair: the separating-axis test's separation, a lower bound of the distance between the
+    rectangles when positive (it is the distance along the best of their side normals), minus the depth
+    of their overlap when not. Cheaper than :func:`signed_distance`: no corners."""
+    return _separation(a, b, np.cos(a.heading), np.sin(a.heading), np.cos(b.heading), np.sin(b.heading))
+
+
 def signed_distance(a: Boxes, b: Boxes) -> tuple[Floats, Floats]:
     """For each pair ``(a[i], b[i])``: the distance between the rectangles (negative: minus the depth of
     their overlap) and where it is taken, (p, 2)."""
@@ -79,13 +97,7 @@ def signed_distance(a: Boxes, b: Boxes) -> tuple[Floats, Floats]:
     if count == 0:
         return np.zeros(0), np.zeros((0, 2))
     cos_a, sin_a, cos_b, sin_b = np.cos(a.heading), np.sin(a.heading), np.cos(b.heading), np.sin(b.heading)
-    dx, dy = b.x - a.x, b.y - a.y
-    # The separating-axis test on the four side normals: the largest separation (negative: the overlap).
-    separation = np.full(count, -np.inf)
-    for ux, uy in ((cos_a, sin_a), (-sin_a, cos_a), (cos_b, sin_b), (-sin_b, cos_b)):
-        reach_a = a.half_length * np.abs(cos_a * ux + sin_a * uy) + a.half_width * np.abs(-sin_a * ux + cos_a * uy)
-        reach_b = b.half_length * np.abs(cos_b * ux + sin_b * uy) + b.half_width * np.abs(-sin_b * ux + cos_b * uy)
-        np.maximum(separation, np.abs(dx * ux + dy * uy) - reach_a - reach_b, out=separation)
+    separation = _separation(a, b, cos_a, sin_a, cos_b, sin_b)
     distance = separation.copy()
     where = np.stack((0.5 * (a.x + b.x), 0.5 * (a.y + b.y)), axis=-1)
     apart = np.flatnonzero(separation > 0.0)

@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from fleetsim.contact.geometry import Boxes, interpolate, motion_bound, signed_distance
+from fleetsim.contact.geometry import Boxes, interpolate, motion_bound, separation, signed_distance
 
 __all__ = ["TOUCH", "Approach", "Contact", "ContactMonitor", "ContactReport"]
 
@@ -181,8 +181,14 @@ class ContactMonitor:
         gap1 = np.hypot(b1.x - a1.x, b1.y - a1.y) - reach
         bound = motion_bound(a0, a1, b0, b1)
         active = self._in_contact(i, j, touching)
-        # Between the steps: pairs that could have touched and were not touching already.
-        sweep = np.flatnonzero((gap0 + gap1 <= bound + TOUCH) & ~active)
+        # Between the steps: pairs that could have touched and were not touching already. The circles'
+        # gaps sort out most; the separating-axis separations (also lower bounds of the distance, and much
+        # closer for side-by-side rectangles) the rest of those that merely drive alongside each other.
+        maybe = np.flatnonzero((gap0 + gap1 <= bound + TOUCH) & ~active)
+        if len(maybe):
+            bounds = separation(a0.take(maybe), b0.take(maybe)) + separation(a1.take(maybe), b1.take(maybe))
+            maybe = maybe[bounds <= bound[maybe] + TOUCH]
+        sweep = maybe
         if len(sweep):
             fresh += self._sweep(i[sweep], j[sweep], start, end, bound[sweep], t0, t1)
         # At the step's end: the pairs whose circles come close enough to count.
