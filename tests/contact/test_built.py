@@ -18,6 +18,16 @@ from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Checks, Scenario, ScenarioSe
 from fleetsim.sim.loop import run_scenario
 
 
+def _write(folder: Path, segments: tuple[Segment, ...], vehicles: str, tasks: str) -> None:
+    """A scenario folder: the map as Tiled JSON, and ``vehicles.csv`` and ``tasks.csv`` with these rows."""
+    folder.mkdir(exist_ok=True)
+    write_map(folder / "map.json", segments)
+    (folder / "vehicles.csv").write_text(
+        "vehicle_id,start_segment_id,segment_orientation,progress_direction\n" + vehicles
+    )
+    (folder / "tasks.csv").write_text("vehicle_id,goal_segment_id,goal_progress_direction\n" + tasks)
+
+
 def _crossing_apart(tmp_path: Path, checks: Checks) -> Scenario:
     """A + junction at the origin. Vehicle 1 drives east from (-10, 0) and stops at (2, 0), just past
     it; vehicle 2 comes north from (0, -40), so it reaches the junction some 30 s after vehicle 1 has
@@ -29,11 +39,7 @@ def _crossing_apart(tmp_path: Path, checks: Checks) -> Scenario:
         Segment(3, Shape.STRAIGHT, Direction.BOTH, ((0.0, -10.0), (0.0, 0.0))),
         Segment(4, Shape.STRAIGHT, Direction.BOTH, ((0.0, 0.0), (0.0, 10.0))),
     )
-    write_map(tmp_path / "map.json", segments)
-    (tmp_path / "vehicles.csv").write_text(
-        "vehicle_id,start_segment_id,segment_orientation,progress_direction\n1,1,forward,forward\n2,5,forward,forward\n"
-    )
-    (tmp_path / "tasks.csv").write_text("vehicle_id,goal_segment_id,goal_progress_direction\n1,2,\n2,4,\n")
+    _write(tmp_path, segments, "1,1,forward,forward\n2,5,forward,forward\n", "1,2,\n2,4,\n")
     settings = ScenarioSettings(stop_on=(), time_limit=120.0, checks=checks)
     return load_scenario_dir(tmp_path, settings=settings)
 
@@ -81,11 +87,7 @@ def test_two_vehicles_meeting_at_a_junction_touch_at_the_moment_and_place_comput
         Segment(3, Shape.STRAIGHT, Direction.BOTH, ((0.0, -10.0), (0.0, 0.0))),
         Segment(4, Shape.STRAIGHT, Direction.BOTH, ((0.0, 0.0), (0.0, 10.0))),
     )
-    write_map(tmp_path / "map.json", segments)
-    (tmp_path / "vehicles.csv").write_text(
-        "vehicle_id,start_segment_id,segment_orientation,progress_direction\n1,1,forward,forward\n2,3,forward,forward\n"
-    )
-    (tmp_path / "tasks.csv").write_text("vehicle_id,goal_segment_id,goal_progress_direction\n1,2,\n2,4,\n")
+    _write(tmp_path, segments, "1,1,forward,forward\n2,3,forward,forward\n", "1,2,\n2,4,\n")
     settings = ScenarioSettings(
         stop_on=(), time_limit=60.0, allow_start_conflicts=True, checks=Checks(reservations=False)
     )
@@ -115,11 +117,7 @@ def test_head_on_at_5_m_s_with_half_second_steps_is_caught_between_the_steps(tmp
         Segment(4, Shape.STRAIGHT, Direction.BOTH, ((start, 0.0), (start + 20.0, 0.0))),
         Segment(5, Shape.STRAIGHT, Direction.BOTH, ((-start - 20.0, 0.0), (-start, 0.0))),
     )
-    write_map(tmp_path / "map.json", segments)
-    (tmp_path / "vehicles.csv").write_text(
-        "vehicle_id,start_segment_id,segment_orientation,progress_direction\n1,1,forward,forward\n2,3,backward,forward\n"
-    )
-    (tmp_path / "tasks.csv").write_text("vehicle_id,goal_segment_id,goal_progress_direction\n1,4,\n2,5,\n")
+    _write(tmp_path, segments, "1,1,forward,forward\n2,3,backward,forward\n", "1,4,\n2,5,\n")
     fast = replace(DEFAULT_VEHICLE_TYPE, max_speed=5.0, acceleration=1000.0)
     settings = ScenarioSettings(
         time_step=0.5, planning_period=0.5, stop_on=(), time_limit=30.0, allow_start_conflicts=True,
@@ -146,11 +144,7 @@ def _lanes(tmp_path: Path, margin: float) -> Scenario:
         Segment(3, Shape.STRAIGHT, Direction.FORWARD, ((-10.0, 0.7), (0.0, 0.7))),
         Segment(4, Shape.STRAIGHT, Direction.FORWARD, ((0.0, 0.7), (10.0, 0.7))),
     )
-    write_map(tmp_path / "map.json", segments)
-    (tmp_path / "vehicles.csv").write_text(
-        "vehicle_id,start_segment_id,segment_orientation,progress_direction\n1,1,forward,forward\n2,3,forward,forward\n"
-    )
-    (tmp_path / "tasks.csv").write_text("vehicle_id,goal_segment_id,goal_progress_direction\n1,2,\n2,4,\n")
+    _write(tmp_path, segments, "1,1,forward,forward\n2,3,forward,forward\n", "1,2,\n2,4,\n")
     settings = ScenarioSettings(
         stop_on=(), time_limit=60.0, allow_start_conflicts=True, checks=Checks(reservations=False, safety_margin=margin)
     )
@@ -182,12 +176,7 @@ def _corner(tmp_path: Path, offset: float) -> Scenario:
         # Vehicle 2's start leg, which it drives to its end: 5 cm, ending where it is to stand.
         Segment(3, Shape.STRAIGHT, Direction.BOTH, ((offset + 0.45, offset + 0.3), (offset + 0.5, offset + 0.3))),
     )
-    tmp_path.mkdir()
-    write_map(tmp_path / "map.json", segments)
-    (tmp_path / "vehicles.csv").write_text(
-        "vehicle_id,start_segment_id,segment_orientation,progress_direction\n1,1,forward,forward\n2,3,forward,forward\n"
-    )
-    (tmp_path / "tasks.csv").write_text("vehicle_id,goal_segment_id,goal_progress_direction\n1,4,\n")
+    _write(tmp_path, segments, "1,1,forward,forward\n2,3,forward,forward\n", "1,4,\n")
     settings = ScenarioSettings(
         stop_on=(), time_limit=60.0, allow_start_conflicts=True, checks=Checks(reservations=False)
     )
