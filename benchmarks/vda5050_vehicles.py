@@ -41,10 +41,7 @@ import contextlib
 import json
 import os
 import resource
-import shutil
-import socket
 import statistics
-import subprocess
 import sys
 import tempfile
 import threading
@@ -62,7 +59,7 @@ from warehouse import write_fleet_scenario
 from fleetsim.load.scenario import load_scenario_dir
 from fleetsim.scenario import ScenarioSettings
 from fleetsim.sim.loop import run_scenario
-from fleetsim.vda5050.broker import BrokerAddress, BrokerError, EmbeddedBroker, check_reachable
+from fleetsim.vda5050.broker import BrokerAddress, BrokerError, EmbeddedBroker, Mosquitto, find_mosquitto
 from fleetsim.vda5050.fleet import Vda5050Fleet, Vda5050Settings
 
 
@@ -117,9 +114,6 @@ class _FirstOrders:
 
 
 BROKERS = ("embedded", "mosquitto")
-_MOSQUITTO = "/usr/sbin/mosquitto"  # Debian installs it outside a user's PATH
-_MOSQUITTO_START_TIMEOUT = 5.0  # seconds until it must accept connections
-_PORT_ATTEMPTS = 3  # free ports tried when another process takes the one found before mosquitto binds it
 _KEPT = 1.05  # kept: the paced run took at most 5 % longer than its paced time (steps may jitter a little)
 
 
@@ -131,11 +125,6 @@ class _Broker(NamedTuple):
     cpu: Callable[[], float | None]
 
 
-def mosquitto_executable() -> str | None:
-    """mosquitto on PATH or where Debian installs it; None when it is not installed."""
-    return shutil.which("mosquitto") or (_MOSQUITTO if os.access(_MOSQUITTO, os.X_OK) else None)
-
-
 @contextlib.contextmanager
 def running_broker(kind: str, folder: Path) -> Iterator[_Broker]:
     """A fresh broker of ``kind`` (one of `BROKERS`) on a free loopback port, stopped afterwards."""
@@ -143,62 +132,14 @@ def running_broker(kind: str, folder: Path) -> Iterator[_Broker]:
         with EmbeddedBroker() as embedded:
             yield _Broker(embedded.address, lambda: None)
         return
-    executable = mosquitto_executable()
+    executable = find_mosquitto()
     if executable is None:
         msg = "broker 'mosquitto' is not installed (Debian/Ubuntu: apt install mosquitto)"
         raise BrokerError(msg, "mosquitto")
-    process, address = _start_mosquitto(executable, folder)
-    try:
-        yield _Broker(address, lambda: _process_cpu(process.pid))
-    finally:
-        _stop(process)
-
-
-def _start_mosquitto(executable: str, folder: Path) -> tuple[subprocess.Popen[bytes], BrokerAddress]:
-    """mosquitto with a minimal configuration (one loopback listener, anonymous clients, nothing kept on
-    disk), once it accepts connections; started again on another port when another process took the port."""
-    config, log = folder / "mosquitto.conf", folder / "mosquitto.log"
-    for _attempt in range(_PORT_ATTEMPTS):
-        address = BrokerAddress("127.0.0.1", _free_port())
-        config.write_text(f"listener {address.port} 127.0.0.1\nallow_anonymous true\npersistence false\n")
-        # Its log goes to a file: a pipe nobody reads would block mosquitto once full.
-        with log.open("wb") as output:
-            process = subprocess.Popen([executable, "-c", str(config)], stdout=output, stderr=subprocess.STDOUT)
-        deadline = time.monotonic() + _MOSQUITTO_START_TIMEOUT
-        while process.poll() is None and time.monotonic() < deadline:
-            try:
-                check_reachable(address, timeout=0.5)
-            except BrokerError:
-                time.sleep(0.02)
-                continue
-            return process, address
-        status = process.poll()
-        _stop(process)
-        text = log.read_text(errors="replace")
-        if "Address already in use" not in text:
-            break
-    how = (
-        f"exited with status {status}" if status is not None else f"did not listen within {_MOSQUITTO_START_TIMEOUT} s"
-    )
-    msg = f"mosquitto ({executable}) for {address.url} {how}:\n{text}"
-    raise BrokerError(msg, address.url)
-
-
-def _stop(process: subprocess.Popen[bytes]) -> None:
-    process.terminate()
-    try:
-        process.wait(5)
-    except subprocess.TimeoutExpired:
-        process.kill()
-        process.wait(5)
-
-
-def _free_port() -> int:
-    """A loopback port nothing listens on now."""
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        port: int = probe.getsockname()[1]
-        return port
+    with Mosquitto(executable, folder) as mosquitto:
+        assert mosquitto.process is not None
+        pid = mosquitto.process.pid
+        yield _Broker(mosquitto.address, lambda: _process_cpu(pid))
 
 
 def _process_cpu(pid: int) -> float:
@@ -361,7 +302,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     parser.add_argument("--repeat", type=int, default=1, help="runs per broker, fleet and speed (medians shown)")
     args = parser.parse_args(argv)
-    installed = mosquitto_executable() is not None
+    installed = find_mosquitto() is not None
     brokers: list[str] = args.broker or (list(BROKERS) if installed else ["embedded"])
     if "mosquitto" in brokers and not installed:
         parser.error("--broker=mosquitto: mosquitto is not installed (Debian/Ubuntu: apt install mosquitto)")

@@ -13,8 +13,11 @@ import errno
 import logging
 import os
 import re
+import shutil
 import socket
+import subprocess
 import threading
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import TracebackType
@@ -23,11 +26,21 @@ from urllib.parse import unquote, urlsplit
 
 from fleetsim.sim.planner_spec import PlannerSpecError
 
-__all__ = ["BrokerAddress", "BrokerError", "EmbeddedBroker", "check_reachable", "parse_broker_url"]
+__all__ = [
+    "BrokerAddress",
+    "BrokerError",
+    "EmbeddedBroker",
+    "Mosquitto",
+    "check_reachable",
+    "find_mosquitto",
+    "parse_broker_url",
+]
 
 _FORM = "mqtt://[user[:password]@]host[:port] (port 1883 by default) or mqtts://... (TLS, port 8883)"
 _DEFAULT_PORTS = {"mqtt": 1883, "mqtts": 8883}
 _PORT_ATTEMPTS = 5  # free ports tried when another process takes the one found between look-up and bind
+_MOSQUITTO = "/usr/sbin/mosquitto"  # Debian installs it outside a user's PATH
+_MOSQUITTO_START_TIMEOUT = 5.0  # seconds until a started mosquitto must accept connections
 _AMQTT_LOGGERS = ("amqtt", "transitions")  # transitions: the state machine library amqtt logs through
 
 
@@ -250,6 +263,74 @@ class EmbeddedBroker:
                 continue
             self._port = port
             return broker
+
+
+def find_mosquitto() -> str | None:
+    """The mosquitto broker's executable: on PATH, or where Debian puts it; None when it is not installed."""
+    return shutil.which("mosquitto") or (_MOSQUITTO if os.access(_MOSQUITTO, os.X_OK) else None)
+
+
+class Mosquitto:
+    """A mosquitto broker of its own (``executable``) on a free port of 127.0.0.1, with a minimal
+    configuration in ``folder`` (one loopback listener, anonymous clients, nothing kept on disk), for
+    tests and benchmarks that need a broker in another process. Use it as a context manager: on entering
+    it accepts connections (:attr:`address`; started again on another port when another process took the
+    port), on leaving it is stopped. One that will not start is a :class:`BrokerError` with its log."""
+
+    def __init__(self, executable: str, folder: Path) -> None:
+        self.executable, self.folder = executable, folder
+        self.address = BrokerAddress("127.0.0.1", 0)
+        self.process: subprocess.Popen[bytes] | None = None
+
+    def __enter__(self) -> Mosquitto:
+        config, log = self.folder / "mosquitto.conf", self.folder / "mosquitto.log"
+        status: int | None = None
+        text = ""
+        for _attempt in range(_PORT_ATTEMPTS):
+            self.address = BrokerAddress("127.0.0.1", _free_port())
+            config.write_text(f"listener {self.address.port} 127.0.0.1\nallow_anonymous true\npersistence false\n")
+            # Its log goes to a file: a pipe nobody reads would block mosquitto once full.
+            with log.open("wb") as output:
+                process = subprocess.Popen(
+                    [self.executable, "-c", str(config)], stdout=output, stderr=subprocess.STDOUT
+                )
+            deadline = time.monotonic() + _MOSQUITTO_START_TIMEOUT
+            while process.poll() is None and time.monotonic() < deadline:
+                try:
+                    check_reachable(self.address, timeout=0.5)
+                except BrokerError:
+                    time.sleep(0.02)
+                    continue
+                self.process = process
+                return self
+            status = process.poll()
+            _stop(process)
+            text = log.read_text(errors="replace")
+            if "Address already in use" not in text:
+                break
+        how = (
+            f"exited with status {status}"
+            if status is not None
+            else f"did not listen within {_MOSQUITTO_START_TIMEOUT} s"
+        )
+        msg = f"mosquitto ({self.executable}) for {self.address.url} {how}:\n{text}"
+        raise BrokerError(msg, self.address.url)
+
+    def __exit__(
+        self, kind: type[BaseException] | None, value: BaseException | None, traceback: TracebackType | None
+    ) -> None:
+        if self.process is not None:
+            _stop(self.process)
+            self.process = None
+
+
+def _stop(process: subprocess.Popen[bytes]) -> None:
+    process.terminate()
+    try:
+        process.wait(5)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        process.wait(5)
 
 
 def _amqtt_config(port: int) -> dict[str, Any]:

@@ -10,23 +10,16 @@ from __future__ import annotations
 
 import itertools
 import os
-import shutil
-import socket
-import subprocess
-import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
 
-from fleetsim.vda5050.broker import BrokerAddress, BrokerError, EmbeddedBroker, check_reachable
+from fleetsim.vda5050.broker import BrokerAddress, BrokerError, EmbeddedBroker, Mosquitto, find_mosquitto
 from fleetsim.vda5050.link import MqttLink, Will
 
 __all__ = ["MakeLink", "mosquitto_executable"]
 
-_MOSQUITTO = "/usr/sbin/mosquitto"  # Debian installs it outside a user's PATH
-_START_TIMEOUT = 5.0
-_PORT_ATTEMPTS = 3
 
 MakeLink = Callable[..., MqttLink]
 
@@ -34,55 +27,13 @@ MakeLink = Callable[..., MqttLink]
 def mosquitto_executable() -> str:
     """The mosquitto broker; a test needing it is skipped when it is missing, or fails when
     FLEETSIM_REQUIRE_TOOLS=1."""
-    executable = shutil.which("mosquitto") or (_MOSQUITTO if os.access(_MOSQUITTO, os.X_OK) else None)
+    executable = find_mosquitto()
     if executable is None:
         reason = "the MQTT broker 'mosquitto' is not installed (Debian/Ubuntu: apt install mosquitto)"
         if os.environ.get("FLEETSIM_REQUIRE_TOOLS") == "1":
             pytest.fail(reason + "; FLEETSIM_REQUIRE_TOOLS=1 requires it")
         pytest.skip(reason)
     return executable
-
-
-def _free_port() -> int:
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        port: int = probe.getsockname()[1]
-        return port
-
-
-def _start_mosquitto(executable: str, folder: Path) -> tuple[subprocess.Popen[bytes], BrokerAddress]:
-    """mosquitto on a free loopback port, reachable; retried when another process took the port first."""
-    log = folder / "mosquitto.log"
-    attempt = 0
-    while True:
-        attempt += 1
-        address = BrokerAddress("127.0.0.1", _free_port())
-        config = folder / "mosquitto.conf"
-        config.write_text(f"listener {address.port} 127.0.0.1\nallow_anonymous true\npersistence false\n")
-        # Its log goes to a file: a pipe nobody reads would block mosquitto once full.
-        with log.open("wb") as output:
-            process = subprocess.Popen([executable, "-c", str(config)], stdout=output, stderr=subprocess.STDOUT)
-        deadline = time.monotonic() + _START_TIMEOUT
-        while process.poll() is None and time.monotonic() < deadline:
-            try:
-                check_reachable(address, timeout=0.5)
-            except BrokerError:
-                time.sleep(0.02)
-                continue
-            return process, address
-        _stop(process)
-        text = log.read_text(errors="replace")
-        if "Address already in use" not in text or attempt == _PORT_ATTEMPTS:
-            pytest.fail(f"mosquitto did not start on {address.url} within {_START_TIMEOUT} s:\n{text}")
-
-
-def _stop(process: subprocess.Popen[bytes]) -> None:
-    process.terminate()
-    try:
-        process.wait(5)
-    except subprocess.TimeoutExpired:
-        process.kill()
-        process.wait(5)
 
 
 @pytest.fixture
@@ -95,11 +46,14 @@ def embedded_broker() -> Iterator[BrokerAddress]:
 @pytest.fixture
 def mosquitto_broker(tmp_path: Path) -> Iterator[BrokerAddress]:
     """A fresh mosquitto process on loopback, terminated after the test."""
-    process, address = _start_mosquitto(mosquitto_executable(), tmp_path)
     try:
-        yield address
+        running = Mosquitto(mosquitto_executable(), tmp_path).__enter__()
+    except BrokerError as error:
+        pytest.fail(str(error))
+    try:
+        yield running.address
     finally:
-        _stop(process)
+        running.__exit__(None, None, None)
 
 
 @pytest.fixture(params=["embedded", "mosquitto"])

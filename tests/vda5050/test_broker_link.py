@@ -10,12 +10,21 @@ import logging
 import socket
 import time
 from collections.abc import Callable
+from pathlib import Path
 
 import pytest
+from conftest import mosquitto_executable
 
 from fleetsim.sim.planner_spec import PlannerSpecError
 from fleetsim.vda5050 import broker as broker_module
-from fleetsim.vda5050.broker import BrokerAddress, BrokerError, EmbeddedBroker, check_reachable, parse_broker_url
+from fleetsim.vda5050.broker import (
+    BrokerAddress,
+    BrokerError,
+    EmbeddedBroker,
+    Mosquitto,
+    check_reachable,
+    parse_broker_url,
+)
 from fleetsim.vda5050.link import Inbound, MqttLink, Will
 
 MakeLink = Callable[..., MqttLink]  # the mqtt_link fixture of conftest.py
@@ -381,3 +390,16 @@ def test_the_embedded_broker_logs_nothing_unless_verbose(caplog: pytest.LogCaptu
     with EmbeddedBroker(verbose=True) as verbose:
         _connect_once(verbose.address)
     assert any(record.name.startswith("amqtt") for record in caplog.records)
+
+
+def test_a_mosquitto_that_will_not_start_is_a_broker_error_with_its_status(tmp_path: Path) -> None:
+    with pytest.raises(BrokerError, match=r"mosquitto \(/bin/false\) for mqtt://127\.0\.0\.1:\d+ exited with status 1"):
+        Mosquitto("/bin/false", tmp_path).__enter__()
+
+
+def test_a_started_mosquitto_accepts_connections_and_is_stopped_on_leaving(tmp_path: Path) -> None:
+    with Mosquitto(mosquitto_executable(), tmp_path) as running:
+        check_reachable(running.address, timeout=2.0)
+        process = running.process
+        assert process is not None
+    assert process.poll() is not None and running.process is None
