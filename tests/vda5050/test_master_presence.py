@@ -4,9 +4,10 @@ saying, in VDA 5050's terms, which order each waiting vehicle waits for."""
 
 from __future__ import annotations
 
+import contextlib
 import json
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any
@@ -35,6 +36,16 @@ def _crossing() -> Scenario:
     return load_scenario(next(s for s in suite.scenarios if s.name == "crossing"), suite)
 
 
+@contextlib.contextmanager
+def _master(broker: BrokerAddress, **options: Any) -> Iterator[ScriptedMaster]:
+    """A scripted master control on ``broker`` (``options`` as ScriptedMaster takes them), closed afterwards."""
+    master = ScriptedMaster(broker.host, broker.port, **options)
+    try:
+        yield master
+    finally:
+        master.close()
+
+
 def _run_while(broker: BrokerAddress, master: ScriptedMaster, then: Callable[[], None] | None = None) -> RunResult:
     """Run the crossing; ``then`` is called (in a thread) once a vehicle reports it drives an order."""
 
@@ -56,11 +67,8 @@ def _run_while(broker: BrokerAddress, master: ScriptedMaster, then: Callable[[],
 
 
 def test_a_master_control_that_crashes_mid_run_fails_it_through_its_last_will(broker: BrokerAddress) -> None:
-    master = ScriptedMaster(broker.host, broker.port, announce="mc-1")
-    try:
+    with _master(broker, announce="mc-1") as master:
         result = _run_while(broker, master, master.crash)
-    finally:
-        master.close()
     assert result.ended == "planner-error"
     [failure] = result.failures
     assert "the master control 'mc-1' lost its connection at t = " in failure.message
@@ -69,11 +77,8 @@ def test_a_master_control_that_crashes_mid_run_fails_it_through_its_last_will(br
 
 
 def test_a_master_control_that_announced_itself_and_stays_completes_the_run(broker: BrokerAddress) -> None:
-    master = ScriptedMaster(broker.host, broker.port, announce="mc-1")
-    try:
+    with _master(broker, announce="mc-1") as master:
         result = _run_while(broker, master)
-    finally:
-        master.close()
     assert result.passed, [f.message for f in result.failures]
     assert result.tasks_completed == 2
     document = result.to_dict()
@@ -82,11 +87,8 @@ def test_a_master_control_that_announced_itself_and_stays_completes_the_run(brok
 
 
 def test_a_master_control_that_goes_offline_with_tasks_queued_fails_the_run(broker: BrokerAddress) -> None:
-    master = ScriptedMaster(broker.host, broker.port, announce="mc-2")
-    try:
+    with _master(broker, announce="mc-2") as master:
         result = _run_while(broker, master, master.leave)
-    finally:
-        master.close()
     [failure] = result.failures
     assert result.ended == "planner-error"
     assert "the master control 'mc-2' went OFFLINE at t = " in failure.message
@@ -113,26 +115,20 @@ def _retain(broker: BrokerAddress, state: str) -> None:
 
 def test_an_earlier_runs_retained_last_will_is_history_not_news(broker: BrokerAddress) -> None:
     _retain(broker, "CONNECTIONBROKEN")
-    master = ScriptedMaster(broker.host, broker.port)  # one that does not announce itself
-    try:
+    with _master(broker) as master:  # one that does not announce itself
         result = _run_while(broker, master)
-    finally:
-        master.close()
     assert result.passed, [f.message for f in result.failures]
 
 
 def test_a_message_on_master_connection_that_is_no_connection_is_ignored_with_a_word(
     broker: BrokerAddress, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    master = ScriptedMaster(broker.host, broker.port)
+    with _master(broker) as master:
 
-    def garble() -> None:
-        master.client.publish(PRESENCE, b'{"connectionState": "GONE"}', qos=1).wait_for_publish(5.0)
+        def garble() -> None:
+            master.client.publish(PRESENCE, b'{"connectionState": "GONE"}', qos=1).wait_for_publish(5.0)
 
-    try:
         result = _run_while(broker, master, garble)
-    finally:
-        master.close()
     assert result.passed, [f.message for f in result.failures]
     said = capsys.readouterr().err
     assert f"fleetsim: ignored a message on {PRESENCE} that is not a connection: " in said
@@ -153,11 +149,8 @@ def test_a_silent_master_control_leaves_a_diagnosis_that_names_the_orders_the_ve
 ) -> None:
     # One vehicle at a time: vehicle 1 gets an order with one released edge and never an update;
     # vehicle 2 never gets an order, as the master control waits for vehicle 1's task.
-    master = ScriptedMaster(broker.host, broker.port, tamper=_base_only_the_first_edge)
-    try:
+    with _master(broker, tamper=_base_only_the_first_edge) as master:
         result = _run_while(broker, master)
-    finally:
-        master.close()
     assert result.ended == "deadlock"
     assert result.diagnosis is not None
     first, second = result.diagnosis.findings
