@@ -310,13 +310,14 @@ class _Run:
     def diagnose(self, kind: Literal["deadlock", "timeout"], now: float) -> Diagnosis:
         """Why the vehicles with pending tasks have not finished them (at the run's end)."""
         controller = self.controller
+        heads = controller.tasks.heads()
         facts = StuckFacts(
             kind=kind,
             time=now,
             layout=self.scenario.layout,
             plans=controller.plans,
             states=controller.states,
-            heads=controller.tasks.heads(),
+            heads=heads,
             last_moved={
                 vehicle: moved
                 for vehicle, moved in zip(self.ids, self.last_moved.tolist(), strict=True)
@@ -325,7 +326,7 @@ class _Run:
             plan_changed=self.plan_changed,
             route_errors=self.route_errors,
             accepted_plans=self.accepted_plans,
-            notes=self.wait_notes(controller.tasks.heads(), now),
+            notes=self.wait_notes(heads, now),
         )
         return diagnose(facts)
 
