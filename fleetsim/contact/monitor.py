@@ -20,8 +20,8 @@ pairs whose circles come close enough to matter.
 The continuous phase catches what no sampled step shows: two fast vehicles that pass through each other
 within one step. It is conservative advancement along the poses interpolated between the step's start
 and end (centre along the straight line, heading along the shorter turn): from the start, advance by
-the distance divided by the most the distance can change per unit of the interpolation
-(:func:`.geometry.motion_bound`), and again, until the footprints touch (within :data:`TOUCH` metres) or
+the distance divided by the most the distance can change per unit of the interpolation (the pair's
+relative travel plus each one's turn times its half diagonal), and again, until the footprints touch (within :data:`TOUCH` metres) or
 the step ends. Such an advance can never step over a touch. A pair needs it only when its circles'
 distances at both ends add up to no more than that bound: otherwise it cannot have touched between.
 The interpolation is a chord of the true path (an arc in a curve): at the 0.1 s step of fleetsim's
@@ -37,14 +37,17 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from fleetsim.contact.geometry import Boxes, interpolate, motion_bound, separation, signed_distance
+from fleetsim.contact.geometry import Footprint, interpolate, separation, signed_distance
 
 __all__ = ["TOUCH", "Approach", "Contact", "ContactMonitor", "ContactReport"]
 
 TOUCH = 1e-4  # metres: footprints closer than this touch
 _ADVANCES = 32  # conservative advancement steps per pair and step before sampling the rest
 _SAMPLES = 16  # samples of what is left of a step after that
-_NEIGHBOURS = ((0, 0), (1, -1), (1, 0), (1, 1), (0, 1))  # half the 3 x 3 cells: each pair of cells once
+# The broad phase counts vehicles per cell in an array while there are at most this many cells per vehicle.
+_DENSE_CELLS = 8
+# Half the 3 x 3 cells round a cell, as (dx, dy) columns: each pair of neighbouring cells once.
+_NEIGHBOURS = np.array([[0, 1, 1, 1, 0], [0, -1, 0, 1, 1]], dtype=np.int64)
 
 Floats = npt.NDArray[np.float64]
 Ints = npt.NDArray[np.intp]
@@ -139,22 +142,24 @@ class ContactMonitor:
         self.half_length = np.asarray(lengths, dtype=np.float64) / 2 + safety_margin
         self.half_width = np.asarray(widths, dtype=np.float64) / 2 + safety_margin
         self.radius = np.hypot(self.half_length, self.half_width)
+        self._largest = 2.0 * float(self.radius.max(initial=0.0))
         self.safety_margin, self.near_miss = safety_margin, near_miss
         self.reach = max(reach, near_miss)
         self.contacts: list[Contact] = []
         self._active: dict[tuple[int, int], int] = {}  # a pair of indices in contact -> its contact
         self._closest: dict[tuple[int, int], Approach] = {}  # pairs closer than near_miss
         self._clearance: Approach | None = None
-        self._poses: Boxes | None = None
+        self._poses: Floats | None = None  # at the last step's end: x, y, heading, half sizes (5, n)
 
     # -- the run ----------------------------------------------------------------------------------------
 
     def begin(self, x: Floats, y: Floats, heading: Floats, time: float = 0.0) -> list[Contact]:
         """The poses at the start: footprints that overlap already are contacts from ``time``."""
-        self._poses = self._boxes(x, y, heading)
-        everyone = np.ones(len(self.ids), dtype=bool)
-        i, j = self._candidates(self._poses, everyone, 0.0)
-        return self._judge_static(i, j, self._poses, time)
+        self._poses = poses = np.array((x, y, heading, self.half_length, self.half_width), dtype=np.float64)
+        i, j = self._candidates(poses, np.ones(len(self.ids), dtype=bool), 0.0)
+        gap = np.hypot(poses[0, j] - poses[0, i], poses[1, j] - poses[1, i]) - self.radius[i] - self.radius[j]
+        near = np.flatnonzero(gap < self.reach)
+        return self._judge_end(i[near], j[near], poses, time)
 
     def step(
         self, t0: float, t1: float, x: Floats, y: Floats, heading: Floats, moved: npt.NDArray[np.bool_]
@@ -163,49 +168,50 @@ class ContactMonitor:
         Returns the contacts that began in it."""
         start = self._poses
         assert start is not None, "begin() first"
-        end = self._boxes(x, y, heading)
+        end = start.copy()
+        end[0], end[1], end[2] = x, y, heading
         self._poses = end
-        fresh: list[Contact] = []
-        touching = set(self._active)  # at the step's start: not swept for a new contact
-        if self._active:
-            self._follow_active(end, t1)
-        if not moved.any():
-            return fresh
-        travel = np.hypot(end.x - start.x, end.y - start.y)
-        i, j = self._candidates(end, moved, float(travel.max(initial=0.0)))
+        if not moved.any():  # nothing moved: no distance changed
+            return []
+        dx, dy = end[0] - start[0], end[1] - start[1]
+        i, j = self._candidates(end, moved, float(np.hypot(dx, dy).max()))
         if len(i) == 0:
-            return fresh
-        a0, b0, a1, b1 = start.take(i), start.take(j), end.take(i), end.take(j)
-        reach = self.radius[i] + self.radius[j]
-        gap0 = np.hypot(b0.x - a0.x, b0.y - a0.y) - reach
-        gap1 = np.hypot(b1.x - a1.x, b1.y - a1.y) - reach
-        bound = motion_bound(a0, a1, b0, b1)
-        active = self._in_contact(i, j, touching)
-        # Between the steps: pairs that could have touched and were not touching already. The circles'
-        # gaps sort out most; the separating-axis separations (also lower bounds of the distance, and much
-        # closer for side-by-side rectangles) the rest of those that merely drive alongside each other.
+            return []
+        # Per pair, from gathers of per-vehicle rows: the bounding circles' gaps at both ends, and the most
+        # their footprints' distance can change over the step (relative travel, plus each one's turn times
+        # its half diagonal, the farthest any point of it lies from its centre).
+        spin = np.abs(np.remainder(end[2] - start[2] + np.pi, 2.0 * np.pi) - np.pi) * self.radius
+        rows = np.array((end[0], end[1], dx, dy, self.radius, spin))
+        first, second = rows[:, i], rows[:, j]
+        offset = second - first
+        reach = first[4] + second[4]
+        gap1 = np.hypot(offset[0], offset[1]) - reach
+        gap0 = np.hypot(offset[0] - offset[2], offset[1] - offset[3]) - reach
+        bound = np.hypot(offset[2], offset[3]) + first[5] + second[5]
+        active = self._in_contact(i, j)  # in contact at the step's start: followed, never swept anew
+        fresh: list[Contact] = []
+        # Between the steps: pairs that could have touched and were not touching already (the circles'
+        # gaps at both ends add up to no more than the bound).
         maybe = np.flatnonzero((gap0 + gap1 <= bound + TOUCH) & ~active)
         if len(maybe):
-            bounds = separation(a0.take(maybe), b0.take(maybe)) + separation(a1.take(maybe), b1.take(maybe))
-            maybe = maybe[bounds <= bound[maybe] + TOUCH]
-        sweep = maybe
-        if len(sweep):
-            fresh += self._sweep(i[sweep], j[sweep], start, end, bound[sweep], t0, t1)
-        # At the step's end: the pairs whose circles come close enough to count.
+            p, q = i[maybe], j[maybe]
+            pairs = zip(
+                p.tolist(), q.tolist(), _footprints(start, p), _footprints(end, p), _footprints(start, q),
+                _footprints(end, q), bound[maybe].tolist(), strict=True,
+            )  # fmt: skip
+            for first_id, second_id, a0, a1, b0, b1, most in pairs:
+                contact = self._sweep(first_id, second_id, a0, a1, b0, b1, most, t0, t1)
+                if contact is not None:
+                    fresh.append(contact)
+        # At the step's end: the contacts in force, and the pairs whose circles come close enough to count.
         limit = max(self.near_miss, self._clearance.distance if self._clearance is not None else self.reach)
-        near = np.flatnonzero((gap1 < limit) & ~active)
+        near = np.flatnonzero((gap1 < limit) | active)
         if len(near):
-            distance, where = signed_distance(a1.take(near), b1.take(near))
-            pi, qi = i[near], j[near]
-            touch = distance <= TOUCH
-            for k in np.flatnonzero(touch):  # a touch the sweep could not tell apart (it began at the end)
-                p, q = int(pi[k]), int(qi[k])
-                if (p, q) not in self._active:
-                    fresh.append(
-                        self._begin_contact(p, q, t1, float(where[k, 0]), float(where[k, 1]), -float(distance[k]))
-                    )
-            apart = ~touch
-            self._record(pi[apart], qi[apart], distance[apart], np.full(int(apart.sum()), t1), where[apart])
+            held = active[near]
+            if held.any():
+                self._follow(i[near[held]], j[near[held]], end, t1)
+            near = near[~held]
+            fresh += self._judge_end(i[near], j[near], end, t1)
         return fresh
 
     def report(self) -> ContactReport:
@@ -226,127 +232,107 @@ class ContactMonitor:
 
     # -- phases -------------------------------------------------------------------------------------------
 
-    def _boxes(self, x: Floats, y: Floats, heading: Floats) -> Boxes:
-        return Boxes(
-            np.asarray(x, dtype=np.float64).copy(),
-            np.asarray(y, dtype=np.float64).copy(),
-            np.asarray(heading, dtype=np.float64).copy(),
-            self.half_length,
-            self.half_width,
-        )
-
-    def _candidates(self, poses: Boxes, moved: npt.NDArray[np.bool_], travel: float) -> tuple[Ints, Ints]:
+    def _candidates(self, poses: Floats, moved: npt.NDArray[np.bool_], travel: float) -> tuple[Ints, Ints]:
         """Pairs (i < j) in the same or neighbouring cells of a grid as large as two footprints can be
         apart and still matter, at least one of them moved."""
         count = len(self.ids)
         if count < 2:
             return np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp)
-        size = 2.0 * float(self.radius.max()) + self.reach + 2.0 * travel + TOUCH
-        cx = np.floor(poses.x / size).astype(np.int64)
-        cy = np.floor(poses.y / size).astype(np.int64)
-        cx -= cx.min()
-        cy -= cy.min()
-        span = int(cy.max()) + 3  # room for the neighbours' rows
-        key = cx * span + (cy + 1)
+        size = self._largest + self.reach + 2.0 * travel + TOUCH
+        cells = np.floor(poses[:2] / size).astype(np.int64)
+        cells -= cells.min(axis=1, keepdims=True)
+        span = int(cells[1].max()) + 3  # room for the neighbours' rows
+        key = cells[0] * span + (cells[1] + 1)
         order = np.argsort(key, kind="stable")
-        ordered = key[order]
-        offsets = np.array([dx * span + dy for dx, dy in _NEIGHBOURS], dtype=np.int64)
-        targets = (key[:, None] + offsets[None, :]).ravel()
-        left = np.searchsorted(ordered, targets, side="left")
-        right = np.searchsorted(ordered, targets, side="right")
-        counts = right - left
+        targets = (key[:, None] + _NEIGHBOURS[0] * span + _NEIGHBOURS[1]).ravel()
+        keys = (int(cells[0].max()) + 2) * span
+        if keys <= _DENSE_CELLS * count + 4096:  # few cells: count the vehicles in each, in one array
+            per_cell = np.bincount(key, minlength=keys)
+            counts = per_cell[targets]
+            left = (np.cumsum(per_cell) - per_cell)[targets]
+        else:  # a sparse fleet on a vast map: look each cell up among the vehicles' sorted cells
+            ordered = key[order]
+            left = np.searchsorted(ordered, targets, side="left")
+            counts = np.searchsorted(ordered, targets, side="right") - left
         total = int(counts.sum())
         if total == 0:
             return np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp)
-        first = np.repeat(np.arange(count, dtype=np.intp), len(_NEIGHBOURS))
-        starts = np.repeat(left - (np.cumsum(counts) - counts), counts)
-        i = np.repeat(first, counts)
-        j = order[np.arange(total) + starts]
-        same_cell = np.repeat(np.tile(np.arange(len(_NEIGHBOURS)) == 0, count), counts)
+        cell = np.repeat(np.arange(count * len(_NEIGHBOURS[0]), dtype=np.intp), counts)
+        i = cell // len(_NEIGHBOURS[0])
+        j = order[np.arange(total) + np.repeat(left - (np.cumsum(counts) - counts), counts)]
+        same_cell = cell % len(_NEIGHBOURS[0]) == 0
         keep = np.where(same_cell, i < j, i != j) & (moved[i] | moved[j])
         i, j = i[keep], j[keep]
-        low, high = np.minimum(i, j), np.maximum(i, j)
-        return low, high
+        return np.minimum(i, j), np.maximum(i, j)
 
-    def _judge_static(self, i: Ints, j: Ints, poses: Boxes, time: float) -> list[Contact]:
+    def _judge_end(self, i: Ints, j: Ints, poses: Floats, time: float) -> list[Contact]:
+        """The pairs ``(i, j)``, not in contact before, at ``time`` (``poses``): those that touch now begin
+        a contact (unless the sweep began it already), the others' distances are recorded."""
         fresh = []
-        gap = np.hypot(poses.x[j] - poses.x[i], poses.y[j] - poses.y[i]) - self.radius[i] - self.radius[j]
-        near = np.flatnonzero(gap < self.reach)
-        distance, where = signed_distance(poses.take(i[near]), poses.take(j[near]))
-        pi, qi = i[near], j[near]
-        touch = distance <= TOUCH
-        for k in np.flatnonzero(touch):
-            p, q = int(pi[k]), int(qi[k])
-            fresh.append(self._begin_contact(p, q, time, float(where[k, 0]), float(where[k, 1]), -float(distance[k])))
-        apart = ~touch
-        self._record(pi[apart], qi[apart], distance[apart], np.full(int(apart.sum()), time), where[apart])
+        for p, q, a, b in zip(i.tolist(), j.tolist(), _footprints(poses, i), _footprints(poses, j), strict=True):
+            distance, x, y = signed_distance(a, b)
+            if distance > TOUCH:
+                self._approach(p, q, distance, time, x, y)
+            elif (p, q) not in self._active:  # a touch the sweep could not tell apart (it began at the end)
+                fresh.append(self._begin_contact(p, q, time, x, y, -distance))
         return fresh
 
-    def _sweep(self, i: Ints, j: Ints, start: Boxes, end: Boxes, bound: Floats, t0: float, t1: float) -> list[Contact]:
-        """Conservative advancement of the pairs ``(i, j)`` over the step: the contacts that begin in it."""
-        a0, a1, b0, b1 = start.take(i), end.take(i), start.take(j), end.take(j)
-        tau = np.zeros(len(i))
-        touching = np.zeros(len(i), dtype=bool)
-        going = np.ones(len(i), dtype=bool)
-        place = np.zeros((len(i), 2))
+    def _sweep(
+        self,
+        p: int,
+        q: int,
+        a0: Footprint,
+        a1: Footprint,
+        b0: Footprint,
+        b1: Footprint,
+        bound: float,
+        t0: float,
+        t1: float,
+    ) -> Contact | None:
+        """Conservative advancement of the pair ``(p, q)`` over the step (its footprints ``a0``, ``b0`` at
+        the start and ``a1``, ``b1`` at the end; ``bound``: the most their distance can change over it): the
+        contact that begins in it, if any."""
+        # The separating-axis separations, lower bounds of the distance much closer than the circles' for
+        # side-by-side rectangles, sort out the pairs that merely drive alongside each other.
+        if separation(a0, b0) + separation(a1, b1) > bound + TOUCH:
+            return None
+        scale = 1.0 / max(bound, 1e-12)
+        duration = t1 - t0
+        tau, touched = 0.0, None
         for _ in range(_ADVANCES):
-            rows = np.flatnonzero(going)
-            if len(rows) == 0:
+            distance, x, y = signed_distance(interpolate(a0, a1, tau), interpolate(b0, b1, tau))
+            if distance <= TOUCH:
+                touched = (tau, x, y)
                 break
-            t = tau[rows]
-            distance, where = signed_distance(
-                interpolate(a0.take(rows), a1.take(rows), t), interpolate(b0.take(rows), b1.take(rows), t)
-            )
-            on_the_way = (t > 0.0) & (distance > TOUCH)  # the closest they came between the steps counts too
-            self._record(
-                i[rows[on_the_way]], j[rows[on_the_way]], distance[on_the_way],
-                t0 + t[on_the_way] * (t1 - t0), where[on_the_way],
-            )  # fmt: skip
-            touch = distance <= TOUCH
-            touching[rows[touch]] = True
-            place[rows[touch]] = where[touch]
-            going[rows[touch]] = False
-            advance = rows[~touch]
-            step = distance[~touch] / np.maximum(bound[advance], 1e-12)
-            tau[advance] = tau[advance] + step
-            done = tau[advance] > 1.0
-            going[advance[done]] = False
-        # Pairs still advancing (a graze, where each advance is short): sample what is left of the step.
-        for row in np.flatnonzero(going):
-            samples = np.linspace(tau[row], 1.0, _SAMPLES)
-            pa = interpolate(a0.take(np.full(_SAMPLES, row)), a1.take(np.full(_SAMPLES, row)), samples)
-            pb = interpolate(b0.take(np.full(_SAMPLES, row)), b1.take(np.full(_SAMPLES, row)), samples)
-            distance, where = signed_distance(pa, pb)
-            hit = np.flatnonzero(distance <= TOUCH)
-            if len(hit):
-                touching[row], tau[row], place[row] = True, samples[hit[0]], where[hit[0]]
-        fresh = []
-        for row in np.flatnonzero(touching):
-            p, q = int(i[row]), int(j[row])
-            if (p, q) in self._active:
-                continue
-            begun = min(float(tau[row]), 1.0)
-            # How deep they went within the step (at its end, the next step's follow-up takes over).
-            samples = np.linspace(begun, 1.0, _SAMPLES)
-            rows = np.full(_SAMPLES, row)
-            inside, _ = signed_distance(
-                interpolate(a0.take(rows), a1.take(rows), samples), interpolate(b0.take(rows), b1.take(rows), samples)
-            )
-            moment = t0 + begun * (t1 - t0)
-            depth = max(0.0, -float(inside.min()))
-            contact = self._begin_contact(p, q, moment, float(place[row, 0]), float(place[row, 1]), depth)
-            if inside[-1] > TOUCH:  # apart again by the step's end: passed through each other
-                self.contacts[self._active.pop((p, q))] = contact = replace(contact, until=t1)
-            fresh.append(contact)
-        return fresh
+            if tau > 0.0:  # the closest they came between the steps counts too
+                self._approach(p, q, distance, t0 + tau * duration, x, y)
+            tau += distance * scale
+            if tau > 1.0:
+                return None
+        else:  # still advancing (a graze, where each advance is short): sample what is left of the step
+            for k in range(_SAMPLES):
+                at = tau + (1.0 - tau) * k / (_SAMPLES - 1)
+                distance, x, y = signed_distance(interpolate(a0, a1, at), interpolate(b0, b1, at))
+                if distance <= TOUCH:
+                    touched = (at, x, y)
+                    break
+        if touched is None or (p, q) in self._active:
+            return None
+        begun, x, y = min(touched[0], 1.0), touched[1], touched[2]
+        # How deep they went within the step (at its end, the next step's follow-up takes over).
+        inside = [
+            signed_distance(interpolate(a0, a1, at), interpolate(b0, b1, at))[0]
+            for at in (begun + (1.0 - begun) * k / (_SAMPLES - 1) for k in range(_SAMPLES))
+        ]
+        contact = self._begin_contact(p, q, t0 + begun * duration, x, y, max(0.0, -min(inside)))
+        if inside[-1] > TOUCH:  # apart again by the step's end: passed through each other
+            self.contacts[self._active.pop((p, q))] = contact = replace(contact, until=t1)
+        return contact
 
-    def _follow_active(self, end: Boxes, t1: float) -> None:
-        """Deepen or end the contacts in force."""
-        pairs = sorted(self._active)
-        i = np.array([p for p, _ in pairs], dtype=np.intp)
-        j = np.array([q for _, q in pairs], dtype=np.intp)
-        distance, _ = signed_distance(end.take(i), end.take(j))
-        for (p, q), d in zip(pairs, distance.tolist(), strict=True):
+    def _follow(self, i: Ints, j: Ints, poses: Floats, t1: float) -> None:
+        """Deepen or end the contacts of the pairs ``(i, j)``, in force at the step's start."""
+        for p, q, a, b in zip(i.tolist(), j.tolist(), _footprints(poses, i), _footprints(poses, j), strict=True):
+            d = signed_distance(a, b)[0]
             index = self._active[(p, q)]
             contact = self.contacts[index]
             if d > TOUCH:
@@ -364,23 +350,13 @@ class ContactMonitor:
         self._approach(p, q, 0.0, time, x, y)
         return contact
 
-    def _in_contact(self, i: Ints, j: Ints, pairs: set[tuple[int, int]]) -> npt.NDArray[np.bool_]:
-        """Which of the pairs ``(i, j)`` are among ``pairs``."""
-        if not pairs:
+    def _in_contact(self, i: Ints, j: Ints) -> npt.NDArray[np.bool_]:
+        """Which of the pairs ``(i, j)`` are in contact now."""
+        if not self._active:
             return np.zeros(len(i), dtype=bool)
         count = len(self.ids)
-        known = np.array([p * count + q for p, q in sorted(pairs)], dtype=np.int64)
+        known = np.array([p * count + q for p, q in self._active], dtype=np.int64)
         return np.isin(i.astype(np.int64) * count + j, known)
-
-    def _record(self, i: Ints, j: Ints, distance: Floats, time: Floats, where: Floats) -> None:
-        """Distances between footprints apart: the clearance, and each pair's closest approach below
-        ``near_miss``."""
-        if len(distance) == 0:
-            return
-        best = int(np.argmin(distance))
-        self._approach(int(i[best]), int(j[best]), float(distance[best]), float(time[best]), *map(float, where[best]))
-        for k in np.flatnonzero(distance < self.near_miss):
-            self._approach(int(i[k]), int(j[k]), float(distance[k]), float(time[k]), *map(float, where[k]))
 
     def _approach(self, p: int, q: int, distance: float, time: float, x: float, y: float) -> None:
         distance = max(distance, 0.0)
@@ -392,3 +368,8 @@ class ContactMonitor:
             known = self._closest.get((p, q))
             if known is None or distance < known.distance:
                 self._closest[(p, q)] = Approach(pair, distance, time, x, y)
+
+
+def _footprints(poses: Floats, rows: Ints) -> list[Footprint]:
+    """The footprints of the vehicles ``rows`` from a (5, n) array of poses and half sizes."""
+    return list(zip(*poses[:, rows].tolist(), strict=True))

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from fleetsim.contact.geometry import Boxes, signed_distance
+from fleetsim.contact.geometry import Footprint, signed_distance
 from fleetsim.contact.monitor import ContactMonitor
 
 BOTH = np.array([True, True])
@@ -18,8 +18,8 @@ def _xs(*values: float) -> np.ndarray:
     return np.array(values, dtype=float)
 
 
-def _box(x: float, y: float, heading: float, length: float, width: float) -> Boxes:
-    return Boxes(_xs(x), _xs(y), _xs(heading), _xs(length / 2), _xs(width / 2))
+def _box(x: float, y: float, heading: float, length: float, width: float) -> Footprint:
+    return (x, y, heading, length / 2, width / 2)
 
 
 @pytest.mark.parametrize(
@@ -36,15 +36,15 @@ def _box(x: float, y: float, heading: float, length: float, width: float) -> Box
 def test_the_signed_distance_of_two_footprints_is_exact(
     a: tuple[float, ...], b: tuple[float, ...], distance: float
 ) -> None:
-    found, _ = signed_distance(_box(*a), _box(*b))
-    assert found[0] == pytest.approx(distance, abs=1e-12)
+    found, _, _ = signed_distance(_box(*a), _box(*b))
+    assert found == pytest.approx(distance, abs=1e-12)
 
 
 def test_a_rotated_footprint_is_measured_at_its_true_corners() -> None:
     # A 2 x 2 square turned 45 degrees reaches sqrt(2) from its centre along +x.
-    found, where = signed_distance(_box(0, 0, math.pi / 4, 2, 2), _box(3, 0, 0, 2, 2))
-    assert found[0] == pytest.approx(2 - math.sqrt(2))
-    assert where[0] == pytest.approx([(math.sqrt(2) + 2) / 2, 0.0])
+    found, *where = signed_distance(_box(0, 0, math.pi / 4, 2, 2), _box(3, 0, 0, 2, 2))
+    assert found == pytest.approx(2 - math.sqrt(2))
+    assert where == pytest.approx([(math.sqrt(2) + 2) / 2, 0.0])
 
 
 def _lanes(gap: float, margin: float = 0.0) -> ContactMonitor:
@@ -77,9 +77,9 @@ def test_head_on_at_5_m_s_with_half_second_steps_the_continuous_check_catches_wh
     # At t = 0 they are 1.8 m apart nose to nose; after one 0.5 s step each has driven 2.5 m: they have
     # passed through each other, and at both sampled moments their footprints are apart.
     assert monitor.begin(_xs(-1.4, 1.4), _xs(0, 0), _xs(0, math.pi)) == []
-    before, _ = signed_distance(_box(-1.4, 0, 0, 1, 0.5), _box(1.4, 0, math.pi, 1, 0.5))
-    after, _ = signed_distance(_box(1.1, 0, 0, 1, 0.5), _box(-1.1, 0, math.pi, 1, 0.5))
-    assert before[0] > 0 and after[0] > 0
+    before = signed_distance(_box(-1.4, 0, 0, 1, 0.5), _box(1.4, 0, math.pi, 1, 0.5))[0]
+    after = signed_distance(_box(1.1, 0, 0, 1, 0.5), _box(-1.1, 0, math.pi, 1, 0.5))[0]
+    assert before > 0 and after > 0
     [contact] = monitor.step(0.0, 0.5, _xs(1.1, -1.1), _xs(0, 0), _xs(0, math.pi), BOTH)
     # Noses meet when the centres are 1 m apart: 2.8 - 10 t = 1, t = 0.18 s, at x = 0.
     assert contact.time == pytest.approx(0.18, abs=1e-3)
@@ -131,10 +131,11 @@ def test_vehicles_far_apart_have_no_clearance_within_reach_and_no_near_miss() ->
     assert report.clearance is None and report.near_misses == () and report.contacts == ()
 
 
-def test_the_broad_phase_finds_the_one_close_pair_among_many() -> None:
+@pytest.mark.parametrize("spacing", [5.0, 5000.0])  # a compact row, and one on a vast map (few vehicles per cell)
+def test_the_broad_phase_finds_the_one_close_pair_among_many(spacing: float) -> None:
     rng = np.random.default_rng(7)
     count = 400
-    x, y = np.arange(count) * 5.0, rng.uniform(0, 1, count)  # a row 5 m apart: nobody near anybody
+    x, y = np.arange(count) * spacing, rng.uniform(0, 1, count)  # nobody near anybody
     x[300] = x[299] + 1.05  # but vehicle 300 sits 0.05 m behind vehicle 299
     ids = list(range(1, count + 1))
     monitor = ContactMonitor(ids, [1.0] * count, [0.5] * count)
@@ -145,3 +146,28 @@ def test_the_broad_phase_finds_the_one_close_pair_among_many() -> None:
     clearance = monitor.report().clearance
     assert clearance is not None and clearance.vehicles == (300, 301)
     assert clearance.distance == pytest.approx(0.05)
+
+
+@pytest.mark.parametrize("area", [60.0, 1e6])  # metres square: cells counted in an array, and looked up
+def test_the_broad_phase_misses_no_pair_that_could_matter(area: float) -> None:
+    # Clusters of three vehicles within a few metres of each other, in every direction from each other,
+    # the clusters scattered over the area: every pair whose circles come within reach is a candidate.
+    rng = np.random.default_rng(11)
+    centres = rng.uniform(0, area, (150, 2))
+    x = (centres[:, None, 0] + rng.uniform(-2, 2, (150, 3))).ravel()
+    y = (centres[:, None, 1] + rng.uniform(-2, 2, (150, 3))).ravel()
+    count = len(x)
+    monitor = ContactMonitor(list(range(count)), [1.0] * count, [0.5] * count)
+    monitor.begin(x, y, rng.uniform(-math.pi, math.pi, count))
+    moved = rng.uniform(size=count) < 0.5
+    i, j = monitor._candidates(monitor._poses, moved, 0.0)  # type: ignore[arg-type]
+    found = set(zip(i.tolist(), j.tolist(), strict=True))
+    radius = math.hypot(0.5, 0.25)
+    expected = {
+        (p, q)
+        for p in range(count)
+        for q in range(p + 1, count)
+        if (moved[p] or moved[q]) and math.hypot(x[q] - x[p], y[q] - y[p]) - 2 * radius < monitor.reach
+    }
+    assert expected and expected <= found
+    assert len(i) == len(found) and all(p < q for p, q in found)  # each pair once, in order
