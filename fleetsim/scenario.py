@@ -233,7 +233,7 @@ class Expectations:
         rejections: ``"none"``, ``"any"`` (at least one), or the check codes that must occur.
         deadlock: Whether the run must end in a deadlock.
         max_makespan: Seconds by which the last task must be completed, or ``None``.
-        contacts: ``"none"`` (a contact fails the run) or ``"any"`` (contacts are allowed).
+        contacts: ``"none"`` (a contact fails the run) or ``"any"`` (the run must have at least one).
         clearance: Metres: the run fails when two footprints came closer than this, or ``None``.
     """
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
+from fleetsim.contact.monitor import ContactReport
 from fleetsim.sim.result import MOMENTLESS, Failure, RunResult
 
 __all__ = [
@@ -28,6 +29,7 @@ __all__ = [
 _BROKEN = {
     "rejection": "expect.rejections: none",
     "collision": "expect.collisions: none",
+    "contact": "expect.contacts: none",
     "deadlock": "expect.deadlock: false",
     "timeout": "expect.tasks",
     "planner-error": "the planner failed",
@@ -44,6 +46,8 @@ SUMMARY_COLUMNS = (
     "tasks",
     "makespan",
     "alerts",
+    "contacts",
+    "clearance",
     "rejections",
     "route errors",
     "hash",
@@ -54,20 +58,33 @@ SUMMARY_COLUMNS = (
 def summary_cells(label: str, outcome: str, result: RunResult | None) -> tuple[str, ...]:
     """One row of the summary table; ``result`` is ``None`` for a scenario that never ran."""
     if result is None or not result.trace_hash:
-        return (label, outcome, "-", "-", "-", "-", "-", "-", "-")
+        return (label, outcome, *("-" for _ in SUMMARY_COLUMNS[2:]))
     makespan = result.metrics.makespan
     factor = result.metrics.realtime_factor
+    contact = result.contact
     return (
         label,
         outcome,
         f"{result.tasks_completed}/{result.tasks_total}",
         "-" if makespan is None else f"{makespan:.1f} s",
         str(len(result.collisions)),
+        "-" if contact is None else str(len(contact.contacts)),
+        _clearance(contact),
         str(len(result.rejections)),
         str(len(result.route_errors)),
         result.trace_hash[:12],
         "-" if factor is None else f"{factor:.0f}x",
     )
+
+
+def _clearance(contact: ContactReport | None) -> str:
+    """The clearance cell: metres, ``> reach`` when no two footprints came within reach, ``-`` when the
+    contact check was off."""
+    if contact is None:
+        return "-"
+    if contact.clearance is None:
+        return f"> {contact.reach:g} m"
+    return f"{contact.clearance.distance:.2f} m"
 
 
 def format_table(rows: Sequence[Sequence[str]], header: Sequence[str] = SUMMARY_COLUMNS) -> list[str]:

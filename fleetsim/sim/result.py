@@ -502,7 +502,8 @@ def _judge_rejections(expect: Expectations, rejections: tuple[RejectionEvent, ..
 
 
 def _judge_contact(expect: Expectations, contact: ContactReport | None, end_time: float) -> list[Failure]:
-    """A contact each, unless contacts are expected; a clearance below the expected one."""
+    """A contact each, unless contacts are expected (then none at all fails, as for collisions); a
+    clearance below the expected one."""
     failures = []
     if contact is not None and expect.contacts == "none":
         for c in contact.contacts:
@@ -510,6 +511,13 @@ def _judge_contact(expect: Expectations, contact: ContactReport | None, end_time
             deep = f", overlapping up to {c.depth:.3f} m" if c.depth > 0 else ""
             msg = f"vehicles {a} and {b} touched at t = {c.time:.2f} s at ({c.x:.2f}, {c.y:.2f}){deep}"
             failures.append(Failure("contact", c.time, msg, c.to_dict()))
+    if expect.contacts == "any":
+        if contact is None:
+            msg = "the scenario expects contacts, but its contact check is off (checks: contact)"
+            failures.append(Failure("expectation", end_time, msg, {"expect": "contacts"}))
+        elif not contact.contacts:
+            msg = "the scenario expects contacts, but no two footprints touched"
+            failures.append(Failure("expectation", end_time, msg, {"expect": "contacts"}))
     if expect.clearance is not None:
         if contact is None:
             msg = f"the scenario expects a clearance of {expect.clearance:g} m, but its contact check is off (checks: contact)"

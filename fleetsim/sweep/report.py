@@ -26,6 +26,8 @@ COMPARED = (
     "makespan",
     "waiting_share",
     "alerts",
+    "contacts",
+    "clearance",
     "rejections",
     "deadlocks",
     "planner_time_per_call",
@@ -134,18 +136,27 @@ def figure(value: float | None, digits: int = 4) -> str:
     return "–" if value is None else f"{value:.{digits}g}"
 
 
+def _labelled(metric: str) -> str:
+    """A metric's label with its unit: ``makespan (s)``."""
+    found = METRICS[metric]
+    return found.label + (f" ({found.unit})" if found.unit else "")
+
+
 def summary_table(report: Report) -> tuple[list[str], list[list[str]]]:
     head = [
         "planner",
         "runs",
         "errors",
-        *(f"{METRICS[m].label}" + (f" ({METRICS[m].unit})" if METRICS[m].unit else "") for m in COMPARED),
+        *(("least " if m == "clearance" else "") + _labelled(m) for m in COMPARED),
     ]
     body = []
     for s in report.summaries:
         cells = [short(s.planner), str(s.runs), str(s.errors)]
         for metric in COMPARED:
-            cells.append(f"{s.totals[metric]:.0f}" if metric in s.totals else figure(s.means[metric]))
+            if metric == "clearance":  # for safety the closest call counts, not the average one
+                cells.append(figure(s.least_clearance))
+            else:
+                cells.append(f"{s.totals[metric]:.0f}" if metric in s.totals else figure(s.means[metric]))
         body.append(cells)
     return head, body
 
@@ -161,7 +172,7 @@ def comparison_table(report: Report, candidate: str) -> tuple[list[str], list[li
         relative = c.relative(c.mean)
         verdict = _verdict(c)
         body.append([
-            f"{metric.label}" + (f" ({metric.unit})" if metric.unit else ""), str(c.n), figure(c.baseline_mean),
+            _labelled(c.metric), str(c.n), figure(c.baseline_mean),
             f"{c.mean:+.4g}", f"{c.low:+.4g} .. {c.high:+.4g}", "–" if relative is None else f"{relative * 100:+.1f}%", verdict,
         ])  # fmt: skip
     return head, body

@@ -25,6 +25,7 @@ __all__ = [
     "Paired",
     "PlannerSummary",
     "SweepMetric",
+    "contacts",
     "paired",
     "planner_time_per_call",
     "summarise",
@@ -78,6 +79,12 @@ def planner_time_per_call(record: Mapping[str, Any]) -> float | None:
     return float(metrics["planner_wall_time"]) / calls if calls else None
 
 
+def contacts(record: Mapping[str, Any]) -> float | None:
+    """How many times two footprints touched; None when the run's contact check was off."""
+    contact = record.get("contact")
+    return None if contact is None else float(len(contact["contacts"]))
+
+
 def _scaled(
     read: Callable[[Mapping[str, Any]], float | None], by: float
 ) -> Callable[[Mapping[str, Any]], float | None]:
@@ -96,6 +103,8 @@ METRICS: Mapping[str, SweepMetric] = {
         SweepMetric("makespan", "makespan", "s", "lower", lambda r: _number(r["metrics"]["makespan"])),
         SweepMetric("waiting_share", "waiting share", "%", "lower", _scaled(waiting_share, 100)),
         SweepMetric("alerts", "alerts", "", "lower", lambda r: float(len(r["collisions"]))),
+        SweepMetric("contacts", "contacts", "", "lower", contacts),
+        SweepMetric("clearance", "clearance", "m", "higher", lambda r: _number(r["metrics"].get("clearance"))),
         SweepMetric("rejections", "rejections", "", "lower", lambda r: float(len(r["rejections"]))),
         SweepMetric("deadlocks", "deadlocks", "", "lower", lambda r: 0.0 if r["deadlock"] is None else 1.0),
         SweepMetric(
@@ -111,7 +120,8 @@ class PlannerSummary:
     runs: int
     errors: int  # runs that never ran: planner not importable, scenario not loading, worker lost
     means: Mapping[str, float | None]  # metric name -> mean over the runs that have the figure
-    totals: Mapping[str, float]  # alerts, rejections, deadlocks: summed
+    totals: Mapping[str, float]  # alerts, contacts, rejections, deadlocks: summed
+    least_clearance: float | None  # the closest two footprints came in any run (None: never within reach)
 
 
 def summarise(rows: Sequence[Mapping[str, Any]]) -> list[PlannerSummary]:
@@ -126,10 +136,18 @@ def summarise(rows: Sequence[Mapping[str, Any]]) -> list[PlannerSummary]:
             means[name] = math.fsum(values) / len(values) if values else None
         totals = {
             name: math.fsum(v for v in map(METRICS[name].read, mine) if v is not None)
-            for name in ("alerts", "rejections", "deadlocks")
+            for name in ("alerts", "contacts", "rejections", "deadlocks")
         }
+        clearances = [v for v in map(METRICS["clearance"].read, mine) if v is not None]
         summaries.append(
-            PlannerSummary(planner, len(mine), sum(row.get("error") is not None for row in mine), means, totals)
+            PlannerSummary(
+                planner,
+                len(mine),
+                sum(row.get("error") is not None for row in mine),
+                means,
+                totals,
+                min(clearances, default=None),
+            )
         )
     return summaries
 

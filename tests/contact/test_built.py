@@ -4,6 +4,7 @@ crossed 30 s apart, judged by both disciplines."""
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import replace
 from pathlib import Path
 
@@ -14,6 +15,7 @@ from fleetsim.layout import Segment
 from fleetsim.load.scenario import load_scenario_dir
 from fleetsim.load.tiled_writer import write_map
 from fleetsim.planners import BFSPlanner
+from fleetsim.recording.picture import failure_picture
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Checks, Scenario, ScenarioSettings
 from fleetsim.sim.loop import run_scenario
 
@@ -80,7 +82,9 @@ def test_an_expected_clearance_above_what_the_run_kept_fails_it(tmp_path: Path) 
     assert failure.details["expect"] == "clearance" and "came within 1.200 m" in failure.message
 
 
-def test_two_vehicles_meeting_at_a_junction_touch_at_the_moment_and_place_computed_by_hand(tmp_path: Path) -> None:
+def _meeting(tmp_path: Path) -> Scenario:
+    """A + junction at the origin, both vehicles 10 m from it, one from the west and one from the south,
+    driving alike straight across: they meet in it. Reservations off."""
     segments = (
         Segment(1, Shape.STRAIGHT, Direction.BOTH, ((-10.0, 0.0), (0.0, 0.0))),
         Segment(2, Shape.STRAIGHT, Direction.BOTH, ((0.0, 0.0), (10.0, 0.0))),
@@ -91,7 +95,11 @@ def test_two_vehicles_meeting_at_a_junction_touch_at_the_moment_and_place_comput
     settings = ScenarioSettings(
         stop_on=(), time_limit=60.0, allow_start_conflicts=True, checks=Checks(reservations=False)
     )
-    result = run_scenario(load_scenario_dir(tmp_path, settings=settings), BFSPlanner())
+    return load_scenario_dir(tmp_path, settings=settings)
+
+
+def test_two_vehicles_meeting_at_a_junction_touch_at_the_moment_and_place_computed_by_hand(tmp_path: Path) -> None:
+    result = run_scenario(_meeting(tmp_path), BFSPlanner())
     assert result.contact is not None
     [contact] = result.contact.contacts
     # Both drive alike, 10 m from the junction: 1.0 x 0.6 m footprints first touch when each centre is
@@ -199,3 +207,28 @@ def test_a_turn_in_place_clips_a_standing_vehicles_corner(tmp_path: Path) -> Non
     assert second.time - first.time == pytest.approx(math.radians(76 - 14) / turn_rate, abs=0.1)
     apart = run_scenario(_corner(tmp_path / "far", 0.55), BFSPlanner())  # beyond the swept circle
     assert apart.contact is not None and apart.contact.contacts == () and apart.passed
+
+
+@pytest.mark.parametrize(
+    ("picture", "build", "kind"),
+    [("judgement-reservations.svg", "crossed-apart", "collision"), ("judgement-contact.svg", "meeting", "contact")],
+)
+def test_the_pictures_of_the_two_judgements_in_the_docs_are_these_runs(
+    picture: str, build: str, kind: str, tmp_path: Path
+) -> None:
+    """docs/contact.md shows the failure pictures of two runs: the junction crossed 30 s apart (a reservation
+    alert, though the vehicles never come near) and the junction where they meet (a contact).
+    ``FLEETSIM_UPDATE_DOCS=1`` draws them anew."""
+    folder = tmp_path / build  # the scenario's name in the picture
+    scenario = _crossing_apart(folder, Checks()) if build == "crossed-apart" else _meeting(folder)
+    result = run_scenario(scenario, BFSPlanner())
+    assert result.failures[0].kind == kind
+    found = failure_picture(scenario, result)
+    assert found is not None
+    svg = found[1].replace(str(tmp_path), "")  # no machine's folder in the page
+    shown = Path(__file__).resolve().parents[2] / "docs" / "images" / picture
+    if os.environ.get("FLEETSIM_UPDATE_DOCS") == "1":
+        shown.write_text(svg, encoding="utf-8")
+    assert shown.read_text(encoding="utf-8") == svg, (
+        f"docs/images/{picture} is stale: FLEETSIM_UPDATE_DOCS=1 redraws it"
+    )

@@ -67,7 +67,19 @@ def test_with_contact_off_nothing_is_measured() -> None:
     )
     assert result.contact is None and result.metrics.clearance is None
     assert result.to_dict()["contact"] is None and result.to_dict()["metrics"]["clearance"] is None
-    assert result.passed  # the alerts it expects are still there
+    # The alerts it expects are still there; the contact it expects cannot be seen, and the run says why.
+    [failure] = result.failures
+    assert failure.kind == "expectation" and failure.details == {"expect": "contacts"}
+    assert failure.message == "the scenario expects contacts, but its contact check is off (checks: contact)"
+
+
+def test_expected_contacts_that_never_happen_fail_the_run() -> None:
+    scenario = _scenario("examples.fleetsim.yaml", "crossing")
+    [failure] = run_scenario(
+        replace(scenario, expect=replace(scenario.expect, contacts="any")), ReservingPlanner()
+    ).failures
+    assert failure.kind == "expectation" and failure.details == {"expect": "contacts"}
+    assert failure.message == "the scenario expects contacts, but no two footprints touched"
 
 
 def test_stop_on_contact_ends_the_run_at_the_first_one() -> None:
@@ -186,3 +198,21 @@ def test_the_recording_marks_each_contact_at_its_step_for_an_independent_reader(
     with open(paths["mcap"], "rb") as stream:
         logs = [bytes(msg.data) for _, c, msg in make_reader(stream).iter_messages(topics=["/rosout"])]
     assert any(b"contact: vehicles 1 and 2 touched at t = 18.50 s" in data for data in logs)
+
+
+def test_the_summary_table_shows_contacts_and_clearance_or_that_they_were_not_judged() -> None:
+    from fleetsim.sim.report import SUMMARY_COLUMNS, summary_cells
+
+    def cells(result: object) -> dict[str, str]:
+        return dict(zip(SUMMARY_COLUMNS, summary_cells("s", "passed", result), strict=True))  # type: ignore[arg-type]
+
+    head_on = run_scenario(_scenario("caught-bugs.fleetsim.yaml", "corridor-head-on"), BFSPlanner())
+    assert (cells(head_on)["contacts"], cells(head_on)["clearance"]) == ("1", "0.00 m")
+    scenario = _scenario("examples.fleetsim.yaml", "corridor-passing-bay")
+    apart = run_scenario(scenario, ReservingPlanner())
+    assert apart.contact is not None and apart.contact.clearance is not None
+    assert cells(apart)["clearance"] == f"{apart.contact.clearance.distance:.2f} m" and cells(apart)["contacts"] == "0"
+    off = run_scenario(_with(scenario, contact=False), ReservingPlanner())
+    assert (cells(off)["contacts"], cells(off)["clearance"]) == ("-", "-")
+    far = replace(apart, contact=replace(apart.contact, clearance=None))  # no two came within reach
+    assert cells(far)["clearance"] == "> 2 m"

@@ -104,3 +104,21 @@ def test_fail_if_gates_on_the_interval_with_exit_codes(report: Path, capsys: pyt
     assert "FAIL  fleetsim.planners:BFSPlanner: throughput < baseline + 1000000" in capsys.readouterr().out
     assert main(["sweep", "report", results, *html, "--fail-if", "speed < baseline"]) == 2
     assert "unknown metric 'speed'" in capsys.readouterr().err
+
+
+def test_contacts_and_the_least_clearance_are_summed_up_and_compared(report: Path) -> None:
+    records = [json.loads(line) for line in (report / "results.jsonl").read_text(encoding="utf-8").splitlines()[1:]]
+    text = (report / "summary.md").read_text(encoding="utf-8")
+    header = next(line for line in text.splitlines() if line.startswith("| planner |"))
+    columns = [cell.strip() for cell in header.strip("|").split("|")]
+    assert "contacts" in columns and "least clearance (m)" in columns
+    for planner in ("ReservingPlanner", "BFSPlanner"):
+        mine = [r for r in records if r["planner"].endswith(planner)]
+        row = next(line for line in text.splitlines() if line.startswith(f"| {planner} |"))
+        cells = dict(zip(columns, (cell.strip() for cell in row.strip("|").split("|")), strict=True))
+        assert cells["contacts"] == str(sum(len(r["contact"]["contacts"]) for r in mine))
+        least = min(r["metrics"]["clearance"] for r in mine if r["metrics"]["clearance"] is not None)
+        assert cells["least clearance (m)"] == f"{least:.4g}"
+    # The reservation rule keeps footprints apart (the property test's guarantee); BFSPlanner's do touch.
+    assert sum(len(r["contact"]["contacts"]) for r in records if r["planner"].endswith("ReservingPlanner")) == 0
+    assert "| contacts | 8 |" in text and "| clearance (m) | " in text
