@@ -16,6 +16,7 @@ from fleetsim.load.scenario import load_scenario_dir
 from fleetsim.load.tiled_writer import write_map
 from fleetsim.planners import BFSPlanner
 from fleetsim.recording.picture import failure_picture
+from fleetsim.recording.replay import replay
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Checks, Scenario, ScenarioSettings
 from fleetsim.sim.loop import run_scenario
 
@@ -32,12 +33,12 @@ def _write(folder: Path, segments: tuple[Segment, ...], vehicles: str, tasks: st
 
 def _crossing_apart(tmp_path: Path, checks: Checks) -> Scenario:
     """A + junction at the origin. Vehicle 1 drives east from (-10, 0) and stops at (2, 0), just past
-    it; vehicle 2 comes north from (0, -40), so it reaches the junction some 30 s after vehicle 1 has
-    crossed it, and passes 2 m from where vehicle 1 stands."""
+    it; vehicle 2 comes from (-30, -10), east and then north round a corner, so it reaches the junction
+    some 30 s after vehicle 1 has crossed it, and passes 2 m from where vehicle 1 stands."""
     segments = (
         Segment(1, Shape.STRAIGHT, Direction.BOTH, ((-10.0, 0.0), (0.0, 0.0))),
         Segment(2, Shape.STRAIGHT, Direction.BOTH, ((0.0, 0.0), (2.0, 0.0))),
-        Segment(5, Shape.STRAIGHT, Direction.BOTH, ((0.0, -40.0), (0.0, -10.0))),
+        Segment(5, Shape.STRAIGHT, Direction.BOTH, ((-30.0, -10.0), (0.0, -10.0))),
         Segment(3, Shape.STRAIGHT, Direction.BOTH, ((0.0, -10.0), (0.0, 0.0))),
         Segment(4, Shape.STRAIGHT, Direction.BOTH, ((0.0, 0.0), (0.0, 10.0))),
     )
@@ -232,3 +233,15 @@ def test_the_pictures_of_the_two_judgements_in_the_docs_are_these_runs(
     assert shown.read_text(encoding="utf-8") == svg, (
         f"docs/images/{picture} is stale: FLEETSIM_UPDATE_DOCS=1 redraws it"
     )
+
+
+def test_a_replay_shows_alerts_only_where_the_reservation_check_raised_them(tmp_path: Path) -> None:
+    """Both plans hold the junction from the start: with reservations on the replay (pictures, MCAP)
+    shows that alert; with them off the run raised none, and the replay shows none."""
+    off = _meeting(tmp_path / "off")
+    on = replace(off, settings=replace(off.settings, checks=Checks()))
+    for scenario, judged in ((off, False), (on, True)):
+        result = run_scenario(scenario, BFSPlanner())
+        assert result.trace is not None and bool(result.collisions) is judged
+        shown = [frame.step for frame in replay(scenario, result.trace.lines) if frame.alerts]
+        assert bool(shown) is judged
