@@ -60,13 +60,16 @@ def separation(a: Footprint, b: Footprint) -> float:
     return _separation(a, b, math.cos(a[2]), math.sin(a[2]), math.cos(b[2]), math.sin(b[2]))
 
 
-def signed_distance(a: Footprint, b: Footprint) -> tuple[float, float, float]:
+def signed_distance(a: Footprint, b: Footprint, beyond: float = math.inf) -> tuple[float, float, float]:
     """The distance between the rectangles (negative: minus the depth of their overlap) and where it is
-    taken: ``(distance, x, y)``."""
+    taken: ``(distance, x, y)``. Farther apart than ``beyond``, a lower bound of the distance (the
+    separating-axis separation, :func:`separation`) and no place (NaN) are enough."""
     ca, sa, cb, sb = math.cos(a[2]), math.sin(a[2]), math.cos(b[2]), math.sin(b[2])
     apart = _separation(a, b, ca, sa, cb, sb)
     if apart <= 0.0:
         return apart, 0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])
+    if apart > beyond:
+        return apart, math.nan, math.nan
     best, at_x, at_y = math.inf, 0.0, 0.0
     for (x, y, _, length, width), co, si, (ox, oy, _, ol, ow), oc, os in (
         (a, ca, sa, b, cb, sb),  # a's corners against b

@@ -30,6 +30,7 @@ scenarios the two differ by millimetres.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import Any
@@ -46,6 +47,7 @@ _ADVANCES = 32  # conservative advancement steps per pair and step before sampli
 _SAMPLES = 16  # samples of what is left of a step after that
 # The broad phase counts vehicles per cell in an array while there are at most this many cells per vehicle.
 _DENSE_CELLS = 8
+_SKIN = 2.0  # metres: the candidate pairs are listed this much wider, and kept while no vehicle drove farther
 # Half the 3 x 3 cells round a cell, as (dx, dy) columns: each pair of neighbouring cells once.
 _NEIGHBOURS = np.array([[0, 1, 1, 1, 0], [0, -1, 0, 1, 1]], dtype=np.int64)
 
@@ -149,17 +151,26 @@ class ContactMonitor:
         self._active: dict[tuple[int, int], int] = {}  # a pair of indices in contact -> its contact
         self._closest: dict[tuple[int, int], Approach] = {}  # pairs closer than near_miss
         self._clearance: Approach | None = None
-        self._poses: Floats | None = None  # at the last step's end: x, y, heading, half sizes (5, n)
+        self._sizes = np.array((self.half_length, self.half_width, self.radius))  # per vehicle
+        self._poses: Floats | None = None  # at the last step's end: x, y, heading (3, n)
+        self._listed: _Listed | None = None  # the candidate pairs
+        # Per vehicle, metres: the farthest any point of its footprint can have moved since the start.
+        self._spent = np.zeros(len(self.ids))
 
     # -- the run ----------------------------------------------------------------------------------------
 
     def begin(self, x: Floats, y: Floats, heading: Floats, time: float = 0.0) -> list[Contact]:
         """The poses at the start: footprints that overlap already are contacts from ``time``."""
-        self._poses = poses = np.array((x, y, heading, self.half_length, self.half_width), dtype=np.float64)
-        i, j = self._candidates(poses, np.ones(len(self.ids), dtype=bool), 0.0)
-        gap = np.hypot(poses[0, j] - poses[0, i], poses[1, j] - poses[1, i]) - self.radius[i] - self.radius[j]
-        near = np.flatnonzero(gap < self.reach)
-        return self._judge_end(i[near], j[near], poses, time)
+        self._poses = poses = np.array((x, y, heading), dtype=np.float64)
+        i, j = self._candidates(poses, 0.0)
+        table = np.vstack((poses, self._sizes))  # per vehicle: x, y, heading, half sizes, radius
+        fresh = []
+        for p, q, a, b in zip(i.tolist(), j.tolist(), table[:, i].T.tolist(), table[:, j].T.tolist(), strict=True):
+            if math.hypot(b[0] - a[0], b[1] - a[1]) - a[5] - b[5] < self.reach:
+                contact = self._judge(p, q, (a[0], a[1], a[2], a[3], a[4]), (b[0], b[1], b[2], b[3], b[4]), time)[1]
+                if contact is not None:
+                    fresh.append(contact)
+        return fresh
 
     def step(
         self, t0: float, t1: float, x: Floats, y: Floats, heading: Floats, moved: npt.NDArray[np.bool_]
@@ -168,50 +179,53 @@ class ContactMonitor:
         Returns the contacts that began in it."""
         start = self._poses
         assert start is not None, "begin() first"
-        end = start.copy()
-        end[0], end[1], end[2] = x, y, heading
-        self._poses = end
+        self._poses = end = np.array((x, y, heading), dtype=np.float64)
         if not moved.any():  # nothing moved: no distance changed
             return []
-        dx, dy = end[0] - start[0], end[1] - start[1]
-        i, j = self._candidates(end, moved, float(np.hypot(dx, dy).max()))
-        if len(i) == 0:
+        delta = end - start
+        shift = np.hypot(delta[0], delta[1])
+        # No point of a footprint moved farther than its centre's shift plus its turn times its half
+        # diagonal; it turns the shorter way, at most half a turn (a heading that wraps round, from pi to
+        # -pi, counts as half a turn: more, never less). Two footprints' distance changed by no more than
+        # the sum of theirs.
+        spin = np.minimum(np.abs(delta[2]), math.pi) * self.radius
+        self._spent += shift + spin
+        listed = self._neighbours(end, float(shift.max()))
+        spent = self._spent[listed.i] + self._spent[listed.j]
+        due = np.flatnonzero(listed.due <= spent)
+        due = due[moved[listed.i[due]] | moved[listed.j[due]]]
+        if len(due) == 0:
             return []
-        # Per pair, from gathers of per-vehicle rows: the bounding circles' gaps at both ends, and the most
-        # their footprints' distance can change over the step (relative travel, plus each one's turn times
-        # its half diagonal, the farthest any point of it lies from its centre).
-        spin = np.abs(np.remainder(end[2] - start[2] + np.pi, 2.0 * np.pi) - np.pi) * self.radius
-        rows = np.array((end[0], end[1], dx, dy, self.radius, spin))
-        first, second = rows[:, i], rows[:, j]
-        offset = second - first
-        reach = first[4] + second[4]
-        gap1 = np.hypot(offset[0], offset[1]) - reach
-        gap0 = np.hypot(offset[0] - offset[2], offset[1] - offset[3]) - reach
-        bound = np.hypot(offset[2], offset[3]) + first[5] + second[5]
-        active = self._in_contact(i, j)  # in contact at the step's start: followed, never swept anew
+        i, j = listed.i[due], listed.j[due]
+        table = np.vstack((end, start, self._sizes, spin))  # per vehicle: x, y, heading at the end, at the start, ...
         fresh: list[Contact] = []
-        # Between the steps: pairs that could have touched and were not touching already (the circles'
-        # gaps at both ends add up to no more than the bound).
-        maybe = np.flatnonzero((gap0 + gap1 <= bound + TOUCH) & ~active)
-        if len(maybe):
-            p, q = i[maybe], j[maybe]
-            pairs = zip(
-                p.tolist(), q.tolist(), _footprints(start, p), _footprints(end, p), _footprints(start, q),
-                _footprints(end, q), bound[maybe].tolist(), strict=True,
-            )  # fmt: skip
-            for first_id, second_id, a0, a1, b0, b1, most in pairs:
-                contact = self._sweep(first_id, second_id, a0, a1, b0, b1, most, t0, t1)
-                if contact is not None:
-                    fresh.append(contact)
-        # At the step's end: the contacts in force, and the pairs whose circles come close enough to count.
-        limit = max(self.near_miss, self._clearance.distance if self._clearance is not None else self.reach)
-        near = np.flatnonzero((gap1 < limit) | active)
-        if len(near):
-            held = active[near]
-            if held.any():
-                self._follow(i[near[held]], j[near[held]], end, t1)
-            near = near[~held]
-            fresh += self._judge_end(i[near], j[near], end, t1)
+        slack: list[float] = []
+        active = self._active
+        for p, q, a, b in zip(i.tolist(), j.tolist(), table[:, i].T.tolist(), table[:, j].T.tolist(), strict=True):
+            ax, ay, ah, ax0, ay0, ah0, al, aw, ar, a_spin = a
+            bx, by, bh, bx0, by0, bh0, bl, bw, br, b_spin = b
+            a1, b1 = (ax, ay, ah, al, aw), (bx, by, bh, bl, bw)
+            distance = gap = math.hypot(bx - ax, by - ay) - ar - br  # the bounding circles' gap at the end
+            if (p, q) in active:  # in contact at the step's start: followed, never swept anew
+                distance = self._follow(p, q, a1, b1, t1)
+            else:
+                # Between the steps: they could have touched only if the circles' gaps at both ends add up to
+                # no more than the most their distance can change (relative travel plus both spins).
+                gap0 = math.hypot(bx0 - ax0, by0 - ay0) - ar - br
+                most = math.hypot(bx - bx0 - ax + ax0, by - by0 - ay + ay0) + a_spin + b_spin
+                if gap0 + gap <= most + TOUCH:
+                    a0, b0 = (ax0, ay0, ah0, al, aw), (bx0, by0, bh0, bl, bw)
+                    contact = self._sweep(p, q, a0, a1, b0, b1, most, t0, t1)
+                    if contact is not None:
+                        fresh.append(contact)
+                if gap < self._limit():  # close enough at the step's end to count
+                    distance, contact = self._judge(p, q, a1, b1, t1)
+                    if contact is not None:
+                        fresh.append(contact)
+            # Farther apart than the limit (which only shrinks over a run), the pair need not be looked at
+            # again until the fleet has spent that much.
+            slack.append(distance - self._limit() - TOUCH)
+        listed.due[due] = spent[due] + np.array(slack)
         return fresh
 
     def report(self) -> ContactReport:
@@ -232,9 +246,39 @@ class ContactMonitor:
 
     # -- phases -------------------------------------------------------------------------------------------
 
-    def _candidates(self, poses: Floats, moved: npt.NDArray[np.bool_], travel: float) -> tuple[Ints, Ints]:
+    def _neighbours(self, poses: Floats, travel: float) -> _Listed:
+        """Every pair (i < j, in order) whose centres are within the broad phase's distance (see
+        :meth:`_candidates`) at ``poses``, after a step in which no vehicle drove farther than ``travel``:
+        the pairs listed ``skin`` wider, while no vehicle has drifted so far from where it was then that
+        a pair could have come in from outside (travel + drift <= skin), else listed anew."""
+        listed = self._listed
+        if listed is not None:
+            # No vehicle drifted farther than the farthest travels of the steps since added up: look at
+            # each one's drift only when that does not settle it.
+            listed.travelled += travel
+            if travel + listed.travelled <= listed.skin:
+                return listed
+            centres = listed.centres
+            drift = float(np.hypot(poses[0] - centres[0], poses[1] - centres[1]).max(initial=0.0))
+            if travel + drift <= listed.skin:
+                return listed
+        skin = max(_SKIN, travel)
+        i, j = self._candidates(poses, skin)
+        size = self._largest + self.reach + 2.0 * skin + TOUCH
+        keep = np.hypot(poses[0, j] - poses[0, i], poses[1, j] - poses[1, i]) <= size
+        keys = i[keep] * len(self.ids) + j[keep]
+        keys.sort()
+        due = np.full(len(keys), -np.inf)
+        if listed is not None and len(listed.keys) and len(keys):  # what is known of the pairs listed before
+            at = np.minimum(np.searchsorted(listed.keys, keys), len(listed.keys) - 1)
+            known = listed.keys[at] == keys
+            due[known] = listed.due[at[known]]
+        self._listed = listed = _Listed(keys, due, poses[:2].copy(), skin, len(self.ids))
+        return listed
+
+    def _candidates(self, poses: Floats, travel: float) -> tuple[Ints, Ints]:
         """Pairs (i < j) in the same or neighbouring cells of a grid as large as two footprints can be
-        apart and still matter, at least one of them moved."""
+        apart and still matter (after a step in which no vehicle drove farther than ``travel``)."""
         count = len(self.ids)
         if count < 2:
             return np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp)
@@ -261,21 +305,23 @@ class ContactMonitor:
         i = cell // len(_NEIGHBOURS[0])
         j = order[np.arange(total) + np.repeat(left - (np.cumsum(counts) - counts), counts)]
         same_cell = cell % len(_NEIGHBOURS[0]) == 0
-        keep = np.where(same_cell, i < j, i != j) & (moved[i] | moved[j])
+        keep = np.where(same_cell, i < j, i != j)
         i, j = i[keep], j[keep]
         return np.minimum(i, j), np.maximum(i, j)
 
-    def _judge_end(self, i: Ints, j: Ints, poses: Floats, time: float) -> list[Contact]:
-        """The pairs ``(i, j)``, not in contact before, at ``time`` (``poses``): those that touch now begin
-        a contact (unless the sweep began it already), the others' distances are recorded."""
-        fresh = []
-        for p, q, a, b in zip(i.tolist(), j.tolist(), _footprints(poses, i), _footprints(poses, j), strict=True):
-            distance, x, y = signed_distance(a, b)
-            if distance > TOUCH:
-                self._approach(p, q, distance, time, x, y)
-            elif (p, q) not in self._active:  # a touch the sweep could not tell apart (it began at the end)
-                fresh.append(self._begin_contact(p, q, time, x, y, -distance))
-        return fresh
+    def _judge(self, p: int, q: int, a: Footprint, b: Footprint, time: float) -> tuple[float, Contact | None]:
+        """The pair ``(p, q)``, not in contact before, at ``time`` (footprints ``a``, ``b``): if they touch
+        now they begin a contact (unless the sweep began it already), else their distance is recorded.
+        Their signed distance (or a lower bound of it beyond the limit), and the contact begun."""
+        distance, x, y = signed_distance(a, b, self._limit())  # beyond the limit, nothing counts
+        if distance > self._limit():
+            return distance, None
+        if distance > TOUCH:
+            self._approach(p, q, distance, time, x, y)
+            return distance, None
+        if (p, q) in self._active:
+            return distance, None
+        return distance, self._begin_contact(p, q, time, x, y, -distance)
 
     def _sweep(
         self,
@@ -326,20 +372,20 @@ class ContactMonitor:
         ]
         contact = self._begin_contact(p, q, t0 + begun * duration, x, y, max(0.0, -min(inside)))
         if inside[-1] > TOUCH:  # apart again by the step's end: passed through each other
-            self.contacts[self._active.pop((p, q))] = contact = replace(contact, until=t1)
+            contact = self._end_contact(p, q, t1)
         return contact
 
-    def _follow(self, i: Ints, j: Ints, poses: Floats, t1: float) -> None:
-        """Deepen or end the contacts of the pairs ``(i, j)``, in force at the step's start."""
-        for p, q, a, b in zip(i.tolist(), j.tolist(), _footprints(poses, i), _footprints(poses, j), strict=True):
-            d = signed_distance(a, b)[0]
-            index = self._active[(p, q)]
-            contact = self.contacts[index]
-            if d > TOUCH:
-                self.contacts[index] = replace(contact, until=t1)
-                del self._active[(p, q)]
-            elif -d > contact.depth:
-                self.contacts[index] = replace(contact, depth=-d)
+    def _follow(self, p: int, q: int, a: Footprint, b: Footprint, t1: float) -> float:
+        """Deepen or end the contact of the pair ``(p, q)``, in force at the step's start; their signed
+        distance."""
+        d = signed_distance(a, b)[0]
+        index = self._active[(p, q)]
+        contact = self.contacts[index]
+        if d > TOUCH:
+            self._end_contact(p, q, t1)
+        elif -d > contact.depth:
+            self.contacts[index] = Contact(contact.time, contact.vehicles, contact.x, contact.y, -d)
+        return d
 
     # -- bookkeeping --------------------------------------------------------------------------------------
 
@@ -350,13 +396,16 @@ class ContactMonitor:
         self._approach(p, q, 0.0, time, x, y)
         return contact
 
-    def _in_contact(self, i: Ints, j: Ints) -> npt.NDArray[np.bool_]:
-        """Which of the pairs ``(i, j)`` are in contact now."""
-        if not self._active:
-            return np.zeros(len(i), dtype=bool)
-        count = len(self.ids)
-        known = np.array([p * count + q for p, q in self._active], dtype=np.int64)
-        return np.isin(i.astype(np.int64) * count + j, known)
+    def _limit(self) -> float:
+        """How close two footprints must come for their distance to count now: within the near-miss
+        distance, or closer than the clearance so far (within ``reach`` before there is one)."""
+        best = self._clearance
+        return max(self.near_miss, self.reach if best is None else best.distance)
+
+    def _end_contact(self, p: int, q: int, t1: float) -> Contact:
+        index = self._active.pop((p, q))
+        self.contacts[index] = contact = replace(self.contacts[index], until=t1)
+        return contact
 
     def _approach(self, p: int, q: int, distance: float, time: float, x: float, y: float) -> None:
         distance = max(distance, 0.0)
@@ -370,6 +419,14 @@ class ContactMonitor:
                 self._closest[(p, q)] = Approach(pair, distance, time, x, y)
 
 
-def _footprints(poses: Floats, rows: Ints) -> list[Footprint]:
-    """The footprints of the vehicles ``rows`` from a (5, n) array of poses and half sizes."""
-    return list(zip(*poses[:, rows].tolist(), strict=True))
+class _Listed:
+    """The broad phase's candidate pairs (``keys``: i * count + j, i < j, in order) and the centres and skin
+    they were listed for; per pair, what its two vehicles must have spent before it needs to be looked at
+    again (``due``)."""
+
+    __slots__ = ("centres", "due", "i", "j", "keys", "skin", "travelled")
+
+    def __init__(self, keys: Ints, due: Floats, centres: Floats, skin: float, count: int) -> None:
+        self.keys, self.due, self.centres, self.skin = keys, due, centres, skin
+        self.i, self.j = keys // count, keys % count
+        self.travelled = 0.0  # the farthest travels of the steps since, added up

@@ -25,6 +25,8 @@ import traceback
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass
+from itertools import chain
+from operator import attrgetter
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Literal
@@ -61,6 +63,7 @@ from fleetsim.sim.trace import Trace, TraceFile, plan_record
 __all__ = ["RunProgress", "run_scenario"]
 
 # Metres: two footprints farther apart than this do not count towards a run's clearance (it is "more").
+_POSE = attrgetter("x", "y", "heading")  # a vehicle state's pose, for the contact check
 _CLEARANCE_REACH = 2.0
 
 
@@ -120,7 +123,7 @@ class _Run:
         # The contact check (fleetsim.contact): every vehicle's pose, by index, kept up to date from what
         # moved; contacts, clearance and near misses are judged from it and enter no trace.
         checks = scenario.settings.checks
-        self.index = {vid: k for k, vid in enumerate(self.ids)}
+        self.stepped_at: list[int] = []  # the indices of the vehicles the last step moved one by one
         self.poses = np.array(
             [[states[v].x for v in self.ids], [states[v].y for v in self.ids], [states[v].heading for v in self.ids]]
         )
@@ -282,6 +285,7 @@ class _Run:
             stepped_at.append(i)
             if arming:
                 cruise.arm(i, plan)
+        self.stepped_at = stepped_at
         if stepped or cruised.ids:
             self.last_activity = end
             self.last_moved[stepped_at] = end
@@ -297,14 +301,12 @@ class _Run:
         with what moved in it."""
         assert self.contact is not None
         poses = self.poses
-        moved = np.zeros(len(self.ids), dtype=bool)
-        if stepped:
-            rows = np.fromiter((self.index[state.id] for state in stepped), dtype=np.intp, count=len(stepped))
-            poses[:, rows] = np.array([[s.x for s in stepped], [s.y for s in stepped], [s.heading for s in stepped]])
-            moved[rows] = True
+        if stepped:  # by index, as move() stepped them
+            values = np.fromiter(chain.from_iterable(map(_POSE, stepped)), dtype=np.float64, count=3 * len(stepped))
+            poses[:, self.stepped_at] = values.reshape(-1, 3).T
         if cruised is not None and len(cruised.positions):
             poses[:, cruised.positions] = cruised.motion[1:4]
-            moved[cruised.positions] = True
+        moved = self.last_moved == end  # move() stamps each vehicle that moved with the step's end
         return self.contact.step(start, end, poses[0], poses[1], poses[2], moved)
 
     def diagnose(self, kind: Literal["deadlock", "timeout"], now: float) -> Diagnosis:
