@@ -39,13 +39,16 @@ def turn(start: float, end: float) -> float:
     return math.remainder(end - start, math.tau)
 
 
-def _separation(a: Footprint, b: Footprint, ca: float, sa: float, cb: float, sb: float) -> float:
+def _separations(
+    a: Footprint, b: Footprint, ca: float, sa: float, cb: float, sb: float
+) -> tuple[float, float, float, float]:
+    """Along each one's length and width axis (a's two, then b's): the centres' offset less its own half
+    size and the other's reach."""
     ax, ay, _, al, aw = a
     bx, by, _, bl, bw = b
     dx, dy = bx - ax, by - ay
     c, s = abs(ca * cb + sa * sb), abs(ca * sb - sa * cb)  # |cos|, |sin| of the angle between them
-    # Along each one's length and width: the centres' offset less its own half size and the other's reach.
-    return max(
+    return (
         abs(dx * ca + dy * sa) - al - bl * c - bw * s,
         abs(dy * ca - dx * sa) - aw - bl * s - bw * c,
         abs(dx * cb + dy * sb) - bl - al * c - aw * s,
@@ -57,7 +60,18 @@ def separation(a: Footprint, b: Footprint) -> float:
     """The separating-axis test's separation: a lower bound of the distance between the rectangles when
     positive (it is the distance along the best of their side normals), minus the depth of their overlap
     when not. Cheaper than :func:`signed_distance`: no corners."""
-    return _separation(a, b, math.cos(a[2]), math.sin(a[2]), math.cos(b[2]), math.sin(b[2]))
+    return max(_separations(a, b, math.cos(a[2]), math.sin(a[2]), math.cos(b[2]), math.sin(b[2])))
+
+
+def _corner_to(cx: float, cy: float, owner: Footprint, oc: float, os: float) -> tuple[float, float, float]:
+    """The squared distance from the point ``(cx, cy)`` to the rectangle ``owner`` (its heading's cosine
+    and sine ``oc``, ``os``), and the midpoint of the point and its closest point on it."""
+    ox, oy, _, ol, ow = owner
+    rx, ry = cx - ox, cy - oy
+    lx, ly = rx * oc + ry * os, ry * oc - rx * os  # the point in the owner's frame
+    ex, ey = max(abs(lx) - ol, 0.0), max(abs(ly) - ow, 0.0)
+    qx, qy = min(max(lx, -ol), ol), min(max(ly, -ow), ow)  # its closest point on the owner
+    return ex * ex + ey * ey, 0.5 * (cx + ox + qx * oc - qy * os), 0.5 * (cy + oy + qx * os + qy * oc)
 
 
 def signed_distance(a: Footprint, b: Footprint, beyond: float = math.inf) -> tuple[float, float, float]:
@@ -65,12 +79,30 @@ def signed_distance(a: Footprint, b: Footprint, beyond: float = math.inf) -> tup
     taken: ``(distance, x, y)``. Farther apart than ``beyond``, a lower bound of the distance (the
     separating-axis separation, :func:`separation`) and no place (NaN) are enough."""
     ca, sa, cb, sb = math.cos(a[2]), math.sin(a[2]), math.cos(b[2]), math.sin(b[2])
-    apart = _separation(a, b, ca, sa, cb, sb)
+    along = _separations(a, b, ca, sa, cb, sb)
+    apart = max(along)
     if apart <= 0.0:
         return apart, 0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])
     if apart > beyond:
         return apart, math.nan, math.nan
-    best, at_x, at_y = math.inf, 0.0, 0.0
+    # Mostly the closest points are a corner and the side whose normal separates best: the other's corner
+    # deepest towards that side. If that corner lies as far from the side's rectangle as the separation,
+    # a lower bound, that is the distance.
+    axis = along.index(apart)
+    owner, other, oc, os, tc, ts = (a, b, ca, sa, cb, sb) if axis < 2 else (b, a, cb, sb, ca, sa)
+    nx, ny = (oc, os) if axis % 2 == 0 else (-os, oc)  # the side's normal ...
+    if nx * (other[0] - owner[0]) + ny * (other[1] - owner[1]) < 0.0:  # ... pointing at the other
+        nx, ny = -nx, -ny
+    length = other[3] if nx * tc + ny * ts < 0.0 else -other[3]  # the other's corner deepest along -normal
+    width = other[4] if ny * tc - nx * ts < 0.0 else -other[4]
+    squared, at_x, at_y = _corner_to(
+        other[0] + length * tc - width * ts, other[1] + length * ts + width * tc, owner, oc, os
+    )
+    if squared <= apart * apart * (1.0 + 1e-12):
+        return math.sqrt(squared), at_x, at_y
+    # Else corner to corner, or a corner beyond the side's ends: the closest of all eight corners to the
+    # other rectangle (for convex polygons the closest points lie on a corner of one of them).
+    best = math.inf
     for (x, y, _, length, width), co, si, (ox, oy, _, ol, ow), oc, os in (
         (a, ca, sa, b, cb, sb),  # a's corners against b
         (b, cb, sb, a, ca, sa),  # b's against a

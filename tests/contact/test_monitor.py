@@ -40,6 +40,45 @@ def test_the_signed_distance_of_two_footprints_is_exact(
     assert found == pytest.approx(distance, abs=1e-12)
 
 
+def _corners(f: Footprint) -> list[tuple[float, float]]:
+    x, y, heading, length, width = f
+    c, s = math.cos(heading), math.sin(heading)
+    return [(x + u * length * c - v * width * s, y + u * length * s + v * width * c) for u, v in ((1, 1), (-1, 1), (-1, -1), (1, -1))]  # fmt: skip
+
+
+def _to_segment(p: tuple[float, float], a: tuple[float, float], b: tuple[float, float]) -> float:
+    (px, py), (ax, ay), (bx, by) = p, a, b
+    t = max(0.0, min(1.0, ((px - ax) * (bx - ax) + (py - ay) * (by - ay)) / ((bx - ax) ** 2 + (by - ay) ** 2)))
+    return math.hypot(px - ax - t * (bx - ax), py - ay - t * (by - ay))
+
+
+def test_the_distance_of_rectangles_apart_is_that_of_their_closest_sides() -> None:
+    """Against a reference of its own kind: for two rectangles apart, the least distance between a
+    corner of one and a side of the other, over all of them; random poses, many nearly parallel."""
+    rng = np.random.default_rng(3)
+    checked = 0
+    for _ in range(3000):
+        a = (0.0, 0.0, rng.uniform(-math.pi, math.pi), rng.uniform(0.2, 1.5), rng.uniform(0.1, 0.8))
+        parallel = a[2] + rng.choice([0.0, math.pi / 2, math.pi]) + rng.normal(0, 1e-3)
+        heading = parallel if rng.uniform() < 0.5 else rng.uniform(-math.pi, math.pi)
+        b = (*rng.uniform(-4, 4, 2), heading, rng.uniform(0.2, 1.5), rng.uniform(0.1, 0.8))
+        found, x, y = signed_distance(a, b)
+        ca, cb = _corners(a), _corners(b)
+        sides_a, sides_b = list(zip(ca, ca[1:] + ca[:1], strict=True)), list(zip(cb, cb[1:] + cb[:1], strict=True))
+        expected = min(
+            [_to_segment(p, *side) for p in ca for side in sides_b] + [_to_segment(p, *side) for p in cb for side in sides_a]
+        )  # fmt: skip
+        if found > 1e-9:  # apart (overlaps are checked above)
+            checked += 1
+            assert found == pytest.approx(expected, abs=1e-9)
+            # The place lies halfway between the two rectangles: as far from each as half the distance.
+            place = (x, y)
+            to_a = min(_to_segment(place, *side) for side in sides_a)
+            to_b = min(_to_segment(place, *side) for side in sides_b)
+            assert to_a == pytest.approx(found / 2, abs=1e-9) and to_b == pytest.approx(found / 2, abs=1e-9)
+    assert checked > 2000
+
+
 def test_a_rotated_footprint_is_measured_at_its_true_corners() -> None:
     # A 2 x 2 square turned 45 degrees reaches sqrt(2) from its centre along +x.
     found, *where = signed_distance(_box(0, 0, math.pi / 4, 2, 2), _box(3, 0, 0, 2, 2))
