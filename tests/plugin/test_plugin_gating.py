@@ -624,18 +624,21 @@ def test_summary_table_and_metrics_json_have_one_row_per_scenario(
         assert row["outcome"] == cells[1]
         assert row["trace_hash"] == recorded[cells[0]].hash
         assert row["planner"] == RESERVING
+        clearance = "> 2 m" if row["clearance"] is None else f"{row['clearance']:.2f} m"
         assert (
-            cells[2:8]
+            cells[2:10]
             == [
                 f"{row['tasks_completed']}/{row['tasks_total']}",
                 f"{row['makespan']:.1f} s",
                 str(row["alerts"]),
+                str(row["contacts"]),
+                clearance,
                 str(row["rejections"]),
                 "0",  # route errors: the reference planner finds every route
                 "not recorded" if cells[0] == "corridor-passing-bay" else row["trace_hash"][:12],
             ]
         )
-        assert re.fullmatch(r"\d+x", cells[8])
+        assert re.fullmatch(r"\d+x", cells[10])
     result.stdout.fnmatch_lines(["metrics of 2 scenario(s) written to *metrics.json"])
 
 
