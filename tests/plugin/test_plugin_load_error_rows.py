@@ -9,6 +9,10 @@ import json
 import pytest
 from plugin_helpers import RESERVING, copy_example_suites
 
+from fleetsim.sim.report import SUMMARY_COLUMNS
+
+NOTHING = ["-"] * (len(SUMMARY_COLUMNS) - 2)  # a row's cells after its scenario and outcome, for no run
+
 
 def _row(result: pytest.RunResult, name: str) -> list[str]:
     [line] = [line for line in result.stdout.lines if line.startswith(f"{name} ")]
@@ -27,7 +31,7 @@ def test_a_scenario_that_does_not_load_is_a_load_error_row_and_counted(
     _break_the_loop(pytester)
     result = pytester.runpytest_inprocess("--planner", RESERVING, "--fleetsim-metrics-json", "metrics.json")
     result.assert_outcomes(passed=3, failed=1)
-    assert _row(result, "loop-one-way")[1:] == ["load", "error", "-", "-", "-", "-", "-", "-", "-"]
+    assert _row(result, "loop-one-way")[1:] == ["load", "error", *NOTHING]
     assert _row(result, "crossing")[1] == "passed"  # narrow: the others are rows of their own outcome
     metrics = json.loads((pytester.path / "metrics.json").read_text())
     ids = sorted(entry["id"] for entry in metrics["scenarios"])
@@ -75,4 +79,4 @@ def test_a_planner_that_cannot_be_made_is_a_failed_row(pytester: pytest.Pytester
     pytester.syspathinsert()
     result = pytester.runpytest_inprocess("--planner", "broken:Planner", "-k", "crossing")
     result.assert_outcomes(failed=1)
-    assert _row(result, "crossing")[1:] == ["failed", "-", "-", "-", "-", "-", "-", "-"]
+    assert _row(result, "crossing")[1:] == ["failed", *NOTHING]

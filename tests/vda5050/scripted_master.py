@@ -119,6 +119,8 @@ class ScriptedMaster:
                 continue
             serial = task["serialNumber"]
             if serial not in self.states:
+                if self.one_at_a_time:  # strictly in the tasks' order, whichever vehicle reported first
+                    break
                 continue
             order = self._order(serial, task)
             if order is None:
