@@ -28,8 +28,8 @@ The continuous phase catches what no sampled step shows: two fast vehicles that 
 within one step. It is conservative advancement along the poses interpolated between the step's start
 and end (centre along the straight line, heading along the shorter turn): from the start, advance by
 the distance divided by the most the distance can change per unit of the interpolation (the pair's
-relative travel plus each one's turn times its half diagonal), and again, until the footprints touch (within :data:`TOUCH` metres) or
-the step ends. Such an advance can never step over a touch. A pair needs it only when its circles'
+relative travel plus each one's turn times its half diagonal), and again, until the footprints touch
+(within :data:`TOUCH` metres) or the step ends. Such an advance can never step over a touch. A pair needs it only when its circles'
 distances at both ends add up to no more than that bound: otherwise it cannot have touched between.
 The interpolation is a chord of the true path (an arc in a curve): at the 0.1 s step of fleetsim's
 scenarios the two differ by millimetres.
@@ -320,8 +320,9 @@ class ContactMonitor:
         """The pair ``(p, q)``, not in contact before, at ``time`` (footprints ``a``, ``b``): if they touch
         now they begin a contact (unless the sweep began it already), else their distance is recorded.
         Their signed distance (or a lower bound of it beyond the limit), and the contact begun."""
-        distance, x, y = signed_distance(a, b, self._limit())  # beyond the limit, nothing counts
-        if distance > self._limit():
+        limit = self._limit()
+        distance, x, y = signed_distance(a, b, limit)  # beyond the limit, nothing counts
+        if distance > limit:
             return distance, None
         if distance > TOUCH:
             self._approach(p, q, distance, time, x, y)

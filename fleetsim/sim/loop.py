@@ -63,8 +63,8 @@ from fleetsim.sim.trace import Trace, TraceFile, plan_record
 __all__ = ["RunProgress", "run_scenario"]
 
 # Metres: two footprints farther apart than this do not count towards a run's clearance (it is "more").
-_POSE = attrgetter("x", "y", "heading")  # a vehicle state's pose, for the contact check
 _CLEARANCE_REACH = 2.0
+_POSE = attrgetter("x", "y", "heading")  # a vehicle state's pose, for the contact check
 
 
 @dataclass(frozen=True, slots=True)
