@@ -83,6 +83,24 @@ def _add_layout_options(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def _add_serving_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--port", type=_port, default=0, metavar="N", help="the loopback port to serve the page on (default: any free one)"
+    )
+    parser.add_argument("--no-open", action="store_true", help="serve the page without opening a browser on it")
+
+
+def _port(text: str) -> int:
+    try:
+        port = int(text)
+    except ValueError:
+        port = -1
+    if not 0 <= port <= 65535:
+        msg = f"{text!r} must be a port number from 0 (any free one) to 65535"
+        raise argparse.ArgumentTypeError(msg)
+    return port
+
+
 def _add_map_options(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group(
         "map options", "which part of a LIF or Open-RMF map to read (as map_options in a suite)"
@@ -217,6 +235,24 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="N",
         help="record every N-th step in full (steps with new plans, alerts or events always; default: 1)",
     )
+
+    view_parser = sub.add_parser(
+        "view",
+        help="watch a recorded run in the browser (play, pause, speed, step, scrub), or write it as one HTML file",
+        command="fleetsim.cli.view:view",
+    )
+    view_parser.add_argument("path", metavar="RUN", help="a run's artifact folder, its trace.jsonl or its result.json")
+    view_parser.add_argument(
+        "--html",
+        metavar="OUT.html",
+        help="write the viewer as one self-contained file (the run embedded; it makes no request) instead of serving it",
+    )
+    view_parser.add_argument(
+        "--suite",
+        metavar="SUITE::SCENARIO",
+        help="the scenario the run was of (default: the suite and scenario named in result.json or run.json)",
+    )
+    _add_serving_options(view_parser)
 
     orders_parser = sub.add_parser(
         "orders",

@@ -223,6 +223,10 @@ def _run_files(path: Path) -> tuple[Path, Path | None]:
         trace = path / TRACE_FILE
         if not trace.is_file():
             raise UsageError(f"{path}: no {TRACE_FILE} in this folder (the run did not keep its trace)")
+    elif path.suffix == ".json":  # a run's result.json: its trace is beside it
+        trace = path.parent / TRACE_FILE
+        if not trace.is_file():
+            raise UsageError(f"{path}: no {TRACE_FILE} beside it (the run did not keep its trace)")
     else:
         trace = path
     result = trace.parent / RESULT_FILE

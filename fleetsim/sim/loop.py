@@ -359,20 +359,22 @@ def run_scenario(
     on_progress: Callable[[RunProgress], None] | None = None,
     stop: StopSignals | None = None,
     trace_file: Path | None = None,
+    watch: Callable[[str], None] | None = None,
 ) -> RunResult:
     """Simulate ``scenario`` with ``planner`` (a fresh instance) and judge the run against its ``expect``.
 
     A planner with a ``close()`` method (a planner process, say) is closed when the run ends, however it ends.
     ``stop``: the active ``StopSignals``; once it has received a signal, the run ends at the end of
     the step (``ended: "interrupted"``). ``trace_file``: where to write the trace while the run goes
-    (``TraceFile``); it holds every step written, however the run ends.
+    (``TraceFile``); it holds every step written, however the run ends. ``watch``: called with each trace
+    line as it is written, in the loop's thread (a live view: it may pace the run, never change it).
     """
     sink = TraceFile(trace_file) if trace_file is not None else None
     try:
         with PlannerGuard(planner_timeout) as guard, _COLLECTOR.spared(len(scenario.vehicles)):
             if stop is not None:
                 stop.guard = guard
-            return _simulate(scenario, planner, guard, planner_name, keep_trace, on_progress, stop, sink)
+            return _simulate(scenario, planner, guard, planner_name, keep_trace, on_progress, stop, sink, watch)
     finally:
         if stop is not None:
             stop.guard = None
@@ -445,11 +447,13 @@ def _simulate(
     on_progress: Callable[[RunProgress], None] | None,
     stop: StopSignals | None,
     sink: TraceFile | None,
+    watch: Callable[[str], None] | None = None,
 ) -> RunResult:
     started = time.perf_counter()
     run = _Run(scenario, planner, guard, keep_trace)
     _COLLECTOR.set_aside()
     run.trace.sink = sink
+    run.trace.watcher = watch
     settings = scenario.settings
     dt = settings.time_step
     period = max(1, round(settings.planning_period / dt))

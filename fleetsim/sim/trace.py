@@ -14,7 +14,7 @@ import json
 import os
 import time
 from bisect import bisect_left
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from itertools import chain
 from pathlib import Path
@@ -271,12 +271,17 @@ class Trace:
     checkpoints: list[tuple[int, str]] = field(default_factory=list)  # (step, digest so far)
     steps: int = 0
     sink: TraceFile | None = None
+    # Called with each line once it is written (the header, then each step's, after the sink's flush): a
+    # live view, which may hold the run there (a paused page) and must not change anything.
+    watcher: Callable[[str], None] | None = None
     _hash: Any = field(default_factory=hashlib.sha256)
     _last: dict[int, VehicleRecord] = field(default_factory=dict)
 
     def begin(self, header: dict[str, Any]) -> None:
         header_line = json.dumps({"format": TRACE_FORMAT, **header}, separators=(",", ":"), sort_keys=True)
         self._write(header_line.encode("ascii"))
+        if self.watcher is not None:
+            self.watcher(header_line)
 
     def record(
         self,
@@ -301,7 +306,8 @@ class Trace:
             if changed:
                 encoded.append(_encode_step(changed)[1:-1])
         rest = _encode_step([list(plans), list(events)])  # "[[plans],[events]]"
-        self._write(b"[%d,[%b],%b" % (step, b",".join(encoded), rest[1:]))
+        line = b"[%d,[%b],%b" % (step, b",".join(encoded), rest[1:])
+        self._write(line)
         self.steps = step + 1
         sink = self.sink
         if self.steps % CHECKPOINT_EVERY == 0:
@@ -310,6 +316,8 @@ class Trace:
                 sink.flush()
         elif sink is not None and sink.due:
             sink.flush()
+        if self.watcher is not None:
+            self.watcher(line.decode("ascii"))
 
     def _write(self, line: bytes) -> None:
         """One line (ASCII: the header and step lines escape anything else) into the hash and to whoever

@@ -1,0 +1,183 @@
+"""What the viewer page draws, as one JSON document made from a run's trace (``fleetsim-view/1``).
+
+The page (:mod:`fleetsim.view.page`) knows nothing of fleetsim's objects: it reads this document, which
+is made from the trace format (:mod:`fleetsim.recording.replay` gives the fleet at the end of every step)
+and the result document. Static parts come first — the map's segments, the vehicles' footprints and
+colours, the tasks — then one compact record per step, holding only what changed in it, as the trace
+does:
+
+``[step, poses, plans, alerts, events, disturbed]``
+
+- ``poses``: flat ``[vehicle, x mm, y mm, heading centidegrees, speed mm/s, segment, way]`` for each vehicle
+  whose pose changed (every vehicle at step 0); ``way`` is ``2 * backward + reverse`` (traverse, progress).
+- ``plans``: ``[vehicle, [[segment, way, fixed, task], ...]]`` for each vehicle whose plan was accepted
+  or passed a leg in the step (``task``: the task the leg completes, or ``null``).
+- ``alerts``: the collision alerts in force, ``[segment, [primary], [secondary]]`` each, when they changed
+  (``null`` when not).
+- ``events``: the trace's events of the step, as they are.
+- ``disturbed``: ``{vehicle: "stop" | "slow"}`` when it changed, else ``null``.
+
+A live run sends the same static part first, then the same step records as they happen
+(:mod:`fleetsim.view.live`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping, Sequence
+from typing import Any
+
+from fleetsim.enums import Direction, Progress, Traverse
+from fleetsim.recording.colours import hex_colour, vehicle_colours
+from fleetsim.recording.picture import failure_step, stuck_details
+from fleetsim.recording.replay import Frame
+from fleetsim.scenario import Scenario
+from fleetsim.sim.result import Failure
+
+__all__ = ["VIEW_FORMAT", "StepRecords", "outcome_part", "scene_part", "view_document"]
+
+VIEW_FORMAT = "fleetsim-view/1"
+
+_DIRECTION = {Direction.BOTH: 0, Direction.FORWARD: 1, Direction.BACKWARD: 2}
+_CENTIDEGREES_PER_RADIAN = 18000.0 / math.pi
+
+
+def _way(traverse: Traverse, progress: Progress) -> int:
+    return 2 * (traverse is Traverse.BACKWARD) + (progress is Progress.REVERSE)
+
+
+def scene_part(scenario: Scenario, about: Mapping[str, Any]) -> dict[str, Any]:
+    """The static part of a run's view: ``about`` (planner, suite, ...), the map, vehicles and tasks."""
+    layout = scenario.layout
+    segments = []
+    for sid in sorted(layout.segments):
+        segment = layout.segments[sid]
+        points = [round(c, 3) for point in segment.waypoints for c in point]
+        segments.append([sid, segment.shape.value, _DIRECTION[segment.direction], " / ".join(segment.names), points])
+    colours = vehicle_colours(scenario)
+    vehicles = [
+        [v.id, v.type.name, round(v.type.length, 3), round(v.type.width, 3), hex_colour(colours[v.id])]
+        for v in sorted(scenario.vehicles, key=lambda v: v.id)
+    ]
+    tasks = [[t.id, t.vehicle_id, t.goal_segment] for t in sorted(scenario.tasks, key=lambda t: t.id)]
+    return {
+        "format": VIEW_FORMAT,
+        "scenario": scenario.name,
+        **{key: about[key] for key in sorted(about)},
+        "time_step": scenario.settings.time_step,
+        "time_limit": scenario.settings.time_limit,
+        "segments": segments,
+        "vehicles": vehicles,
+        "tasks": tasks,
+    }
+
+
+class StepRecords:
+    """Frames as the document's step records, each holding what changed since the one before."""
+
+    def __init__(self) -> None:
+        self._alerts: tuple[Any, ...] | None = None
+        self._disturbed: Mapping[int, str] | None = None
+
+    def record(self, frame: Frame) -> list[Any]:
+        first = self._alerts is None
+        poses: list[int] = []
+        for vid in sorted(frame.poses) if first else frame.moved:
+            pose = frame.poses[vid]
+            poses += (
+                vid,
+                round(pose.x * 1000.0),
+                round(pose.y * 1000.0),
+                round(pose.heading * _CENTIDEGREES_PER_RADIAN),
+                round(pose.speed * 1000.0),
+                pose.segment,
+                _way(pose.traverse, pose.progress),
+            )
+        plans = [
+            [
+                vid,
+                [
+                    [leg.segment, _way(leg.traverse, leg.progress), int(leg.fixed), leg.goal_for_task]
+                    for leg in frame.plans[vid].legs
+                ],
+            ]
+            for vid in (sorted(frame.plans) if first else frame.replanned)
+        ]
+        alerts = None
+        if first or frame.alerts != self._alerts:
+            alerts = [[a.segment, list(a.primary), list(a.secondary)] for a in frame.alerts]
+            self._alerts = frame.alerts
+        disturbed = None
+        if first or frame.disturbed != self._disturbed:
+            disturbed = {str(vid): kind for vid, kind in sorted(frame.disturbed.items())}
+            self._disturbed = frame.disturbed
+        return [frame.step, poses, plans, alerts, [list(event) for event in frame.events], disturbed]
+
+
+def outcome_part(
+    document: Mapping[str, Any], failures: Sequence[Failure], time_step: float, last_step: int
+) -> dict[str, Any]:
+    """How the run ended, for the page: status, the failures, the moment to jump to, the contacts and who
+    waits for whom at the end (from ``result.json``'s document; empty for a run that never ended)."""
+    found = failure_step(failures, time_step, last_step) if failures else None
+    stuck = None
+    for failure in failures:
+        details = stuck_details(failure)
+        if details is not None:
+            stuck = _stuck(details, f"{failure.kind}: {failure.message}")
+            break
+    contacts = [
+        {
+            "time": float(f.details["time"]),
+            "x": float(f.details["x"]),
+            "y": float(f.details["y"]),
+            "vehicles": [int(v) for v in f.details["vehicles"]],
+        }
+        for f in failures
+        if f.kind == "contact" and {"time", "x", "y", "vehicles"} <= set(f.details)
+    ]
+    return {
+        "status": document.get("status"),
+        "ended": document.get("ended"),
+        "trace_hash": document.get("trace_hash"),
+        "failures": [{"kind": f.kind, "time": f.time, "message": f.message} for f in failures],
+        "failure": None
+        if found is None
+        else {"step": found[0], "kind": found[1].kind, "time": found[1].time, "message": found[1].message},
+        "contacts": contacts,
+        "stuck": stuck,
+    }
+
+
+def _stuck(details: Mapping[str, Any], headline: str) -> dict[str, Any]:
+    """Who waits for whom: ``[from, to, "wait-for" | "planned-near", in a cycle]`` relations, the root-cause
+    vehicles and the contested segments."""
+    cycles = details.get("cycles", ())
+    in_cycle = {(int(c[i]), int(c[(i + 1) % len(c)])) for c in cycles for i in range(len(c))}
+    relations = []
+    for finding in details.get("vehicles", ()):
+        source = int(finding["vehicle"])
+        for target in finding.get("blocked_by", ()):
+            relations.append([source, int(target), "wait-for", (source, int(target)) in in_cycle])
+        for target in finding.get("planned_near", ()):
+            relations.append([source, int(target), "planned-near", False])
+    return {
+        "headline": headline,
+        "relations": relations,
+        "roots": sorted({int(v) for root in details.get("roots", ()) for v in root.get("vehicles", ())}),
+        "contested": sorted({int(s) for f in details.get("vehicles", ()) for s in f.get("contested", ())}),
+    }
+
+
+def view_document(
+    scenario: Scenario,
+    frames: Iterable[Frame],
+    about: Mapping[str, Any],
+    outcome: Mapping[str, Any],
+    notes: Sequence[str] = (),
+) -> dict[str, Any]:
+    """The whole view of a recorded run: the scene, every step's record, how it ended and ``notes`` (a
+    trace that ends early says so here)."""
+    records = StepRecords()
+    steps = [records.record(frame) for frame in frames]
+    return {**scene_part(scenario, about), "live": False, "steps": steps, "outcome": dict(outcome), "notes": list(notes)}
