@@ -86,6 +86,8 @@ class FleetsimState:
     notes: list[str] = field(default_factory=list)
     comparison: Comparison | None = None
     stopped_by: int | None = None  # the stop signal that ended a scenario; the session ends after its report
+    live: tuple[float | None, int, bool] | None = None  # --fleetsim-live: (speed, port, open a browser)
+    _live_session: Any = None  # the page server, made for the first run
 
     # -- set-up -------------------------------------------------------------------------------------
 
@@ -121,7 +123,20 @@ class FleetsimState:
             raise pytest.UsageError(
                 f"--fleetsim-record-every={option.fleetsim_record_every} must be a whole number of steps >= 1"
             )
+        live = None
+        if option.fleetsim_live:
+            from fleetsim.view.live import parse_speed
+
+            if getattr(option, "numprocesses", None) or hasattr(config, "workerinput"):
+                raise pytest.UsageError(
+                    "--fleetsim-live shows one run at a time, in this process: run without -n (pytest-xdist)"
+                )
+            try:
+                live = (parse_speed(option.fleetsim_speed), option.fleetsim_live_port, not option.fleetsim_no_open)
+            except ValueError as error:
+                raise pytest.UsageError(f"--fleetsim-{error}") from None
         return cls(
+            live=live,
             config=config,
             planner=planner,
             update_hashes=bool(option.fleetsim_update_hashes),
@@ -197,6 +212,7 @@ class FleetsimState:
                 stop=stop,
                 trace_file=trace_file,
                 require_recorded=self.require_hashes,
+                watch=self._watch(scenario, source.identity, item, stop),
             )
         except PlannerSpecError as error:  # the planner could not even be made
             if trace_file is not None:
@@ -204,6 +220,8 @@ class FleetsimState:
             self._describe_unrun(item, source.identity, load_error=False)
             raise ScenarioFailed(_story(f"planner-error: {error}", heading, error.details)) from None
         result = checked.result
+        if self._live_session is not None:
+            self._tell(self._live_session.end(scenario, result))
         if self.record == "all" or (self.record == "failed" and not result.passed):
             result = self._write_artifacts(item, scenario, result, streamed=trace_file is not None)
         elif trace_file is not None:
@@ -212,6 +230,30 @@ class FleetsimState:
         self._describe(item, result, checked.record, source.identity, unrecorded=unrecorded)
         if not result.passed:
             raise ScenarioFailed(failure_report(result, heading=heading))
+
+    def _watch(self, scenario: Scenario, identity: str, item: ScenarioItem, stop: StopSignals) -> Any:
+        """With --fleetsim-live: the trace watcher that paces this run and shows it (the page is served from
+        the first run on); else None."""
+        if self.live is None:
+            return None
+        if self._live_session is None:
+            from fleetsim.view.session import LiveSession
+
+            speed, port, open_browser = self.live
+            self._live_session = LiveSession(speed, port=port, open_browser=open_browser, say=self._tell)
+        about = {"planner": identity, "suite": _relative(self.config, item.path)}
+        return self._live_session.begin(scenario, about, lambda: stop.requested)
+
+    def _tell(self, text: str) -> None:
+        """A line for the user at once, past pytest's capture (the live page's address)."""
+        reporter = self.config.pluginmanager.get_plugin("terminalreporter")
+        if reporter is not None:
+            reporter.write_line(text)
+
+    def close_live(self) -> None:
+        if self._live_session is not None:
+            self._live_session.close()
+            self._live_session = None
 
     def _hunt(self, item: ScenarioItem, make: Any, identity: str, heading: str, stop: StopSignals) -> None:
         """A generated entry: Hypothesis hunts for a failing scenario; a shrunk one is saved and reported."""
@@ -282,8 +324,16 @@ class FleetsimState:
     ) -> RunResult:
         folder = artifact_folder(self.artifacts, item.path, item.spec.name)
         extra = {"suite": str(item.path), "nodeid": item.nodeid, "line": item.spec.line}
+        from fleetsim.view import write_view_file
+
         paths = write_run_artifacts(
-            folder, result, extra, scenario=scenario, record_every=self.record_every, streamed=streamed
+            folder,
+            result,
+            extra,
+            scenario=scenario,
+            record_every=self.record_every,
+            streamed=streamed,
+            more=write_view_file,
         )
         shown = {kind: _relative(self.config, Path(path)) for kind, path in paths.items()}
         return replace(result, artifacts={**result.artifacts, **shown})
@@ -382,6 +432,7 @@ class FleetsimState:
 
     def finish(self, session: pytest.Session) -> None:
         """Write what the session recorded and gate on regressions (controller only)."""
+        self.close_live()
         if not self.is_controller:
             return
         ordered = self.ordered()

@@ -96,6 +96,34 @@ def pytest_addoption(parser: pytest.Parser) -> None:
         help="skip the scenarios that need a planner when none is given (default: a usage error before any "
         "test runs, so a forgotten --planner cannot pass)",
     )
+    group.addoption(
+        "--fleetsim-live",
+        action="store_true",
+        dest="fleetsim_live",
+        help="pace each scenario's run against the wall clock and show it live in the browser (fleetsim view's "
+        "page: pause, step, speed); results and hashes are those of a headless run; not with -n",
+    )
+    group.addoption(
+        "--fleetsim-speed",
+        dest="fleetsim_speed",
+        metavar="X",
+        default="1",
+        help="with --fleetsim-live: simulated seconds per wall second, or 'max' (default: 1)",
+    )
+    group.addoption(
+        "--fleetsim-live-port",
+        dest="fleetsim_live_port",
+        metavar="N",
+        type=int,
+        default=0,
+        help="with --fleetsim-live: the loopback port of the page (default: any free one)",
+    )
+    group.addoption(
+        "--fleetsim-no-open",
+        action="store_true",
+        dest="fleetsim_no_open",
+        help="with --fleetsim-live: do not open a browser on the page",
+    )
     parser.addini("fleetsim_planner", "the planner under test (module:attr) when --planner is not given")
     parser.addini(
         "fleetsim_skip_without_planner",
@@ -140,6 +168,7 @@ def _asked_for(config: pytest.Config) -> bool:
         or option.fleetsim_compare
         or option.fleetsim_compare_fail
         or option.fleetsim_record_every != 1
+        or option.fleetsim_live
     )
 
 

@@ -83,9 +83,13 @@ def _add_layout_options(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def _add_serving_options(parser: argparse.ArgumentParser) -> None:
+def _add_serving_options(parser: argparse.ArgumentParser | argparse._ArgumentGroup) -> None:
     parser.add_argument(
-        "--port", type=_port, default=0, metavar="N", help="the loopback port to serve the page on (default: any free one)"
+        "--port",
+        type=_port,
+        default=0,
+        metavar="N",
+        help="the loopback port to serve the page on (default: any free one)",
     )
     parser.add_argument("--no-open", action="store_true", help="serve the page without opening a browser on it")
 
@@ -99,6 +103,15 @@ def _port(text: str) -> int:
         msg = f"{text!r} must be a port number from 0 (any free one) to 65535"
         raise argparse.ArgumentTypeError(msg)
     return port
+
+
+def _speed(text: str) -> float | None:
+    from fleetsim.view.live import parse_speed
+
+    try:
+        return parse_speed(text)
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error).removeprefix("speed=")) from None
 
 
 def _add_map_options(parser: argparse.ArgumentParser) -> None:
@@ -300,6 +313,31 @@ def build_parser() -> argparse.ArgumentParser:
         default=1,
         metavar="N",
         help="with --record: record every N-th step (steps with new plans, alerts or events always; default: 1)",
+    )
+
+    live = run_parser.add_argument_group("watching a run live (fleetsim view's page, while it runs)")
+    live.add_argument(
+        "--live",
+        action="store_true",
+        help="pace each run against the wall clock and show it in the browser while it runs "
+        "(the page can pause, step and change the speed; results and hashes are those of a headless run)",
+    )
+    live.add_argument(
+        "--speed",
+        type=_speed,
+        default=1.0,
+        metavar="X",
+        help="with --live: simulated seconds per wall second, or 'max' for as fast as it goes (default: 1)",
+    )
+    _add_serving_options(live)
+    live.add_argument(
+        "--foxglove",
+        type=_port,
+        nargs="?",
+        const=8765,
+        metavar="PORT",
+        help="with --live: also serve the run's topics over the Foxglove WebSocket protocol on PORT "
+        "(default 8765; 0: any free port); needs the 'live' extra (foxglove-sdk)",
     )
 
     # Its own parsers (a sweep, or "sweep report RESULTS") live in fleetsim.cli.sweep; imported when used.

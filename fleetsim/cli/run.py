@@ -20,7 +20,7 @@ import sys
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any, TextIO
+from typing import TYPE_CHECKING, Any, TextIO
 
 from fleetsim.errors import FleetsimError, LoadError
 from fleetsim.exec.spec import load_planner_factory
@@ -43,6 +43,9 @@ from fleetsim.sim.loop import RunProgress, run_scenario
 from fleetsim.sim.planner_spec import PlannerFactory, PlannerSpecError
 from fleetsim.sim.report import failure_lines, format_table, summary_cells
 from fleetsim.sim.result import Failure, RunResult
+
+if TYPE_CHECKING:
+    from fleetsim.view.session import LiveSession
 
 __all__ = ["UsageError", "run"]
 
@@ -106,10 +109,18 @@ def run(args: argparse.Namespace) -> int:
     failed run; no further scenario runs) 130 or 143.
     """
     with StopSignals() as stop:
-        return _run_all(args, stop)
+        if not getattr(args, "live", False):
+            return _run_all(args, stop)
+        from fleetsim.view.session import LiveSession
+
+        say = lambda text: print(text, file=sys.stderr, flush=True)  # noqa: E731
+        with LiveSession(
+            args.speed, port=args.port, open_browser=not args.no_open, foxglove_port=args.foxglove, say=say
+        ) as live:
+            return _run_all(args, stop, live)
 
 
-def _run_all(args: argparse.Namespace, stop: StopSignals) -> int:
+def _run_all(args: argparse.Namespace, stop: StopSignals, live: LiveSession | None = None) -> int:
     timeout = args.planner_timeout or None  # 0 switches the timeout off
     factory = load_planner_factory(args.planner, call_timeout=timeout)
     targets = _targets(args.suites)
@@ -122,7 +133,7 @@ def _run_all(args: argparse.Namespace, stop: StopSignals) -> int:
         if stop.requested:
             break
         with progress.scenario(index, target.label):
-            outcome = _run_target(target, factory, timeout, progress.update, record, counterexamples, stop)
+            outcome = _run_target(target, factory, timeout, progress.update, record, counterexamples, stop, live)
         progress.done(outcome)
         outcomes.append(outcome)
         if args.json:
@@ -195,6 +206,7 @@ def _run_target(
     record: tuple[Path, int] | None = None,
     counterexamples: tuple[Path, int] = (DEFAULT_ARTIFACTS, 1),
     stop: StopSignals | None = None,
+    live: LiveSession | None = None,
 ) -> _Outcome:
     if target.error is not None:
         return _Outcome(target, _load_failure(target.label, factory.spec, target.error), loaded=False)
@@ -213,12 +225,20 @@ def _run_target(
     trace_file = (
         start_run_folder(folder, {**extra, "scenario": target.spec.name, "planner": factory.spec}) if folder else None
     )
+    about = {"planner": factory.spec, "suite": str(target.suite_path)}
+    watch = live.begin(scenario, about, lambda: stop is not None and stop.requested) if live else None
     result = run_scenario(
         scenario, factory(), planner_name=factory.spec, planner_timeout=timeout, on_progress=on_progress,
-        keep_trace=record is not None, stop=stop, trace_file=trace_file,
+        keep_trace=record is not None, stop=stop, trace_file=trace_file, watch=watch,
     )  # fmt: skip
+    if live is not None:
+        print(live.end(scenario, result), file=sys.stderr, flush=True)
     if record is not None and folder is not None:
-        paths = write_run_artifacts(folder, result, extra, scenario=scenario, record_every=record[1], streamed=True)
+        from fleetsim.view import write_view_file
+
+        paths = write_run_artifacts(
+            folder, result, extra, scenario=scenario, record_every=record[1], streamed=True, more=write_view_file
+        )
         result = replace(result, artifacts={**result.artifacts, **paths})
     return _Outcome(target, result, loaded=True)
 

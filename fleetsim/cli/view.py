@@ -10,32 +10,26 @@ import argparse
 import sys
 import webbrowser
 from pathlib import Path
-from typing import Any
 
 from fleetsim.cli.recorded import RecordedRun, read_recorded_run
 from fleetsim.cli.run import UsageError
 from fleetsim.load.text import write_text_atomically
-from fleetsim.recording.replay import TraceError, replay
+from fleetsim.recording.replay import TraceError
 
 __all__ = ["view", "view_page"]
-
-VIEW_FILE = "view.html"
 
 
 def view_page(run: RecordedRun) -> str:
     """The self-contained viewer page of a recorded run."""
-    from fleetsim.view import outcome_part, recorded_page, view_document
+    from fleetsim.view import recorded_view
 
-    scenario = run.scenario
-    about: dict[str, Any] = {key: run.document[key] for key in ("planner", "suite") if isinstance(run.document.get(key), str)}
-    outcome = outcome_part(run.document, run.failures, scenario.settings.time_step, run.last_step)
+    document = dict(run.document)
     if run.unfinished:
-        outcome["ended"] = "killed"
+        document["ended"] = "killed"
     try:
-        document = view_document(scenario, replay(scenario, run.lines), about, outcome, run.notes)
+        return recorded_view(run.scenario, run.lines, document, run.failures, run.notes)
     except TraceError as error:
         raise UsageError(f"{run.trace_path}: {error}; name the run's scenario with --suite SUITE::SCENARIO") from None
-    return recorded_page(document)
 
 
 def view(args: argparse.Namespace) -> int:

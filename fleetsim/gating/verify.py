@@ -62,16 +62,17 @@ def run_checked(
     stop: StopSignals | None = None,
     trace_file: Path | None = None,
     require_recorded: bool = False,
+    watch: Callable[[str], None] | None = None,
 ) -> CheckedRun:
     """Run ``scenario`` with a planner from ``make_planner`` and gate its hash as ``mode`` says.
 
     ``record_hint`` completes "record it with ..." in the messages for a missing or changed hash. A
     missing hash fails the run only with ``require_recorded`` (and only a run that passed its checks:
     otherwise its failures are the story). ``stop`` and ``trace_file`` are :func:`run_scenario`'s (the
-    trace file is the first run's).
+    trace file is the first run's). ``watch``: the first run's trace watcher (a live view).
     """
 
-    def run(trace: Path | None = None) -> RunResult:
+    def run(trace: Path | None = None, watched: Callable[[str], None] | None = None) -> RunResult:
         keep = keep_trace or mode == "update"  # a second run is compared line by line
         return run_scenario(
             scenario,
@@ -81,9 +82,10 @@ def run_checked(
             keep_trace=keep,
             stop=stop,
             trace_file=trace,
+            watch=watched,
         )
 
-    result = run(trace_file)
+    result = run(trace_file, watch)
     if mode == "ignore" or result.ended in ("planner-error", "interrupted"):
         return CheckedRun(result)  # a broken or cut-short run has no behaviour worth pinning
     if result.paced is not None:

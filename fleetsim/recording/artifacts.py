@@ -24,7 +24,7 @@ from __future__ import annotations
 import json
 import re
 import shutil
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -112,13 +112,15 @@ def write_run_artifacts(
     scenario: Scenario | None = None,
     record_every: int = 1,
     streamed: bool = False,
+    more: Callable[[Path, Scenario, RunResult, Mapping[str, Any]], Mapping[str, str]] | None = None,
 ) -> dict[str, str]:
     """Write the run's files into ``folder`` (replacing what was there); their paths by kind.
 
     ``extra`` adds keys to ``result.json`` (the suite file, the pytest node id, ...). With the run's
     ``scenario`` and a kept trace, the recording (every ``record_every``-th step) and, for a failed run,
     the failure picture are written too. ``streamed``: the folder was made by :func:`start_run_folder`
-    and holds the run's trace already; it is kept.
+    and holds the run's trace already; it is kept. ``more(folder, scenario, result, extra)``: writes
+    further files of a run with a trace and a scenario (the viewer page, ``fleetsim.view``) and names them.
     """
     if not streamed:
         if folder.exists():
@@ -152,6 +154,8 @@ def write_run_artifacts(
         )
         write_text_atomically(folder / RVIZ_FILE, rviz_config(scenario, RVIZ_CONFIG.read_text(encoding="utf-8")))
         paths["rviz"] = str(folder / RVIZ_FILE)
+        if more is not None:
+            paths.update(more(folder, scenario, result, extra or {}))
     _write_result(folder, result, paths, extra)
     (folder / RUN_FILE).unlink(missing_ok=True)
     return paths

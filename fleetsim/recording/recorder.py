@@ -63,6 +63,7 @@ __all__ = [
     "fleet_urdf",
     "partial_path",
     "record_mcap",
+    "write_frame",
 ]
 
 
@@ -225,7 +226,7 @@ def _write_frames(
         while due < len(pending) and float(pending[due]["time"]) <= frame.time + 1e-9:
             due += 1  # a contact belongs to the step it began in: the one that ends at or after it
         if tick or frame.plans_changed or frame.events or alerts_changed or due > shown:
-            _write_frame(bag, scene, frame, first=first, tick=tick, alerts_changed=alerts_changed)
+            write_frame(bag, scene, frame, first=first, tick=tick, alerts_changed=alerts_changed)
             shown_alerts = frame.alerts
             full += tick
         if due > shown:
@@ -246,7 +247,10 @@ def _write_frames(
     return full
 
 
-def _write_frame(bag: _Bag, scene: Scene, frame: Frame, *, first: bool, tick: bool, alerts_changed: bool) -> None:
+def write_frame(bag: Any, scene: Scene, frame: Frame, *, first: bool, tick: bool, alerts_changed: bool) -> None:
+    """One frame's messages into ``bag`` (anything with ``write(topic, time_ns, message)`` and
+    ``write_bytes(topic, time_ns, data)``: this module's MCAP writer, or a live Foxglove server):
+    ``first`` adds the latched topics, ``tick`` the transforms and sim time."""
     time_ns = round(frame.time * 1e9)
     time = m.stamp(time_ns)
     bag.write_bytes("/clock", time_ns, pack_clock(time))

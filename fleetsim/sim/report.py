@@ -208,7 +208,7 @@ def route_error_lines(result: RunResult, shown: int = 10) -> list[str]:
     return lines
 
 
-_ARTIFACT_ORDER = ("picture", "mcap", "rviz", "trace", "result")
+_ARTIFACT_ORDER = ("picture", "view", "mcap", "rviz", "trace", "result")
 
 
 def failure_lines(result: RunResult, shown: int, more_hint: str) -> list[str]:

@@ -44,7 +44,7 @@ class Worst:
     difference: float  # throughput, candidate - baseline (tasks/h)
     status: str
     failure: str
-    links: Mapping[str, str]  # folder, picture, mcap: paths relative to the report, for those that exist
+    links: Mapping[str, str]  # folder, view, picture, mcap: paths relative to the report, for those that exist
 
 
 @dataclass(frozen=True, slots=True)
@@ -121,7 +121,7 @@ def _first_failure(row: Mapping[str, Any]) -> str:
 def _links(row: Mapping[str, Any], where: Path) -> dict[str, str]:
     links = {}
     for kind, path in (row.get("artifacts") or {}).items():
-        if kind in ("folder", "picture", "mcap") and Path(path).exists():
+        if kind in ("folder", "view", "picture", "mcap") and Path(path).exists():
             links[kind] = Path(os.path.relpath(path, where)).as_posix()
     return links
 
@@ -211,6 +211,7 @@ def markdown(report: Report) -> str:
             lines += ["Where it does worst:", ""]
             for w in worst:
                 link = f" ([run]({w.links['folder']}))" if "folder" in w.links else ""
+                link += f" ([watch it]({w.links['view']}))" if "view" in w.links else ""
                 lines.append(
                     f"- `{w.id}`: {w.status}, throughput {w.difference:+.4g} tasks/h{link}"
                     + (f" — {w.failure[:120]}" if w.failure else "")

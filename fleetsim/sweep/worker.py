@@ -21,6 +21,7 @@ from fleetsim.sim.planner_spec import PlannerSpecError
 from fleetsim.sim.result import Ending, Failure, RunResult
 from fleetsim.sweep.items import RunItem
 from fleetsim.sweep.payload import scenario_from_payload
+from fleetsim.view import write_view_file
 
 __all__ = ["failed_row", "planner_folder", "result_row", "run_item"]
 
@@ -48,7 +49,9 @@ def run_item(item: RunItem) -> dict[str, Any]:
         )  # fmt: skip
         artifacts: dict[str, str] = {}
         if folder is not None and (item["record"] == "all" or not result.passed):
-            artifacts = write_run_artifacts(folder, result, {"id": item["id"]}, scenario=scenario, streamed=True)
+            artifacts = write_run_artifacts(
+                folder, result, {"id": item["id"]}, scenario=scenario, streamed=True, more=write_view_file
+            )
         elif folder is not None:
             discard_run_folder(folder, Path(item["artifacts"]))
         return result_row(item, replace(result, artifacts=artifacts))

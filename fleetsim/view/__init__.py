@@ -6,12 +6,14 @@ the page, :mod:`~fleetsim.view.server` serves it on a loopback port and :mod:`~f
 live run and streams it to the pages watching.
 """
 
+from fleetsim.view.artifact import VIEW_FILE, recorded_view, write_view_file
 from fleetsim.view.document import VIEW_FORMAT, StepRecords, outcome_part, scene_part, view_document
 from fleetsim.view.live import LiveRun, Pacer
 from fleetsim.view.page import live_page, recorded_page
 from fleetsim.view.server import PageServer
 
 __all__ = [
+    "VIEW_FILE",
     "VIEW_FORMAT",
     "LiveRun",
     "Pacer",
@@ -20,6 +22,8 @@ __all__ = [
     "live_page",
     "outcome_part",
     "recorded_page",
+    "recorded_view",
     "scene_part",
     "view_document",
+    "write_view_file",
 ]

@@ -180,4 +180,10 @@ def view_document(
     trace that ends early says so here)."""
     records = StepRecords()
     steps = [records.record(frame) for frame in frames]
-    return {**scene_part(scenario, about), "live": False, "steps": steps, "outcome": dict(outcome), "notes": list(notes)}
+    return {
+        **scene_part(scenario, about),
+        "live": False,
+        "steps": steps,
+        "outcome": dict(outcome),
+        "notes": list(notes),
+    }

@@ -25,12 +25,29 @@ from typing import Any
 
 from fleetsim.recording.replay import replay
 from fleetsim.scenario import Scenario
+from fleetsim.sim.result import Pacing
 from fleetsim.view.document import StepRecords, scene_part
 
-__all__ = ["LiveRun", "Pacer"]
+__all__ = ["FASTEST", "LiveRun", "Pacer", "parse_speed"]
 
+FASTEST = "max"  # the speed word for "as fast as it goes"
+SLOWEST, QUICKEST = 0.01, 1000.0  # the speeds a run may be paced at
 _POLL = 0.1  # seconds between looks at the stop request while waiting
 _END = object()
+
+
+def parse_speed(text: str) -> float | None:
+    """A speed as the command line gives it: a multiple of real time, or ``max`` (``None``: unpaced)."""
+    if text.strip() == FASTEST:
+        return None
+    try:
+        speed = float(text)
+    except ValueError:
+        speed = float("nan")
+    if not SLOWEST <= speed <= QUICKEST:
+        msg = f"speed={text!r} must be a multiple of real time from {SLOWEST:g} to {QUICKEST:g}, or {FASTEST!r}"
+        raise ValueError(msg)
+    return speed
 
 
 class Pacer:
@@ -42,23 +59,37 @@ class Pacer:
         self.paused = False
         self._allowed = 0  # steps a page asked for while paused
         self._anchor: tuple[float, float] | None = None  # (wall clock, sim time) the pace counts from
-        self._stopped = stopped
+        self.stopped = stopped
         self.shown = 0.0  # sim time of the last step let through
+        self.started_at = speed  # the speed the run began at (its result's ``paced``)
+        self.lag = 0.0  # the most wall seconds a step came behind its moment
+        self.late_steps = 0  # steps more than a step's wall time behind
 
     def start(self) -> None:
+        """A run begins: the pace counts from now."""
         with self._changed:
             self._anchor = (time.monotonic(), 0.0)
+            self.shown, self.lag, self.late_steps, self.started_at = 0.0, 0.0, 0, self.speed
+
+    def pacing(self, time_step: float) -> Pacing | None:
+        """How the run kept its pace (``None`` for a run that went as fast as it could)."""
+        if self.started_at is None:
+            return None
+        return Pacing(self.started_at, round(self.lag, 6), self.late_steps, ())
 
     def wait_for_moment(self, sim_time: float) -> None:
         """Until the wall clock reaches the moment of ``sim_time`` at the current speed (returns at once
         when paused, stopped or as fast as possible)."""
         with self._changed:
-            while not self.paused and self.speed is not None and not self._stopped():
+            while not self.paused and self.speed is not None and not self.stopped():
                 if self._anchor is None:
                     self._anchor = (time.monotonic(), 0.0)
                 wall, sim = self._anchor
                 left = wall + (sim_time - sim) / self.speed - time.monotonic()
                 if left <= 0:
+                    self.lag = max(self.lag, -left)
+                    if -left > (sim_time - self.shown) / self.speed:
+                        self.late_steps += 1
                     break
                 self._changed.wait(min(left, _POLL))
             self.shown = sim_time
@@ -66,7 +97,7 @@ class Pacer:
     def hold_while_paused(self) -> None:
         """While paused and no step was asked for; a step asked for is used up here."""
         with self._changed:
-            while self.paused and self._allowed == 0 and not self._stopped():
+            while self.paused and self._allowed == 0 and not self.stopped():
                 self._changed.wait(_POLL)
             if self.paused and self._allowed > 0:
                 self._allowed -= 1
@@ -107,8 +138,8 @@ class _Page:
 class LiveRun:
     """The live view of one or more runs in turn (``begin`` each), paced by one :class:`Pacer`."""
 
-    def __init__(self, speed: float | None, stopped: Callable[[], bool] = lambda: False) -> None:
-        self.pacer = Pacer(speed, stopped)
+    def __init__(self, speed: float | None) -> None:
+        self.pacer = Pacer(speed)
         self._lock = threading.Lock()
         self._pages: list[_Page] = []
         self._scene: dict[str, Any] | None = None
@@ -120,9 +151,11 @@ class LiveRun:
 
     # -- the loop's side ---------------------------------------------------------------------------
 
-    def begin(self, scenario: Scenario, about: Mapping[str, Any]) -> None:
-        """A new run is about to start: every page is shown its scene."""
+    def begin(self, scenario: Scenario, about: Mapping[str, Any], stopped: Callable[[], bool] = lambda: False) -> None:
+        """A new run is about to start: every page is shown its scene. ``stopped``: whether a stop was
+        asked for (a paused run's loop is then let go on, to end at its step)."""
         self.finish_steps()
+        self.pacer.stopped = stopped
         scene = {**scene_part(scenario, about), "live": True}
         with self._lock:
             self._scene, self._history, self._outcome = scene, [], None
@@ -160,6 +193,13 @@ class LiveRun:
             self._lines.put(_END)
             self._converter.join()
             self._converter = None
+
+    def close(self) -> None:
+        """The command is done: every page's connection is closed (the pages keep what they received)."""
+        self.finish_steps()
+        with self._lock:
+            for page in self._pages:
+                page.outbox.put(_END)
 
     def _convert(self, scenario: Scenario, lines: queue.SimpleQueue[Any]) -> None:
         def taken() -> Iterator[str]:
@@ -264,7 +304,7 @@ class LiveRun:
             value = message.get("value")
             if value is None:
                 pacer.set_speed(None)
-            elif isinstance(value, int | float) and not isinstance(value, bool) and 0 < value <= 1000:
+            elif isinstance(value, int | float) and not isinstance(value, bool) and SLOWEST <= value <= QUICKEST:
                 pacer.set_speed(float(value))
             else:
                 return

@@ -575,12 +575,13 @@
   }
 
   function frame(now) {
+    requestAnimationFrame(frame);
+    if (run === null) return;
     advance(now);
     if (dirty || player.playing || (live && !live.paused)) {
       dirty = false;
       draw(now);
     }
-    requestAnimationFrame(frame);
   }
 
   // -- the timeline, the events list, the tooltip ---------------------------------------------------
@@ -816,7 +817,8 @@
         live.paused = message.paused;
         live.speed = message.speed;
         const option = message.speed === null ? "max" : String(message.speed);
-        if ([...el("speed").options].some((o) => o.value === option)) el("speed").value = option;
+        if (![...el("speed").options].some((o) => o.value === option)) el("speed").add(new Option(`${option}\u00d7`, option));
+        el("speed").value = option;
         dirty = true;
       } else if (message.type === "end") {
         run.outcome = message.outcome;

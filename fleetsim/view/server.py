@@ -33,33 +33,19 @@ class PageServer:
         from websockets.sync.server import serve
 
         body = page.encode("utf-8")
-        self._page_response = lambda: Response(
-            HTTPStatus.OK,
-            "OK",
-            Headers(
-                [
-                    ("Content-Type", "text/html; charset=utf-8"),
-                    ("Content-Length", str(len(body))),
-                    ("Cache-Control", "no-store"),
-                ]
-            ),
-            body,
-        )
-        self._not_found = lambda path: Response(
-            HTTPStatus.NOT_FOUND,
-            "Not Found",
-            Headers([("Content-Type", "text/plain; charset=utf-8")]),
-            f"{path}: not here; the page is at /\n".encode(),
-        )
         self._on_socket = on_socket
+
+        def respond(status: HTTPStatus, kind: str, content: bytes) -> Any:
+            headers = [("Content-Type", kind), ("Content-Length", str(len(content))), ("Cache-Control", "no-store")]
+            return Response(status.value, status.phrase, Headers(headers), content)
 
         def process_request(connection: Any, request: Any) -> Any:
             path = request.path.split("?", 1)[0]
             if path in ("/", "/index.html"):
-                return self._page_response()
+                return respond(HTTPStatus.OK, "text/html; charset=utf-8", body)
             if path == "/live" and on_socket is not None:
                 return None  # the WebSocket handshake goes on
-            return self._not_found(path)
+            return respond(HTTPStatus.NOT_FOUND, "text/plain; charset=utf-8", f"{path}: the page is at /\n".encode())
 
         self._server = serve(
             self._handle, host, port, process_request=process_request, compression=None, max_size=2**20

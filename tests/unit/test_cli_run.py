@@ -330,6 +330,7 @@ def test_record_writes_each_runs_artifacts_and_a_picture_for_a_failed_one(
         "result.json",
         "run.mcap",
         "trace.jsonl",
+        "view.html",
     ]
     with (crossing / "run.mcap").open("rb") as stream:
         summary = make_reader(stream).get_summary()
