@@ -45,10 +45,15 @@ def write_view_file(folder: Path, scenario: Scenario, result: RunResult, extra: 
     if result.trace is None or not result.trace.lines:
         return {}
     document = {**result.to_dict(), **extra}
+    # The failures as result.json has them (its times rounded), so this page is the one fleetsim view makes.
+    failures = [
+        Failure(f["kind"], f["time"], f["message"], {k: v for k, v in f.items() if k not in ("kind", "time", "message")})
+        for f in document["failures"]
+    ]
     notes = []
     if result.ended == "interrupted":
         notes.append(f"the run was interrupted at t = {result.sim_time:.2f} s; it ends there")
     write_text_atomically(
-        folder / VIEW_FILE, recorded_view(scenario, result.trace.lines, document, result.failures, notes)
+        folder / VIEW_FILE, recorded_view(scenario, result.trace.lines, document, failures, notes)
     )
     return {"view": str(folder / VIEW_FILE)}

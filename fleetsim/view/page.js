@@ -885,6 +885,11 @@
       return { step: drawn.step, poses: out };
     };
     hook.seek = (step) => seek(step);
+    // where a vehicle is drawn, in CSS pixels from the canvas's top left corner
+    hook.screenOf = (id) => {
+      const i = run.index.get(id), p = run.state.pose;
+      return i === undefined ? null : [sx(p[4 * i]), sy(p[4 * i + 1])];
+    };
     requestAnimationFrame(frame);
   }
 
