@@ -13,7 +13,6 @@ from pathlib import Path
 from typing import Any
 
 from fleetsim.load.text import write_text_atomically
-from fleetsim.recording.replay import replay
 from fleetsim.scenario import Scenario
 from fleetsim.sim.result import Failure, RunResult
 from fleetsim.view.document import outcome_part, view_document
@@ -37,7 +36,7 @@ def recorded_view(
     about = {key: document[key] for key in ("planner", "suite") if isinstance(document.get(key), str)}
     last_step = len(lines) - 2
     outcome = outcome_part(document, failures, scenario.settings.time_step, last_step)
-    return recorded_page(view_document(scenario, replay(scenario, lines), about, outcome, notes))
+    return recorded_page(view_document(scenario, lines, about, outcome, notes))
 
 
 def write_view_file(folder: Path, scenario: Scenario, result: RunResult, extra: Mapping[str, Any]) -> dict[str, str]:
@@ -47,13 +46,13 @@ def write_view_file(folder: Path, scenario: Scenario, result: RunResult, extra: 
     document = {**result.to_dict(), **extra}
     # The failures as result.json has them (its times rounded), so this page is the one fleetsim view makes.
     failures = [
-        Failure(f["kind"], f["time"], f["message"], {k: v for k, v in f.items() if k not in ("kind", "time", "message")})
+        Failure(
+            f["kind"], f["time"], f["message"], {k: v for k, v in f.items() if k not in ("kind", "time", "message")}
+        )
         for f in document["failures"]
     ]
     notes = []
     if result.ended == "interrupted":
         notes.append(f"the run was interrupted at t = {result.sim_time:.2f} s; it ends there")
-    write_text_atomically(
-        folder / VIEW_FILE, recorded_view(scenario, result.trace.lines, document, failures, notes)
-    )
+    write_text_atomically(folder / VIEW_FILE, recorded_view(scenario, result.trace.lines, document, failures, notes))
     return {"view": str(folder / VIEW_FILE)}

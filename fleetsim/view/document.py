@@ -8,8 +8,9 @@ does:
 
 ``[step, poses, plans, alerts, events, disturbed]``
 
-- ``poses``: flat ``[vehicle, x mm, y mm, heading centidegrees, speed mm/s, segment, way]`` for each vehicle
-  whose pose changed (every vehicle at step 0); ``way`` is ``2 * backward + reverse`` (traverse, progress).
+- ``poses``: the trace's own records of the vehicles whose pose changed (every vehicle at step 0), as
+  they are: ``[vehicle, segment, traverse "f"|"b", progress "f"|"r", x mm, y mm, heading centidegrees,
+  speed mm/s]``.
 - ``plans``: ``[vehicle, [[segment, way, fixed, task], ...]]`` for each vehicle whose plan was accepted
   or passed a leg in the step (``task``: the task the leg completes, or ``null``).
 - ``alerts``: the collision alerts in force, ``[segment, [primary], [secondary]]`` each, when they changed
@@ -23,23 +24,25 @@ A live run sends the same static part first, then the same step records as they 
 
 from __future__ import annotations
 
-import math
-from collections.abc import Iterable, Mapping, Sequence
+import gc
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from typing import Any
 
+import orjson
+
 from fleetsim.enums import Direction, Progress, Traverse
+from fleetsim.planning.plans import FleetLeg, FleetPlan
 from fleetsim.recording.colours import hex_colour, vehicle_colours
 from fleetsim.recording.picture import failure_step, stuck_details
-from fleetsim.recording.replay import Frame
+from fleetsim.recording.replay import Frame, replay
 from fleetsim.scenario import Scenario
 from fleetsim.sim.result import Failure
 
-__all__ = ["VIEW_FORMAT", "StepRecords", "outcome_part", "scene_part", "view_document"]
+__all__ = ["VIEW_FORMAT", "StepRecords", "outcome_part", "records_of", "scene_part", "view_document"]
 
 VIEW_FORMAT = "fleetsim-view/1"
 
 _DIRECTION = {Direction.BOTH: 0, Direction.FORWARD: 1, Direction.BACKWARD: 2}
-_CENTIDEGREES_PER_RADIAN = 18000.0 / math.pi
 
 
 def _way(traverse: Traverse, progress: Progress) -> int:
@@ -78,31 +81,13 @@ class StepRecords:
     def __init__(self) -> None:
         self._alerts: tuple[Any, ...] | None = None
         self._disturbed: Mapping[int, str] | None = None
+        self._legs: dict[int, tuple[FleetLeg, list[Any]]] = {}  # id(leg) -> the leg and its record
 
-    def record(self, frame: Frame) -> list[Any]:
+    def record(self, frame: Frame, line: str) -> list[Any]:
+        """The record of ``frame``, whose trace line is ``line`` (its vehicle records are taken as they are)."""
         first = self._alerts is None
-        poses: list[int] = []
-        for vid in sorted(frame.poses) if first else frame.moved:
-            pose = frame.poses[vid]
-            poses += (
-                vid,
-                round(pose.x * 1000.0),
-                round(pose.y * 1000.0),
-                round(pose.heading * _CENTIDEGREES_PER_RADIAN),
-                round(pose.speed * 1000.0),
-                pose.segment,
-                _way(pose.traverse, pose.progress),
-            )
-        plans = [
-            [
-                vid,
-                [
-                    [leg.segment, _way(leg.traverse, leg.progress), int(leg.fixed), leg.goal_for_task]
-                    for leg in frame.plans[vid].legs
-                ],
-            ]
-            for vid in (sorted(frame.plans) if first else frame.replanned)
-        ]
+        poses = orjson.loads(line)[1]
+        plans = [[vid, self._plan(frame.plans[vid])] for vid in (sorted(frame.plans) if first else frame.replanned)]
         alerts = None
         if first or frame.alerts != self._alerts:
             alerts = [[a.segment, list(a.primary), list(a.secondary)] for a in frame.alerts]
@@ -112,6 +97,27 @@ class StepRecords:
             disturbed = {str(vid): kind for vid, kind in sorted(frame.disturbed.items())}
             self._disturbed = frame.disturbed
         return [frame.step, poses, plans, alerts, [list(event) for event in frame.events], disturbed]
+
+    def _plan(self, plan: FleetPlan) -> list[Any]:
+        # A plan that passed a leg keeps the same leg objects: each is encoded once.
+        legs = self._legs
+        encoded = []
+        for leg in plan.legs:
+            known = legs.get(id(leg))
+            if known is None or known[0] is not leg:
+                known = legs[id(leg)] = (
+                    leg,
+                    [leg.segment, _way(leg.traverse, leg.progress), int(leg.fixed), leg.goal_for_task],
+                )
+            encoded.append(known[1])
+        return encoded
+
+
+def records_of(frames: Iterable[Frame], lines: Sequence[str]) -> Iterator[list[Any]]:
+    """The step records of a trace's frames (``lines``: the trace, header first)."""
+    records = StepRecords()
+    for frame in frames:
+        yield records.record(frame, lines[frame.step + 1])
 
 
 def outcome_part(
@@ -171,15 +177,23 @@ def _stuck(details: Mapping[str, Any], headline: str) -> dict[str, Any]:
 
 def view_document(
     scenario: Scenario,
-    frames: Iterable[Frame],
+    lines: Sequence[str],
     about: Mapping[str, Any],
     outcome: Mapping[str, Any],
     notes: Sequence[str] = (),
 ) -> dict[str, Any]:
-    """The whole view of a recorded run: the scene, every step's record, how it ended and ``notes`` (a
-    trace that ends early says so here)."""
-    records = StepRecords()
-    steps = [records.record(frame) for frame in frames]
+    """The whole view of a recorded run whose trace is ``lines`` (header first): the scene, every step's
+    record, how it ended and ``notes`` (a trace that ends early says so here)."""
+    frames = replay(scenario, lines)
+    # Millions of small lists that live until the page is written and hold no cycles: the cyclic
+    # collector would walk them all again and again as they pile up (half the time of a large run).
+    paused = gc.isenabled()
+    gc.disable()
+    try:
+        steps = list(records_of(frames, lines))
+    finally:
+        if paused:
+            gc.enable()
     return {
         **scene_part(scenario, about),
         "live": False,

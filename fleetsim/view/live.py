@@ -202,13 +202,16 @@ class LiveRun:
                 page.outbox.put(_END)
 
     def _convert(self, scenario: Scenario, lines: queue.SimpleQueue[Any]) -> None:
+        last = [""]  # the line replay took last: the one of the frame it yields
+
         def taken() -> Iterator[str]:
             while (line := lines.get()) is not _END:
+                last[0] = line
                 yield line
 
         records = StepRecords()
         for frame in replay(scenario, taken()):
-            record = records.record(frame)
+            record = records.record(frame, last[0])
             with self._lock:
                 self._history.append(record)
                 for page in self._pages:

@@ -63,16 +63,17 @@
       return { minX, minY, maxX, maxY };
     }
     apply(into, record) {
-      const poses = record[1], pose = into.pose, index = this.index;
-      for (let k = 0; k < poses.length; k += 7) {
-        const i = index.get(poses[k]);
+      // the trace's records: [vehicle, segment, traverse f|b, progress f|r, x mm, y mm, heading cdeg, speed mm/s]
+      const pose = into.pose, index = this.index;
+      for (const r of record[1]) {
+        const i = index.get(r[0]);
         if (i === undefined) continue;
-        pose[4 * i] = poses[k + 1] / 1000;
-        pose[4 * i + 1] = poses[k + 2] / 1000;
-        pose[4 * i + 2] = poses[k + 3] * DEG;
-        pose[4 * i + 3] = poses[k + 4] / 1000;
-        into.segment[i] = poses[k + 5];
-        into.way[i] = poses[k + 6];
+        pose[4 * i] = r[4] / 1000;
+        pose[4 * i + 1] = r[5] / 1000;
+        pose[4 * i + 2] = r[6] * DEG;
+        pose[4 * i + 3] = r[7] / 1000;
+        into.segment[i] = r[1];
+        into.way[i] = 2 * (r[2] === "b") + (r[3] === "r");
       }
     }
     add(record) {
@@ -182,13 +183,19 @@
   const sx = (x) => (x - view.cx) * view.scale + view.width / 2;
   const sy = (y) => view.height / 2 - (y - view.cy) * view.scale;
 
+  // A polyline onto path c, in driving order (backward: last point first), leaving out points within a
+  // pixel of the last one drawn (a curve's many waypoints, zoomed out), never the last.
   function tracePoints(c, points, backward, join) {
     const n = points.length / 2;
+    let lastX = NaN, lastY = NaN;
     for (let k = 0; k < n; k++) {
       const j = backward ? n - 1 - k : k;
       const x = sx(points[2 * j]), y = sy(points[2 * j + 1]);
       if (k === 0 && !join) c.moveTo(x, y);
-      else c.lineTo(x, y);
+      else if (k === n - 1 || Math.abs(x - lastX) + Math.abs(y - lastY) >= 1.5) c.lineTo(x, y);
+      else continue;
+      lastX = x;
+      lastY = y;
     }
   }
 
@@ -237,6 +244,7 @@
       }
     }
     view.mapDirty = false;
+    viewVersion++;
   }
 
   function segmentPath(c, ids) {
@@ -246,38 +254,62 @@
     }
   }
 
+  // Each vehicle's plan as paths on screen, made again only when its legs or the view change.
+  let planPaths = [];
+  let viewVersion = 0;
+
+  function planPath(i, legs) {
+    const cached = planPaths[i];
+    if (cached && cached.legs === legs && cached.version === viewVersion) return cached;
+    let fixed = 0;
+    while (fixed < legs.length && legs[fixed][2]) fixed++;
+    const made = { legs, version: viewVersion, fixed: null, planned: null };
+    if (fixed) {
+      made.fixed = new Path2D();
+      for (let k = 0; k < fixed; k++) tracePoints(made.fixed, run.segments.get(legs[k][0])?.points || [], legs[k][1] >= 2, k > 0);
+    }
+    if (fixed < legs.length) {
+      made.planned = new Path2D();
+      for (let k = fixed; k < legs.length; k++) {
+        tracePoints(made.planned, run.segments.get(legs[k][0])?.points || [], legs[k][1] >= 2, k > fixed);
+      }
+    }
+    planPaths[i] = made;
+    return made;
+  }
+
   function drawPlans(step) {
     const c = ctx;
+    c.lineCap = "butt";
+    c.lineJoin = "bevel";
     for (let i = 0; i < run.n; i++) {
       const legs = run.planOf(i, step);
       if (!legs.length) continue;
-      const colour = run.vehicles[i].colour;
-      let fixed = 0;
-      while (fixed < legs.length && legs[fixed][2]) fixed++;
-      if (fixed) {
-        // the reservation: the fixed legs' segments, as wide as the vehicle
-        c.globalAlpha = 0.16;
-        c.strokeStyle = colour;
-        c.lineWidth = Math.max(4, run.vehicles[i].width * view.scale);
-        c.beginPath();
-        for (let k = 0; k < fixed; k++) tracePoints(c, run.segments.get(legs[k][0])?.points || [], legs[k][1] >= 2, k > 0);
-        c.stroke();
-        c.globalAlpha = 0.9;
-        c.lineWidth = 3;
-        c.stroke();
-      }
-      if (fixed < legs.length) {
-        c.globalAlpha = 0.75;
-        c.strokeStyle = colour;
-        c.lineWidth = 1;
-        c.beginPath();
-        for (let k = fixed; k < legs.length; k++) {
-          tracePoints(c, run.segments.get(legs[k][0])?.points || [], legs[k][1] >= 2, k > fixed);
+      const colour = run.vehicles[i].colour, paths = planPath(i, legs);
+      // Zoomed out (the vehicle a few pixels wide), the reservation band would be a blur of colour that
+      // costs most of the frame: the fixed legs are drawn thick, the planned thin, and no band.
+      const wide = run.vehicles[i].width * view.scale;
+      c.strokeStyle = colour;
+      if (paths.fixed) {
+        if (wide >= 4) {
+          // the reservation: the fixed legs' segments, as wide as the vehicle
+          c.globalAlpha = 0.16;
+          c.lineWidth = wide;
+          c.stroke(paths.fixed);
         }
-        c.stroke();
+        c.globalAlpha = 1;
+        c.lineWidth = wide >= 4 ? 3 : 2;
+        c.stroke(paths.fixed);
+      }
+      if (paths.planned) {
+        c.globalAlpha = wide >= 4 ? 0.75 : 1;
+        c.lineWidth = 1;
+        c.stroke(paths.planned);
       }
     }
     c.globalAlpha = 1;
+    c.lineCap = "round";
+    c.lineJoin = "round";
   }
 
   function corners(i, grow) {
@@ -469,9 +501,14 @@
   }
 
   // -- time control ---------------------------------------------------------------------------------
+  // DOM is touched only where something changed: a frame's style and layout work stays small
+  function put(node, key, value) {
+    if (node[key] !== value) node[key] = value;
+  }
+
   function showTime(step) {
     if (run === null || step < 0) {
-      el("time").textContent = "t = 0.00 s";
+      put(el("time"), "textContent", "t = 0.00 s");
       return;
     }
     let text = `t = ${run.time(step).toFixed(2)} s \u00b7 step ${step} of ${run.last}`;
@@ -479,12 +516,12 @@
       const pace = live.speed === null ? "fastest" : `${live.speed}\u00d7`;
       text += live.ended ? " \u00b7 run ended" : live.paused ? " \u00b7 live, paused" : ` \u00b7 live at ${pace}`;
     }
-    el("time").textContent = text;
+    put(el("time"), "textContent", text);
     const scrub = el("scrub");
-    scrub.max = String(Math.max(0, run.last));
-    scrub.value = String(step);
-    el("play").textContent = (live ? !live.paused && !live.ended : player.playing) ? "pause" : "play";
-    el("to-live").hidden = !live || live.following || live.ended;
+    put(scrub, "max", String(Math.max(0, run.last)));
+    put(scrub, "value", String(step));
+    put(el("play"), "textContent", (live ? !live.paused && !live.ended : player.playing) ? "pause" : "play");
+    put(el("to-live"), "hidden", !live || live.following || live.ended);
   }
 
   function seek(step, keepPlaying) {
@@ -587,20 +624,28 @@
   // -- the timeline, the events list, the tooltip ---------------------------------------------------
   const EVENT_COLOURS = { failure: "#d0021b", complete: "#2e9e4f", reject: "#d0021b", "route-error": "#d0021b", "planner-error": "#d0021b", alert: "#ff8c00", disturb: "#e6007e", resume: "#e6007e", interrupted: "#6b7480" };
 
-  function drawTimeline(step) {
-    const c = tctx, w = timeline.width / view.dpr, h = timeline.height / view.dpr;
+  // the timeline's ticks are drawn once into a layer of their own, again only when events arrive
+  const ticksLayer = document.createElement("canvas"), kctx = ticksLayer.getContext("2d");
+  let ticksDrawn = null; // [events, total, width] the layer was drawn for
+
+  function timelineTotal() {
+    return Math.max(run.last + 1, live && !live.ended ? Math.round(run.scene.time_limit / run.dt) : 1);
+  }
+
+  function drawTicks(total) {
+    const c = kctx, w = timeline.width / view.dpr, h = timeline.height / view.dpr;
+    ticksLayer.width = timeline.width;
+    ticksLayer.height = timeline.height;
     c.setTransform(view.dpr, 0, 0, view.dpr, 0, 0);
-    c.clearRect(0, 0, w, h);
     c.fillStyle = "#eef1f5";
     c.fillRect(0, 4, w, h - 8);
-    if (run === null) return;
-    const total = Math.max(run.last + 1, live && !live.ended ? Math.round(run.scene.time_limit / run.dt) : 1);
     const x = (s) => ((s + 0.5) / total) * w;
-    let previous = -1;
+    let previous = -1, previousKind = "";
     for (const { step: s, event } of run.events) {
       const px = Math.round(x(s));
-      if (px === previous && event[0] === "complete") continue;
+      if (px === previous && event[0] === previousKind) continue; // one tick per pixel and kind
       previous = px;
+      previousKind = event[0];
       c.fillStyle = EVENT_COLOURS[event[0]] || "#6b7480";
       c.fillRect(px, 5, 1.5, h - 10);
     }
@@ -613,6 +658,20 @@
       c.lineTo(x(failure.step), 8);
       c.fill();
     }
+    ticksDrawn = [run.events.length, total, timeline.width, run.outcome];
+  }
+
+  function drawTimeline(step) {
+    const c = tctx, w = timeline.width / view.dpr, h = timeline.height / view.dpr;
+    c.setTransform(1, 0, 0, 1, 0, 0);
+    c.clearRect(0, 0, timeline.width, timeline.height);
+    if (run === null) return;
+    const total = timelineTotal();
+    const d = ticksDrawn;
+    if (!d || d[0] !== run.events.length || d[1] !== total || d[2] !== timeline.width || d[3] !== run.outcome) drawTicks(total);
+    c.drawImage(ticksLayer, 0, 0);
+    c.setTransform(view.dpr, 0, 0, view.dpr, 0, 0);
+    const x = (s) => ((s + 0.5) / total) * w;
     c.fillStyle = "rgba(29, 35, 43, 0.15)";
     c.fillRect(x(run.last), 4, w - x(run.last), h - 8);
     c.fillStyle = "#1d232b";
@@ -645,7 +704,11 @@
     el("events").appendChild(li);
   }
 
+  let eventsSeen = [-2, -1]; // [step, events] the list was last brought up to
+
   function updateEvents(step) {
+    if (eventsSeen[0] === step && eventsSeen[1] === run.events.length) return;
+    eventsSeen = [step, run.events.length];
     const list = el("events");
     while (eventsShown < run.events.length && list.children.length < EVENT_ROWS) {
       const { step: s, event } = run.events[eventsShown++];
@@ -772,7 +835,9 @@
   // -- starting: a recorded run, or a live one --------------------------------------------------------
   function begin(scene) {
     run = new Run(scene);
+    planPaths = [];
     eventsShown = eventsPast = 0;
+    eventsSeen = [-2, -1];
     el("events").replaceChildren();
     delete el("events").dataset.cut;
     el("title").textContent = `fleetsim \u00b7 ${scene.scenario}` + (scene.planner ? ` \u00b7 ${scene.planner}` : "");

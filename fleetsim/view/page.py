@@ -17,6 +17,8 @@ from functools import cache
 from pathlib import Path
 from typing import Any
 
+import orjson
+
 __all__ = ["COMPRESS_FROM", "live_page", "recorded_page"]
 
 COMPRESS_FROM = 256 * 1024  # documents larger than this (bytes of JSON) are embedded compressed
@@ -38,12 +40,14 @@ def _page(data: str, encoding: str) -> str:
 
 def recorded_page(document: dict[str, Any], *, compress_from: int = COMPRESS_FROM) -> str:
     """The self-contained page of a recorded run's view document."""
-    text = json.dumps(document, separators=(",", ":"), ensure_ascii=True)
-    if len(text) >= compress_from:
-        packed = gzip.compress(text.encode("ascii"), compresslevel=6, mtime=0)
+    encoded = orjson.dumps(document)  # as json.dumps writes it, compact, in UTF-8, several times faster
+    if len(encoded) >= compress_from:
+        # The fastest level: a large run's page is written in a fraction of the time level 6 takes, for
+        # a few percent more bytes.
+        packed = gzip.compress(encoded, compresslevel=1, mtime=0)
         return _page(base64.b64encode(packed).decode("ascii"), "gzip+base64")
     # Inside <script>, "</" could end the element: JSON allows "<\/" for it.
-    return _page(text.replace("</", "<\\/"), "json")
+    return _page(encoded.decode("utf-8").replace("</", "<\\/"), "json")
 
 
 def live_page(socket_path: str = "/live") -> str:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import threading
 import time
 from pathlib import Path
@@ -33,16 +34,18 @@ def test_step_records_hold_everyone_first_then_only_what_changed() -> None:
     scenario, result = _run("loop-one-way")
     assert result.trace is not None
     encoder = StepRecords()
-    frames = list(replay(scenario, result.trace.lines))
-    first, second = encoder.record(frames[0]), encoder.record(frames[1])
-    assert first[0] == 0 and len(first[1]) == 7 * len(scenario.vehicles)
+    lines = result.trace.lines
+    frames = list(replay(scenario, lines))
+    first, second = encoder.record(frames[0], lines[1]), encoder.record(frames[1], lines[2])
+    assert first[0] == 0 and [r[0] for r in first[1]] == sorted(v.id for v in scenario.vehicles)
     assert [plan[0] for plan in first[2]] == sorted(v.id for v in scenario.vehicles)
     assert first[3] == [] and first[5] == {}  # no alert, no disturbance yet: said once
     assert second[3] is None and second[5] is None  # unchanged: not said again
-    assert len(second[1]) == 7 * len(frames[1].moved)
-    x, y = frames[1].poses[second[1][0]].x, frames[1].poses[second[1][0]].y
-    assert second[1][1:3] == [round(x * 1000), round(y * 1000)]
-    last = [encoder.record(frame) for frame in frames[2:]][-1]
+    assert [r[0] for r in second[1]] == list(frames[1].moved)
+    pose = frames[1].poses[second[1][0][0]]
+    assert second[1][0][1:] == [pose.segment, "f", "f", round(pose.x * 1000), round(pose.y * 1000),
+                                round(pose.heading * 18000 / math.pi), round(pose.speed * 1000)]  # fmt: skip
+    last = [encoder.record(frame, lines[frame.step + 1]) for frame in frames[2:]][-1]
     assert [alert[0] for alert in last[3]] == [9, 10]  # the alerts the run failed on, when they came
     assert ["alert", 9, [2], [1]] in last[4]
 
@@ -78,7 +81,7 @@ def test_the_page_keeps_a_script_in_a_name_inert() -> None:
     scenario, result = _run("crossing")
     assert result.trace is not None
     name = "</script><script>alert(1)</script>"
-    document = view_document(scenario, replay(scenario, result.trace.lines), {"planner": name}, {})
+    document = view_document(scenario, result.trace.lines, {"planner": name}, {})
     html = recorded_page(document)
     assert "</script><script>alert(1)" not in html
     embedded = html.split('data-encoding="json">', 1)[1].split("</script>", 1)[0]

@@ -106,13 +106,13 @@ def test_pausing_on_the_page_stops_the_simulation_and_its_planner(
     page.wait_for_function(f"() => fleetsimView.state().step === {run.paced[-1][1] + 1}")
     time.sleep(0.3)
     assert len(run.paced) == steps + 1
-    # resumed at 5x: the wall clock paces it within 10 %
-    page.select_option("#speed", "5")
+    # resumed at 2x: the wall clock paces it within 10 %
+    page.select_option("#speed", "2")
     page.click("#play")
     page.wait_for_function("() => !fleetsimView.state().live.paused")
     resumed = time.monotonic() + 0.3
-    time.sleep(1.6)
-    assert run.rate(resumed) == pytest.approx(5.0, rel=0.10)
+    time.sleep(2.0)
+    assert run.rate(resumed) == pytest.approx(2.0, rel=0.10)
     # and as fast as it goes to the end
     page.select_option("#speed", "max")
     run.thread.join(timeout=30)
@@ -187,7 +187,7 @@ def test_a_live_run_from_the_command_line_gives_the_headless_result(page: Any, t
     if speed == "1":
         assert elapsed > 2.0  # 2.5 simulated seconds at 1x
     watched, alone = json.loads(out), json.loads(headless.stdout)
-    assert "ran at " + f"{float(speed):g}x real time; kept the pace" in err
+    assert f"live: mixed ran at {float(speed):g}x real time;" in err
     for key in ("status", "trace_hash", "failures", "steps", "sim_time", "tasks", "collisions", "rejections"):
         assert watched[key] == alone[key], key
     wall = {"wall_time", "planner_wall_time", "realtime_factor", "harness_share"}  # the wall clock's figures

@@ -81,10 +81,8 @@ def test_drawn_vehicles_at_scrubbed_times_are_where_the_trace_puts_them(page: An
 def test_a_compressed_page_draws_the_same(page: Any, runs: dict[str, Path], tmp_path: Path) -> None:
     folder = runs["passing"]
     run = read_recorded_run(folder, None)
-    from fleetsim.recording.replay import replay
-
     outcome = outcome_part(run.document, run.failures, run.scenario.settings.time_step, run.last_step)
-    html = recorded_page(view_document(run.scenario, replay(run.scenario, run.lines), {}, outcome), compress_from=0)
+    html = recorded_page(view_document(run.scenario, run.lines, {}, outcome), compress_from=0)
     assert 'data-encoding="gzip+base64"' in html
     (tmp_path / "packed.html").write_text(html, encoding="utf-8")
     _open(page, tmp_path / "packed.html")
