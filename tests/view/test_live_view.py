@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from conftest import EXAMPLES, ready, short_suite, state
+from viewer import EXAMPLES, ready, short_suite, state
 
 from fleetsim.load.scenario import load_scenario
 from fleetsim.load.suite import load_suite

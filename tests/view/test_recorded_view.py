@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from conftest import EXAMPLES, drawn, ready, state, wait_drawn
+from viewer import EXAMPLES, drawn, ready, state, wait_drawn
 
 from fleetsim.cli.main import main
 from fleetsim.cli.recorded import read_recorded_run
