@@ -192,7 +192,7 @@
       const j = backward ? n - 1 - k : k;
       const x = sx(points[2 * j]), y = sy(points[2 * j + 1]);
       if (k === 0 && !join) c.moveTo(x, y);
-      else if (k === n - 1 || Math.abs(x - lastX) + Math.abs(y - lastY) >= 1.5) c.lineTo(x, y);
+      else if (k === 0 || k === n - 1 || Math.abs(x - lastX) + Math.abs(y - lastY) >= 1.5) c.lineTo(x, y);
       else continue;
       lastX = x;
       lastY = y;
@@ -884,6 +884,10 @@
         const option = message.speed === null ? "max" : String(message.speed);
         if (![...el("speed").options].some((o) => o.value === option)) el("speed").add(new Option(`${option}\u00d7`, option));
         el("speed").value = option;
+        if (!run.outcome) {
+          el("status").textContent = live.paused ? "paused" : "running";
+          el("status").className = "running";
+        }
         dirty = true;
       } else if (message.type === "end") {
         run.outcome = message.outcome;
