@@ -280,6 +280,7 @@
 
   function drawPlans(step) {
     const c = ctx;
+    let planned = null;
     c.lineCap = "butt";
     c.lineJoin = "bevel";
     for (let i = 0; i < run.n; i++) {
@@ -302,10 +303,22 @@
         c.stroke(paths.fixed);
       }
       if (paths.planned) {
-        c.globalAlpha = wide >= 4 ? 0.75 : 1;
-        c.lineWidth = 1;
-        c.stroke(paths.planned);
+        if (wide >= 4) {
+          c.globalAlpha = 0.75;
+          c.lineWidth = 1;
+          c.stroke(paths.planned);
+        } else {
+          (planned || (planned = new Path2D())).addPath(paths.planned);
+        }
       }
+    }
+    if (planned) {
+      // Zoomed out, the planned legs of the whole fleet in one thin stroke: a thousand strokes of a
+      // pixel's width, each in its own colour, cost a third of a frame and are a blur at that size.
+      c.globalAlpha = 0.55;
+      c.strokeStyle = "#55606e";
+      c.lineWidth = 1;
+      c.stroke(planned);
     }
     c.globalAlpha = 1;
     c.lineCap = "round";
@@ -329,8 +342,13 @@
     c.lineWidth = 1;
     c.strokeStyle = "#1d232b";
     for (let i = 0; i < run.n; i++) {
-      const k = corners(i, 0);
       c.fillStyle = run.vehicles[i].colour;
+      if (view.scale * run.vehicles[i].length < 3) {
+        // smaller than a few pixels: a 3-pixel square, so that every vehicle shows
+        c.fillRect(sx(p[4 * i]) - 1.5, sy(p[4 * i + 1]) - 1.5, 3, 3);
+        continue;
+      }
+      const k = corners(i, 0);
       c.beginPath();
       c.moveTo(sx(k[0][0]), sy(k[0][1]));
       for (let j = 1; j < 4; j++) c.lineTo(sx(k[j][0]), sy(k[j][1]));
@@ -390,28 +408,34 @@
     c.fill();
   }
 
+  function drawAlerts(step) {
+    // the collision alerts in force: their segments in orange (under the vehicles), with who holds them
+    const c = ctx;
+    const alerts = run.changedAt(run.alerts, step) || [];
+    if (!alerts.length) return;
+    c.strokeStyle = "#ff8c00";
+    c.lineWidth = Math.max(view.scale > 10 ? 4 : 2, 0.35 * view.scale);
+    c.globalAlpha = 0.85;
+    c.beginPath();
+    segmentPath(c, alerts.map((a) => a[0]));
+    c.stroke();
+    c.globalAlpha = 1;
+    if (alerts.length > 30 && view.scale < 15) return; // labels only where they can be read
+    c.fillStyle = "#b35f00";
+    c.font = "bold 12px system-ui, sans-serif";
+    c.textAlign = "left";
+    for (const [segment, primary, secondary] of alerts) {
+      const s = run.segments.get(segment);
+      if (!s) continue;
+      const m = Math.floor(s.points.length / 4) * 2;
+      const x = sx(s.points[m]), y = sy(s.points[m + 1]);
+      if (x < -50 || y < -20 || x > view.width || y > view.height + 20) continue;
+      c.fillText(`\u26a0 ${segment}: ${primary.join(",")} \u27c2 ${secondary.join(",")}`, x + 6, y - 6);
+    }
+  }
+
   function drawMarks(step) {
     const c = ctx, p = run.state.pose, time = run.time(step), outcome = run.outcome;
-    // the collision alerts in force: their segments in orange, with who holds them
-    const alerts = run.changedAt(run.alerts, step) || [];
-    if (alerts.length) {
-      c.strokeStyle = "#ff8c00";
-      c.lineWidth = Math.max(4, 0.35 * view.scale);
-      c.globalAlpha = 0.85;
-      c.beginPath();
-      segmentPath(c, alerts.map((a) => a[0]));
-      c.stroke();
-      c.globalAlpha = 1;
-      c.fillStyle = "#b35f00";
-      c.font = "bold 12px system-ui, sans-serif";
-      c.textAlign = "left";
-      for (const [segment, primary, secondary] of alerts.slice(0, 50)) {
-        const s = run.segments.get(segment);
-        if (!s) continue;
-        const m = Math.floor(s.points.length / 4) * 2;
-        c.fillText(`\u26a0 ${segment}: ${primary.join(",")} \u27c2 ${secondary.join(",")}`, sx(s.points[m]) + 6, sy(s.points[m + 1]) - 6);
-      }
-    }
     // disturbed vehicles: a magenta outline, STOP or SLOW
     const disturbed = run.changedAt(run.disturbed, step) || {};
     for (const [vid, kind] of Object.entries(disturbed)) {
@@ -486,6 +510,7 @@
     ctx.lineJoin = "round";
     if (step >= 0) {
       if (el("show-plans").checked) drawPlans(step);
+      drawAlerts(step);
       drawVehicles();
       drawMarks(step);
       if (hover !== null) drawOutline(hover, 0.35, "#1d232b", 1.5, "");
