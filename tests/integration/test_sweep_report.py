@@ -122,3 +122,25 @@ def test_contacts_and_the_least_clearance_are_summed_up_and_compared(report: Pat
     # The reservation rule keeps footprints apart (the property test's guarantee); BFSPlanner's do touch.
     assert sum(len(r["contact"]["contacts"]) for r in records if r["planner"].endswith("ReservingPlanner")) == 0
     assert "| contacts | 8 |" in text and "| clearance (m) | " in text
+
+
+def test_the_worst_scenarios_link_to_their_viewer_pages(tmp_path: Path) -> None:
+    spec_path = write_spec(tmp_path, ("fleetsim.planners:ReservingPlanner", "fleetsim.planners:BFSPlanner"), count=8)
+    spec_path.write_text(
+        spec_path.read_text(encoding="utf-8").replace("record: none", "record: failed"), encoding="utf-8"
+    )
+    spec = load_sweep_spec(spec_path)
+    results = tmp_path / "results.jsonl"
+    with ResultsFile(results, {"name": "small", "baseline": spec.baseline}, resume=False) as file:
+        for item in expand(spec, tmp_path / "runs"):
+            file.add(run_item(item))
+    assert main(["sweep", "report", str(results), "--markdown", str(tmp_path / "summary.md")]) == 0
+    html = (tmp_path / "results.html").read_text(encoding="utf-8")
+    worst = html.split('<ul class="worst">', 1)[1].split("</ul>", 1)[0]
+    views = [
+        part.split('"', 1)[0] for part in worst.split('<a href="')[1:] if part.split('"', 1)[0].endswith("view.html")
+    ]
+    assert views, worst
+    for link in views:
+        assert (tmp_path / link).read_text(encoding="utf-8").startswith("<!doctype html>")
+    assert "([watch it](" in (tmp_path / "summary.md").read_text(encoding="utf-8")

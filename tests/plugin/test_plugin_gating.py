@@ -547,7 +547,7 @@ def test_record_option_decides_which_runs_leave_artifacts_and_where(
     result = project.runpytest_inprocess("--planner", RESERVING, *options)
 
     result.assert_outcomes(passed=1, failed=1)
-    names = ("result.json", "trace.jsonl", "run.mcap", "fleetsim.rviz", "failure.svg")
+    names = ("result.json", "trace.jsonl", "run.mcap", "fleetsim.rviz", "failure.svg", "view.html")
     files = {str(p.relative_to(project.path)) for p in project.path.rglob("*") if p.name in names}
     failed = {folder for folder in expected if folder.endswith("corridor-passing-bay")}
     assert files == {
@@ -562,10 +562,10 @@ def test_record_option_decides_which_runs_leave_artifacts_and_where(
         assert listed == []
     else:
         folder = next(f for f in expected if f.endswith("corridor-passing-bay"))
-        shown = ["failure.svg", "run.mcap", "fleetsim.rviz", "trace.jsonl", "result.json"]
-        result.stdout.fnmatch_lines(
-            [("artifacts: " if i == 0 else "           ") + f"{folder}/{name}" for i, name in enumerate(shown)]
-        )
+        shown = ["failure.svg", "view.html", "run.mcap", "fleetsim.rviz", "trace.jsonl", "result.json"]
+        lines = [("artifacts: " if i == 0 else "           ") + f"{folder}/{name}" for i, name in enumerate(shown)]
+        start = reports.index(lines[0])
+        assert reports[start : start + len(lines)] == lines
         assert len(listed) == 1  # only the failing scenario's report
 
 
