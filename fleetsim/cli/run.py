@@ -108,8 +108,12 @@ def run(args: argparse.Namespace) -> int:
     after Ctrl-C or SIGTERM (the running scenario ends at the end of its step and is written like any
     failed run; no further scenario runs) 130 or 143.
     """
+    live_only = [name for name, given in (("--speed", args.speed != 1.0), ("--port", args.port != 0),
+                 ("--no-open", args.no_open), ("--foxglove", args.foxglove is not None)) if given]  # fmt: skip
+    if live_only and not args.live:
+        raise UsageError(f"{', '.join(live_only)}: only with --live (a run watched in the browser)")
     with StopSignals() as stop:
-        if not getattr(args, "live", False):
+        if not args.live:
             return _run_all(args, stop)
         from fleetsim.view.session import LiveSession
 

@@ -11,11 +11,13 @@ from fleetsim.view.document import VIEW_FORMAT, StepRecords, outcome_part, scene
 from fleetsim.view.live import LiveRun, Pacer
 from fleetsim.view.page import live_page, recorded_page
 from fleetsim.view.server import PageServer
+from fleetsim.view.session import LiveSession
 
 __all__ = [
     "VIEW_FILE",
     "VIEW_FORMAT",
     "LiveRun",
+    "LiveSession",
     "Pacer",
     "PageServer",
     "StepRecords",

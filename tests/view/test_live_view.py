@@ -197,29 +197,33 @@ def test_a_live_run_from_the_command_line_gives_the_headless_result(page: Any, t
 
 
 def test_a_foxglove_client_receives_tf_at_the_runs_simulation_times(tmp_path: Path) -> None:
+    """A client that subscribes in the middle of a live run gets every step's /tf from then on, at the
+    step's simulated time, and the map (latched) once more."""
     pytest.importorskip("foxglove")
     from websockets.sync.client import connect
 
-    scenario = _scenario(short_suite(tmp_path, 3), "mixed")
-    with LiveSession(5.0, open_browser=False, foxglove_port=0, say=lambda _: None) as session:
+    scenario = _scenario(short_suite(tmp_path, 4), "mixed")
+    with LiveSession(4.0, open_browser=False, foxglove_port=0, say=lambda _: None) as session:
         url = f"ws://127.0.0.1:{session.foxglove.port}"
         with pytest.raises(Exception, match="400"):  # only the SDK's subprotocol is spoken
             connect(url, subprotocols=["foxglove.websocket.v1"]).close()
+        run = _Watched(session, scenario, ReservingPlanner())
+        run.wait_for_step(8)
         client = connect(url, subprotocols=["foxglove.sdk.v1"], max_size=None)
         received: dict[int, list[int]] = {0: [], 1: []}
         subscribed = threading.Event()
-        threading.Thread(
-            target=_listen, args=(client, ["/tf", "/fleetsim/map"], received, subscribed), daemon=True
-        ).start()
+        topics = ["/tf", "/fleetsim/map"]
+        threading.Thread(target=_listen, args=(client, topics, received, subscribed), daemon=True).start()
         assert subscribed.wait(10)
-        time.sleep(0.3)
-        run = _Watched(session, scenario, ReservingPlanner())
         run.thread.join(timeout=30)
         time.sleep(0.5)
         client.close()
-    assert run.result is not None
-    assert received[0] == [round((step + 1) * 0.1 * 1e9) for step in range(run.result.steps)]
-    assert received[1] == [100_000_000]  # the map, latched, at the first step
+    assert run.result is not None and run.result.steps == 40
+    times = received[0]
+    first = round(times[0] / 1e8) - 1  # the step of the first /tf received
+    assert 8 <= first < 39
+    assert times == [round((step + 1) * 0.1 * 1e9) for step in range(first, run.result.steps)]
+    assert received[1] == [100_000_000]  # the map, latched at the first step, sent again on subscribing
 
 
 def _listen(client: Any, topics: list[str], received: dict[int, list[int]], subscribed: threading.Event) -> None:
@@ -262,3 +266,5 @@ def test_live_options_are_checked(capsys: pytest.CaptureFixture[str]) -> None:
     with pytest.raises(SystemExit):
         main(["run", str(EXAMPLES), "--planner", "fleetsim.planners:BFSPlanner", "--live", "--speed", "0"])
     assert "'0' must be a multiple of real time from 0.01 to 1000, or 'max'" in capsys.readouterr().err
+    assert main(["run", str(EXAMPLES), "--planner", "fleetsim.planners:BFSPlanner", "--speed", "2", "--foxglove"]) == 2
+    assert "fleetsim: error: --speed, --foxglove: only with --live" in capsys.readouterr().err
