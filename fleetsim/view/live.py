@@ -97,11 +97,13 @@ class Pacer:
     def hold_while_paused(self) -> None:
         """While paused and no step was asked for; a step asked for is used up here."""
         with self._changed:
+            if not self.paused:
+                return  # the pace counts on from where it was: no drift step by step
             while self.paused and self._allowed == 0 and not self.stopped():
                 self._changed.wait(_POLL)
             if self.paused and self._allowed > 0:
                 self._allowed -= 1
-            self._anchor = (time.monotonic(), self.shown)
+            self._anchor = (time.monotonic(), self.shown)  # held: the pace counts from here
 
     def pause(self) -> None:
         with self._changed:

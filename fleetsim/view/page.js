@@ -900,7 +900,7 @@
         live.following = true;
         showOutcome();
         hook.ready = true;
-      } else if (message.type === "steps") {
+      } else if (message.type === "steps" && run !== null) {
         for (const record of message.steps) run.add(record);
         dirty = true;
       } else if (message.type === "status") {
@@ -909,12 +909,12 @@
         const option = message.speed === null ? "max" : String(message.speed);
         if (![...el("speed").options].some((o) => o.value === option)) el("speed").add(new Option(`${option}\u00d7`, option));
         el("speed").value = option;
-        if (!run.outcome) {
+        if (run !== null && !run.outcome) {
           el("status").textContent = live.paused ? "paused" : "running";
           el("status").className = "running";
         }
         dirty = true;
-      } else if (message.type === "end") {
+      } else if (message.type === "end" && run !== null) {
         run.outcome = message.outcome;
         live.ended = true;
         showOutcome();
