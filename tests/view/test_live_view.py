@@ -142,7 +142,10 @@ def test_several_pages_watch_one_run_and_closing_one_changes_nothing(
     scenario = _scenario(short_suite(tmp_path, 4), "mixed")
     session.live.pacer.set_speed(2.0)
     first, second = browser.new_page(), browser.new_page()
-    first.goto(session.url)
+    errors: list[str] = []
+    for opened in (first, second):
+        opened.on("pageerror", lambda error: errors.append(str(error)))
+    first.goto(session.url)  # before the run begins: it waits for the scene
     run = _Watched(session, scenario, ReservingPlanner())
     ready(first)
     run.wait_for_step(8)
@@ -158,6 +161,7 @@ def test_several_pages_watch_one_run_and_closing_one_changes_nothing(
     second.wait_for_function("() => fleetsimView.drawnPoses().step === 3")
     assert run.result is not None and run.result.steps == 40
     second.close()
+    assert errors == []
 
 
 @pytest.mark.parametrize("speed", ["1", "20"])
