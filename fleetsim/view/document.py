@@ -123,7 +123,7 @@ def records_of(frames: Iterable[Frame], lines: Sequence[str]) -> Iterator[list[A
 def outcome_part(
     document: Mapping[str, Any], failures: Sequence[Failure], time_step: float, last_step: int
 ) -> dict[str, Any]:
-    """How the run ended, for the page: status, the failures, the moment to jump to, the contacts and who
+    """How the run ended, for the page: status, how many failures, the moment to jump to, the contacts and who
     waits for whom at the end (from ``result.json``'s document; empty for a run that never ended)."""
     found = failure_step(failures, time_step, last_step) if failures else None
     stuck = None
@@ -146,7 +146,9 @@ def outcome_part(
         "status": document.get("status"),
         "ended": document.get("ended"),
         "trace_hash": document.get("trace_hash"),
-        "failures": [{"kind": f.kind, "time": f.time, "message": f.message} for f in failures],
+        # How many, not each: a run with an alert a step has tens of thousands (result.json has them all),
+        # and a page that keeps them in memory draws a quarter slower.
+        "failure_count": len(failures),
         "failure": None
         if found is None
         else {"step": found[0], "kind": found[1].kind, "time": found[1].time, "message": found[1].message},

@@ -727,9 +727,12 @@
     li.textContent = `${run.time(step).toFixed(2)} s  ${text}`;
     li.addEventListener("click", () => seek(step));
     el("events").appendChild(li);
+    rowSteps.push(step);
   }
 
   let eventsSeen = [-2, -1]; // [step, events] the list was last brought up to
+  let rowSteps = []; // the step of each event row, ascending
+  let currentRows = []; // the rows marked as the shown step's
 
   function updateEvents(step) {
     if (eventsSeen[0] === step && eventsSeen[1] === run.events.length) return;
@@ -745,14 +748,24 @@
       li.textContent = `(the first ${EVENT_ROWS} events; the timeline shows all)`;
       list.appendChild(li);
     }
-    // rows up to the shown step are past; the step's own rows are current
+    // rows up to the shown step are past; the step's own rows are current (found by bisection: a frame
+    // never walks the whole list)
     const rows = list.children;
-    let past = 0;
-    while (past < rows.length && rows[past].dataset.step !== undefined && Number(rows[past].dataset.step) <= step) past++;
+    let lo = 0, hi = rowSteps.length;
+    while (lo < hi) {
+      const mid = (lo + hi) >> 1;
+      if (rowSteps[mid] <= step) lo = mid + 1;
+      else hi = mid;
+    }
+    const past = lo;
     for (let r = Math.min(past, eventsPast); r < Math.max(past, eventsPast); r++) rows[r].classList.toggle("past", r < past);
     eventsPast = past;
-    for (const row of list.querySelectorAll("li.current")) row.classList.remove("current");
-    for (let r = past - 1; r >= 0 && Number(rows[r].dataset.step) === step; r--) rows[r].classList.add("current");
+    for (const row of currentRows) row.classList.remove("current");
+    currentRows = [];
+    for (let r = past - 1; r >= 0 && rowSteps[r] === step; r--) {
+      rows[r].classList.add("current");
+      currentRows.push(rows[r]);
+    }
   }
 
   function vehicleAt(px, py) {
@@ -863,6 +876,8 @@
     planPaths = [];
     eventsShown = eventsPast = 0;
     eventsSeen = [-2, -1];
+    rowSteps = [];
+    currentRows = [];
     el("events").replaceChildren();
     delete el("events").dataset.cut;
     el("title").textContent = `fleetsim \u00b7 ${scene.scenario}` + (scene.planner ? ` \u00b7 ${scene.planner}` : "");

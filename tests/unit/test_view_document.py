@@ -73,7 +73,7 @@ def test_the_outcome_names_the_failure_step_and_who_waits_for_whom() -> None:
     ]
     assert outcome["stuck"]["roots"] == [1, 2] and outcome["stuck"]["contested"] == [5]
     assert outcome_part({}, [], 0.1, 10) == {
-        "status": None, "ended": None, "trace_hash": None, "failures": [], "failure": None, "contacts": [], "stuck": None,
+        "status": None, "ended": None, "trace_hash": None, "failure_count": 0, "failure": None, "contacts": [], "stuck": None,
     }  # fmt: skip
 
 
