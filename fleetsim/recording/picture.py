@@ -31,6 +31,7 @@ from fleetsim.recording.colours import (
     vehicle_colours,
 )
 from fleetsim.recording.replay import Frame, Pose, frame_at
+from fleetsim.recording.stuck import contested_segments, stuck_relations
 from fleetsim.recording.svg import _arrow, _document, _Frame, _frame, _point_at, _segment_labels, _segment_svg
 from fleetsim.scenario import Scenario, Vehicle
 from fleetsim.sim.report import first_line
@@ -181,9 +182,8 @@ def _alerts_svg(scenario: Scenario, frame: Frame, view: _Frame) -> list[str]:
 
 def _contested_svg(scenario: Scenario, view: _Frame, stuck: Mapping[str, Any]) -> list[str]:
     """Purple bands under the map for the segments waiting vehicles need and others hold."""
-    contested = sorted({int(s) for finding in stuck.get("vehicles", ()) for s in finding.get("contested", ())})
     parts = ['<g class="contested">']
-    for sid in contested:
+    for sid in contested_segments(stuck):
         if sid in scenario.layout.segments:
             parts.append(
                 f'<polyline class="contested-segment" data-segment="{sid}" points="{view.points(scenario.layout.segments[sid].waypoints)}" '
@@ -196,32 +196,27 @@ def _contested_svg(scenario: Scenario, view: _Frame, stuck: Mapping[str, Any]) -
 
 def _waits_svg(scenario: Scenario, frame: Frame, view: _Frame, stuck: Mapping[str, Any]) -> list[str]:
     """An arrow from each waiting vehicle to each vehicle it waits for, red in a cycle; rings round root causes."""
-    in_cycle = {(int(c[i]), int(c[(i + 1) % len(c)])) for c in stuck.get("cycles", ()) for i in range(len(c))}
     radius = {v.id: v.type.swept_radius for v in scenario.vehicles}
     parts = ['<g class="wait-for">']
-    for finding in stuck.get("vehicles", ()):
-        source = int(finding["vehicle"])
-        relations = [(int(b), "wait-for") for b in finding.get("blocked_by", ())]
-        relations += [(int(b), "planned-near") for b in finding.get("planned_near", ())]
-        for target, kind in relations:
-            if source not in frame.poses or target not in frame.poses:
-                continue
-            cycle = (source, target) in in_cycle
-            colour = _CYCLE if cycle else _WAITS
-            parts.append(
-                _relation_arrow(
-                    view,
-                    frame.poses[source],
-                    frame.poses[target],
-                    radius[source],
-                    radius[target],
-                    colour,
-                    kind,
-                    cycle,
-                    source,
-                    target,
-                )
+    for source, target, waits, cycle in stuck_relations(stuck):
+        if source not in frame.poses or target not in frame.poses:
+            continue
+        colour = _CYCLE if cycle else _WAITS
+        kind = "wait-for" if waits else "planned-near"
+        parts.append(
+            _relation_arrow(
+                view,
+                frame.poses[source],
+                frame.poses[target],
+                radius[source],
+                radius[target],
+                colour,
+                kind,
+                cycle,
+                source,
+                target,
             )
+        )
     for root in stuck.get("roots", ()):
         for vid in root.get("vehicles", ()):
             pose = frame.poses.get(int(vid))

@@ -17,6 +17,7 @@ from fleetsim.recording import messages as m
 from fleetsim.recording.colours import ALERT, CONTESTED, CYCLE, DISTURBED, MAP_RVIZ, WAITS, vehicle_colours, with_alpha
 from fleetsim.recording.labels import LabelSpace, box_around, nearest_point, spots_beside
 from fleetsim.recording.rviz import framed_view
+from fleetsim.recording.stuck import contested_segments, root_vehicles, stuck_relations
 from fleetsim.scenario import Scenario
 
 __all__ = ["Scene", "alert_label", "frame_name"]
@@ -150,33 +151,21 @@ class Scene:
     def stuck(self, time: m.Stamp, poses: Mapping[int, Any], stuck: Mapping[str, Any]) -> m.MarkerArray:
         """Who waits for whom at the end of a stuck run (the failure's details, as in result.json)."""
         markers = [m.delete_all(time, "")]
-        contested = sorted(
-            {int(s) for f in stuck.get("vehicles", ()) for s in f.get("contested", ())}
-            & set(self.scenario.layout.segments)
-        )
+        contested = [s for s in contested_segments(stuck) if s in self.scenario.layout.segments]
         if contested:
             markers.append(m.line_list(time, "contested", 0, self.points(contested, 0.04), 0.4, _PURPLE))
-        in_cycle = {(int(c[i]), int(c[(i + 1) % len(c)])) for c in stuck.get("cycles", ()) for i in range(len(c))}
         numbers: dict[str, int] = {}
-        for finding in stuck.get("vehicles", ()):
-            source = int(finding["vehicle"])
-            relations = [(int(b), True) for b in finding.get("blocked_by", ())] + [
-                (int(b), False) for b in finding.get("planned_near", ())
-            ]
-            for target, waits in relations:
-                if source not in poses or target not in poses:
-                    continue
-                cycle = (source, target) in in_cycle
-                namespace = ("wait_for_cycle" if cycle else "wait_for") if waits else "planned_near"
-                numbers[namespace] = numbers.get(namespace, -1) + 1
-                a, b = poses[source], poses[target]
-                start, end = (a.x, a.y, 0.6), (b.x, b.y, 0.6)
-                colour = CYCLE if cycle else WAITS
-                markers.append(
-                    m.arrow(time, namespace, numbers[namespace], start, end, 0.12 if waits else 0.05, colour)
-                )
+        for source, target, waits, cycle in stuck_relations(stuck):
+            if source not in poses or target not in poses:
+                continue
+            namespace = ("wait_for_cycle" if cycle else "wait_for") if waits else "planned_near"
+            numbers[namespace] = numbers.get(namespace, -1) + 1
+            a, b = poses[source], poses[target]
+            start, end = (a.x, a.y, 0.6), (b.x, b.y, 0.6)
+            colour = CYCLE if cycle else WAITS
+            markers.append(m.arrow(time, namespace, numbers[namespace], start, end, 0.12 if waits else 0.05, colour))
         radius = {v.id: v.type.swept_radius for v in self.scenario.vehicles}
-        roots = sorted({int(v) for root in stuck.get("roots", ()) for v in root.get("vehicles", ())} & set(poses))
+        roots = [v for v in root_vehicles(stuck) if v in poses]
         for number, vid in enumerate(roots):
             markers.append(
                 m.disc(time, "root_cause", number, (poses[vid].x, poses[vid].y, 0.02), 2 * radius[vid] + 0.5, _ROOT_RED)

@@ -35,6 +35,7 @@ from fleetsim.planning.plans import FleetLeg, FleetPlan
 from fleetsim.recording.colours import hex_colour, vehicle_colours
 from fleetsim.recording.picture import failure_step, stuck_details
 from fleetsim.recording.replay import Frame, replay
+from fleetsim.recording.stuck import contested_segments, root_vehicles, stuck_relations
 from fleetsim.scenario import Scenario
 from fleetsim.sim.result import Failure
 
@@ -151,7 +152,7 @@ def outcome_part(
         "failure_count": len(failures),
         "failure": None
         if found is None
-        else {"step": found[0], "kind": found[1].kind, "time": found[1].time, "message": found[1].message},
+        else {"step": found[0], "kind": found[1].kind, "time": round(found[1].time, 6), "message": found[1].message},
         "contacts": contacts,
         "stuck": stuck,
     }
@@ -160,20 +161,13 @@ def outcome_part(
 def _stuck(details: Mapping[str, Any], headline: str) -> dict[str, Any]:
     """Who waits for whom: ``[from, to, "wait-for" | "planned-near", in a cycle]`` relations, the root-cause
     vehicles and the contested segments."""
-    cycles = details.get("cycles", ())
-    in_cycle = {(int(c[i]), int(c[(i + 1) % len(c)])) for c in cycles for i in range(len(c))}
-    relations = []
-    for finding in details.get("vehicles", ()):
-        source = int(finding["vehicle"])
-        for target in finding.get("blocked_by", ()):
-            relations.append([source, int(target), "wait-for", (source, int(target)) in in_cycle])
-        for target in finding.get("planned_near", ()):
-            relations.append([source, int(target), "planned-near", False])
     return {
         "headline": headline,
-        "relations": relations,
-        "roots": sorted({int(v) for root in details.get("roots", ()) for v in root.get("vehicles", ())}),
-        "contested": sorted({int(s) for f in details.get("vehicles", ()) for s in f.get("contested", ())}),
+        "relations": [
+            [r.source, r.target, "wait-for" if r.waits else "planned-near", r.cycle] for r in stuck_relations(details)
+        ],
+        "roots": root_vehicles(details),
+        "contested": contested_segments(details),
     }
 
 
