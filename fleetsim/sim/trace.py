@@ -307,7 +307,7 @@ class Trace:
                 encoded.append(_encode_step(changed)[1:-1])
         rest = _encode_step([list(plans), list(events)])  # "[[plans],[events]]"
         line = b"[%d,[%b],%b" % (step, b",".join(encoded), rest[1:])
-        self._write(line)
+        text = self._write(line)
         self.steps = step + 1
         sink = self.sink
         if self.steps % CHECKPOINT_EVERY == 0:
@@ -317,19 +317,21 @@ class Trace:
         elif sink is not None and sink.due:
             sink.flush()
         if self.watcher is not None:
-            self.watcher(line.decode("ascii"))
+            self.watcher(text if text is not None else line.decode("ascii"))
 
-    def _write(self, line: bytes) -> None:
+    def _write(self, line: bytes) -> str | None:
         """One line (ASCII: the header and step lines escape anything else) into the hash and to whoever
-        keeps lines."""
+        keeps lines; the line as text if it was decoded for them."""
         self._hash.update(line)
         self._hash.update(b"\n")
-        if self.keep_lines or self.sink is not None:
-            text = line.decode("ascii")
-            if self.keep_lines:
-                self.lines.append(text)
-            if self.sink is not None:
-                self.sink.add(text)
+        if not (self.keep_lines or self.sink is not None):
+            return None
+        text = line.decode("ascii")
+        if self.keep_lines:
+            self.lines.append(text)
+        if self.sink is not None:
+            self.sink.add(text)
+        return text
 
     @property
     def digest(self) -> str:

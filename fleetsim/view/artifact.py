@@ -43,16 +43,18 @@ def write_view_file(folder: Path, scenario: Scenario, result: RunResult, extra: 
     """Write ``view.html`` for a run whose trace was kept into its folder; its path by kind (``view``)."""
     if result.trace is None or not result.trace.lines:
         return {}
-    document = {**result.to_dict(), **extra}
-    # The failures as result.json has them (its times rounded), so this page is the one fleetsim view makes.
-    failures = [
-        Failure(
-            f["kind"], f["time"], f["message"], {k: v for k, v in f.items() if k not in ("kind", "time", "message")}
-        )
-        for f in document["failures"]
-    ]
+    # What the page reads of result.json (the whole document, with every failure's text, is not needed).
+    document = {
+        "planner": result.planner,
+        "status": result.status,
+        "ended": result.ended,
+        "trace_hash": result.trace_hash,
+        **extra,
+    }
     notes = []
     if result.ended == "interrupted":
         notes.append(f"the run was interrupted at t = {result.sim_time:.2f} s; it ends there")
-    write_text_atomically(folder / VIEW_FILE, recorded_view(scenario, result.trace.lines, document, failures, notes))
+    write_text_atomically(
+        folder / VIEW_FILE, recorded_view(scenario, result.trace.lines, document, result.failures, notes)
+    )
     return {"view": str(folder / VIEW_FILE)}

@@ -16,6 +16,7 @@ or closed page never slows the run. Any page may pause, step or change the speed
 
 from __future__ import annotations
 
+import contextlib
 import json
 import queue
 import threading
@@ -25,7 +26,6 @@ from typing import Any
 
 from fleetsim.recording.replay import replay
 from fleetsim.scenario import Scenario
-from fleetsim.sim.result import Pacing
 from fleetsim.view.document import StepRecords, scene_part
 
 __all__ = ["FASTEST", "LiveRun", "Pacer", "parse_speed"]
@@ -70,12 +70,6 @@ class Pacer:
         with self._changed:
             self._anchor = (time.monotonic(), 0.0)
             self.shown, self.lag, self.late_steps, self.started_at = 0.0, 0.0, 0, self.speed
-
-    def pacing(self, time_step: float) -> Pacing | None:
-        """How the run kept its pace (``None`` for a run that went as fast as it could)."""
-        if self.started_at is None:
-            return None
-        return Pacing(self.started_at, round(self.lag, 6), self.late_steps, ())
 
     def wait_for_moment(self, sim_time: float) -> None:
         """Until the wall clock reaches the moment of ``sim_time`` at the current speed (returns at once
@@ -128,6 +122,21 @@ class Pacer:
             self.speed = speed
             self._anchor = (time.monotonic(), self.shown)
             self._changed.notify_all()
+
+
+def _batched(items: list[Any]) -> Iterator[Any]:
+    """Queued items as messages: each run of step records as one ``steps`` message, others as they are."""
+    steps: list[Any] = []
+    for item in items:
+        if isinstance(item, list):
+            steps.append(item)
+            continue
+        if steps:
+            yield {"type": "steps", "steps": steps}
+            steps = []
+        yield item
+    if steps:
+        yield {"type": "steps", "steps": steps}
 
 
 class _Page:
@@ -252,42 +261,26 @@ class LiveRun:
         from websockets.exceptions import ConnectionClosed
 
         while True:
-            item = page.outbox.get()
-            if item is _END:
-                return
-            steps: list[Any] = []
-            messages: list[Any] = []
-            while True:  # what is queued goes out together: steps batched into one message
-                if isinstance(item, list):
-                    steps.append(item)
-                else:
-                    if steps:
-                        messages.append({"type": "steps", "steps": steps})
-                        steps = []
-                    messages.append(item)
-                try:
-                    item = page.outbox.get_nowait()
-                except queue.Empty:
-                    break
-                if item is _END:
-                    page.outbox.put(_END)
-                    break
-            if steps:
-                messages.append({"type": "steps", "steps": steps})
+            queued = [page.outbox.get()]  # wait for one, then take whatever else is queued
+            with contextlib.suppress(queue.Empty):
+                while True:
+                    queued.append(page.outbox.get_nowait())
+            ended = _END in queued
             try:
-                for message in messages:
+                for message in _batched(queued[: queued.index(_END)] if ended else queued):
                     connection.send(json.dumps(message, separators=(",", ":")))
             except ConnectionClosed:
+                return
+            if ended:
                 return
 
     def _read(self, connection: Any, page: _Page) -> None:
         from websockets.exceptions import ConnectionClosed
 
         try:
-            for text in connection:
-                self._control(text)
-        except ConnectionClosed:
-            pass
+            with contextlib.suppress(ConnectionClosed):  # the page went: nothing more to read
+                for text in connection:
+                    self._control(text)
         finally:
             page.outbox.put(_END)
 

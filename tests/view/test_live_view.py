@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 import re
 import struct
@@ -235,11 +236,9 @@ def _listen(client: Any, topics: list[str], received: dict[int, list[int]], subs
     from websockets.exceptions import ConnectionClosed
 
     channels: dict[str, int] = {}
-    try:
+    with contextlib.suppress(ConnectionClosed):  # the test closed it
         for message in client:
             _take(client, message, channels, topics, received, subscribed)
-    except ConnectionClosed:
-        pass
 
 
 def _take(
