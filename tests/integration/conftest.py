@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import os
-import shutil
 import subprocess
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
+from tooling import required_tool
 
 __all__ = ["TiledCli", "required_tool"]
 
@@ -52,18 +52,6 @@ class TiledCli:
         if not target.is_file():
             raise RuntimeError(f"tiled reported success but wrote no {target}")
         return target
-
-
-def required_tool(program: str, what: str, install: str) -> str:
-    """The path of ``program``; a test needing it is skipped when it is missing, or fails when
-    FLEETSIM_REQUIRE_TOOLS=1 (CI must not pass by skipping)."""
-    executable = shutil.which(program)
-    if executable is None:
-        reason = f"{what} is not on PATH (Debian/Ubuntu: {install})"
-        if os.environ.get("FLEETSIM_REQUIRE_TOOLS") == "1":
-            pytest.fail(reason + "; FLEETSIM_REQUIRE_TOOLS=1 requires it")
-        pytest.skip(reason)
-    return executable
 
 
 @pytest.fixture(scope="session")

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 from browser import chromium_run, requested
-from conftest import required_tool
+from tooling import required_tool
 
 REPO = Path(__file__).resolve().parents[2]
 # What a planner reads (docs/reference/planner.md): each type, and attributes that must be in its table.

@@ -8,8 +8,8 @@ from pathlib import Path
 import pytest
 from browser import chromium_run as _chromium
 from browser import requested as _requested
-from conftest import required_tool
 from sweep_support import write_spec
+from tooling import required_tool
 
 from fleetsim.cli.main import main
 from fleetsim.sweep.items import expand

@@ -9,31 +9,19 @@ FLEETSIM_REQUIRE_TOOLS=1 (CI must not pass by skipping).
 from __future__ import annotations
 
 import itertools
-import os
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
+from tooling import mosquitto_executable
 
-from fleetsim.vda5050.broker import BrokerAddress, BrokerError, EmbeddedBroker, Mosquitto, find_mosquitto
+from fleetsim.vda5050.broker import BrokerAddress, BrokerError, EmbeddedBroker, Mosquitto
 from fleetsim.vda5050.link import MqttLink, Will
 
-__all__ = ["MakeLink", "mosquitto_executable"]
+__all__ = ["MakeLink"]
 
 
 MakeLink = Callable[..., MqttLink]
-
-
-def mosquitto_executable() -> str:
-    """The mosquitto broker; a test needing it is skipped when it is missing, or fails when
-    FLEETSIM_REQUIRE_TOOLS=1."""
-    executable = find_mosquitto()
-    if executable is None:
-        reason = "the MQTT broker 'mosquitto' is not installed (Debian/Ubuntu: apt install mosquitto)"
-        if os.environ.get("FLEETSIM_REQUIRE_TOOLS") == "1":
-            pytest.fail(reason + "; FLEETSIM_REQUIRE_TOOLS=1 requires it")
-        pytest.skip(reason)
-    return executable
 
 
 @pytest.fixture

@@ -41,7 +41,6 @@ from __future__ import annotations
 
 import atexit
 import json
-import os
 import re
 import shutil
 import subprocess
@@ -54,7 +53,7 @@ from pathlib import Path
 from typing import Any
 
 import jsonschema
-import pytest
+from tooling import missing
 
 __all__ = ["KNOWN_DEFECTS", "NODE_DIR", "KnownDefect", "node_validator", "validate", "validate_20", "validate_21"]
 
@@ -190,12 +189,6 @@ class NodeValidator:
                 self._process.wait()
 
 
-def _missing(reason: str) -> None:
-    if os.environ.get("FLEETSIM_REQUIRE_TOOLS") == "1":
-        pytest.fail(reason + "; FLEETSIM_REQUIRE_TOOLS=1 requires it")
-    pytest.skip(reason)
-
-
 _node_validator: NodeValidator | None = None
 
 
@@ -205,9 +198,9 @@ def node_validator() -> NodeValidator:
     if _node_validator is None:
         node = shutil.which("node")
         if node is None:
-            _missing("Node.js 'node' is not on PATH (Debian/Ubuntu: apt install nodejs)")
+            missing("Node.js 'node' is not on PATH (Debian/Ubuntu: apt install nodejs)")
         if not _VALIDATORS_20.is_file():
-            _missing(f"vda-5050-lib is not installed in {NODE_DIR} (npm ci --prefix tests/vda5050/node)")
+            missing(f"vda-5050-lib is not installed in {NODE_DIR} (npm ci --prefix tests/vda5050/node)")
         assert node is not None
         _node_validator = NodeValidator(node)
     return _node_validator

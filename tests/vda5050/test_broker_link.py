@@ -13,7 +13,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
-from conftest import mosquitto_executable
+from tooling import mosquitto_executable
 
 from fleetsim.sim.planner_spec import PlannerSpecError
 from fleetsim.vda5050 import broker as broker_module

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import importlib.util
 import json
-import os
 import re
 import shutil
 import subprocess
@@ -22,15 +21,14 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from tooling import missing
 
 
 def _require(module: str, what: str) -> None:
     """Skip the module when ``module`` is not installed, or fail when FLEETSIM_REQUIRE_TOOLS=1."""
     if importlib.util.find_spec(module.partition(".")[0]) is None or importlib.util.find_spec(module) is None:
         reason = f"{what} ({module}) is not installed: pip install 'fleetsim[vda5050]' 'fleetsim[sweep]'"
-        if os.environ.get("FLEETSIM_REQUIRE_TOOLS") == "1":
-            pytest.fail(reason + "; FLEETSIM_REQUIRE_TOOLS=1 requires it", pytrace=False)
-        pytest.skip(reason, allow_module_level=True)
+        missing(reason, module_level=True)
 
 
 _require("paho.mqtt", "the MQTT client paho-mqtt")

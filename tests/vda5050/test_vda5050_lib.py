@@ -25,6 +25,7 @@ from typing import Any
 import pytest
 from official import NODE_DIR
 from runs import run_example
+from tooling import missing
 
 ROOT = Path(__file__).resolve().parents[2]
 MASTER = NODE_DIR / "master.js"
@@ -32,20 +33,14 @@ _LIB = NODE_DIR / "node_modules" / "vda-5050-lib" / "controller" / "master-contr
 _MQTT = NODE_DIR / "node_modules" / "mqtt"
 
 
-def _missing(reason: str) -> None:
-    if os.environ.get("FLEETSIM_REQUIRE_TOOLS") == "1":
-        pytest.fail(reason + "; FLEETSIM_REQUIRE_TOOLS=1 requires it")
-    pytest.skip(reason)
-
-
 @pytest.fixture(scope="module")
 def node() -> str:
     """The ``node`` executable, with vda-5050-lib and mqtt installed next to master.js."""
     executable = shutil.which("node")
     if executable is None:
-        _missing("Node.js 'node' is not on PATH (Debian/Ubuntu: apt install nodejs)")
+        missing("Node.js 'node' is not on PATH (Debian/Ubuntu: apt install nodejs)")
     if not _LIB.is_file() or not _MQTT.is_dir():
-        _missing(f"vda-5050-lib is not installed in {NODE_DIR} (npm ci --prefix tests/vda5050/node)")
+        missing(f"vda-5050-lib is not installed in {NODE_DIR} (npm ci --prefix tests/vda5050/node)")
     assert executable is not None
     return executable
 

@@ -4,27 +4,16 @@ is missing, and failed instead under FLEETSIM_REQUIRE_TOOLS=1 (CI must not pass 
 
 from __future__ import annotations
 
-import os
-import shutil
 from collections.abc import Iterator
 from typing import Any
 
 import pytest
-
-
-def _missing(reason: str) -> None:
-    if os.environ.get("FLEETSIM_REQUIRE_TOOLS") == "1":
-        pytest.fail(reason + "; FLEETSIM_REQUIRE_TOOLS=1 requires it", pytrace=False)
-    pytest.skip(reason)
+from tooling import missing, required_tool
 
 
 @pytest.fixture(scope="session")
 def chromium_path() -> str:
-    path = shutil.which("chromium")
-    if path is None:
-        _missing("Chromium 'chromium' is not on PATH (Debian/Ubuntu: apt install chromium)")
-    assert path is not None
-    return path
+    return required_tool("chromium", "Chromium 'chromium'", "apt install chromium")
 
 
 @pytest.fixture(scope="module")
@@ -32,7 +21,7 @@ def browser(chromium_path: str) -> Iterator[Any]:
     try:
         from playwright.sync_api import sync_playwright
     except ImportError:
-        _missing("Playwright for Python is not installed (pip install playwright)")
+        missing("Playwright for Python is not installed (pip install playwright)")
     with sync_playwright() as playwright:
         launched = playwright.chromium.launch(
             executable_path=chromium_path, args=["--no-sandbox", "--disable-gpu", "--disable-background-networking"]
