@@ -117,11 +117,15 @@ def run(args: argparse.Namespace) -> int:
             return _run_all(args, stop)
         from fleetsim.view.session import LiveSession
 
-        say = lambda text: print(text, file=sys.stderr, flush=True)  # noqa: E731
         with LiveSession(
-            args.speed, port=args.port, open_browser=not args.no_open, foxglove_port=args.foxglove, say=say
+            args.speed, port=args.port, open_browser=not args.no_open, foxglove_port=args.foxglove, say=_say
         ) as live:
             return _run_all(args, stop, live)
+
+
+def _say(text: str) -> None:
+    """A line for the user at once, on stderr (stdout may carry --json)."""
+    print(text, file=sys.stderr, flush=True)
 
 
 def _run_all(args: argparse.Namespace, stop: StopSignals, live: LiveSession | None = None) -> int:
@@ -236,7 +240,7 @@ def _run_target(
         keep_trace=record is not None, stop=stop, trace_file=trace_file, watch=watch,
     )  # fmt: skip
     if live is not None:
-        print(live.end(scenario, result), file=sys.stderr, flush=True)
+        _say(live.end(scenario, result))
     if record is not None and folder is not None:
         from fleetsim.view import write_view_file
 
