@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from viewer import EXAMPLES, drawn, ready, state, wait_drawn
+from viewer import EXAMPLES, ready, state, wait_drawn
 
 from fleetsim.cli.main import main
 from fleetsim.cli.recorded import read_recorded_run
@@ -266,7 +266,7 @@ def test_the_drawn_headings_point_where_the_vehicles_drive(page: Any, runs: dict
     folder = runs["passing"]
     _open(page, folder / "view.html")
     page.evaluate("fleetsimView.seek(30)")
-    before = drawn(page)["poses"]
+    before = wait_drawn(page, 30)["poses"]  # once that step is drawn
     page.evaluate("fleetsimView.seek(35)")
     after = wait_drawn(page, 35)["poses"]
     x0, y0, heading = before["2"]
