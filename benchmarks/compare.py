@@ -31,7 +31,7 @@ from warehouse import write_fleet_scenario
 CHILD = """
 import json, sys
 from pathlib import Path
-from fleetsim.load.scenario import load_scenario_dir
+from fleetsim.load.suites.scenario import load_scenario_dir
 from fleetsim.planners import BFSPlanner, ReservingPlanner
 from fleetsim.scenario import ScenarioSettings
 from fleetsim.sim.loop import run_scenario

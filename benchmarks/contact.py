@@ -61,7 +61,7 @@ def run_pair(vehicles: int, folder: Path, seconds: float, planner_name: str, con
     """Load one fleet's scenario in this process and run it with the contact check on and off, in the
     order given; both runs' figures."""
     from fleetsim import planners
-    from fleetsim.load.scenario import load_scenario_dir
+    from fleetsim.load.suites.scenario import load_scenario_dir
     from fleetsim.scenario import ScenarioSettings
     from fleetsim.sim.loop import run_scenario
 

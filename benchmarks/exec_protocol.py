@@ -48,7 +48,7 @@ from warehouse import write_fleet_scenario
 
 from fleetsim.exec import SubprocessPlanner
 from fleetsim.layout.layout import Layout
-from fleetsim.load.scenario import load_scenario_dir
+from fleetsim.load.suites.scenario import load_scenario_dir
 from fleetsim.planners import BFSPlanner, ReservingPlanner
 from fleetsim.planning.plans import Response, RouteError
 from fleetsim.planning.protocol import Planner, RoundCall

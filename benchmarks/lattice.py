@@ -25,8 +25,8 @@ sys.path.insert(0, str(Path(__file__).parent))
 from warehouse import spread_starts
 
 from fleetsim.layout import build_layout
-from fleetsim.load.scenario import load_scenario_dir
-from fleetsim.load.tiled_writer import write_map
+from fleetsim.load.suites.scenario import load_scenario_dir
+from fleetsim.load.tiled.writer import write_map
 from fleetsim.planners import BFSPlanner, GreedyPlanner, ReservingPlanner
 from fleetsim.planning.protocol import Planner
 from fleetsim.recording.artifacts import write_run_artifacts

@@ -30,8 +30,8 @@ from fleetsim.enums import ConflictModel
 from fleetsim.layout import Segment, build_layout
 from fleetsim.layout.conflicts import SubSegments, all_pairs_conflicts, conflict_sets, polyline_distances
 from fleetsim.layout.geometry import ragged_arange
-from fleetsim.load.tiled import load_map
-from fleetsim.load.tiled_writer import write_map
+from fleetsim.load.tiled.reader import load_map
+from fleetsim.load.tiled.writer import write_map
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE
 
 T = TypeVar("T")

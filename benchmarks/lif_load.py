@@ -21,8 +21,8 @@ from pathlib import Path
 from typing import Any
 
 from fleetsim.layout.layout import build_layout
-from fleetsim.load.map_options import MapOptions
-from fleetsim.load.site_map import load_site_map
+from fleetsim.load.common.map_options import MapOptions
+from fleetsim.load.maps.site_map import load_site_map
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE
 
 SPACING = 4.0

@@ -47,8 +47,8 @@ from warehouse import aisles, spread_starts
 from fleetsim.enums import Direction, JointKind, Traverse, TurnCapability
 from fleetsim.layout import Layout, build_layout
 from fleetsim.layout.segment import Segment
-from fleetsim.load.scenario import load_scenario_dir
-from fleetsim.load.tiled_writer import write_map
+from fleetsim.load.suites.scenario import load_scenario_dir
+from fleetsim.load.tiled.writer import write_map
 from fleetsim.planners import BFSPlanner, ReservingPlanner
 from fleetsim.planners.routing import legs_along, mark_goal_on_fixed, shortest_route, straight_line_estimate
 from fleetsim.planning.plans import FleetPlan, Response, RouteError

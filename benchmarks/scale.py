@@ -48,7 +48,7 @@ def write_one(vehicles: int, folder: Path) -> float:
 def run_one(vehicles: int, folder: Path, seconds: float, planner_name: str) -> dict[str, Any]:
     """Load and simulate one fleet's scenario in this process; its figures."""
     from fleetsim import planners
-    from fleetsim.load.scenario import load_scenario_dir
+    from fleetsim.load.suites.scenario import load_scenario_dir
     from fleetsim.scenario import ScenarioSettings
     from fleetsim.sim.loop import run_scenario
 

@@ -49,7 +49,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 
 from warehouse import write_fleet_scenario
 
-from fleetsim.load.scenario import load_scenario_dir
+from fleetsim.load.suites.scenario import load_scenario_dir
 from fleetsim.planners import BFSPlanner, ReservingPlanner
 from fleetsim.planning.protocol import Planner
 from fleetsim.scenario import Scenario, ScenarioSettings

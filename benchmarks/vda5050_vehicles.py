@@ -56,7 +56,7 @@ from paho.mqtt.enums import CallbackAPIVersion
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from warehouse import write_fleet_scenario
 
-from fleetsim.load.scenario import load_scenario_dir
+from fleetsim.load.suites.scenario import load_scenario_dir
 from fleetsim.scenario import ScenarioSettings
 from fleetsim.sim.loop import run_scenario
 from fleetsim.vda5050.broker import BrokerAddress, BrokerError, EmbeddedBroker, Mosquitto, find_mosquitto

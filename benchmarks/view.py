@@ -36,7 +36,7 @@ from warehouse import write_fleet_scenario
 
 def make_page(folder: Path, vehicles: int, aisles: float, seconds: float) -> tuple[Path, dict[str, Any]]:
     """Simulate the site and write its viewer page; the page and what making it took."""
-    from fleetsim.load.scenario import load_scenario_dir
+    from fleetsim.load.suites.scenario import load_scenario_dir
     from fleetsim.planners import BFSPlanner
     from fleetsim.scenario import ScenarioSettings
     from fleetsim.sim.loop import run_scenario

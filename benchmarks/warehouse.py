@@ -17,7 +17,7 @@ import networkx as nx
 from fleetsim.enums import Traverse
 from fleetsim.layout import Layout, build_layout
 from fleetsim.layout.segment import Segment
-from fleetsim.load.tiled_writer import write_map
+from fleetsim.load.tiled.writer import write_map
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE
 from fleetsim.strategies.geometry import warehouse
 

@@ -63,7 +63,7 @@ if TYPE_CHECKING:
         VehicleType,
     )
     from fleetsim.sim import Divergence, Failure, RunResult, first_divergence, run_scenario
-    from fleetsim.sim.planner_spec import PlannerSpecError
+    from fleetsim.specs.python import PlannerSpecError
 
 from fleetsim.version import __version__
 
@@ -152,7 +152,7 @@ _HOMES: dict[str, str] = {
     "MapError": "fleetsim.errors",
     "Planner": "fleetsim.planning",
     "PlannerError": "fleetsim.errors",
-    "PlannerSpecError": "fleetsim.sim.planner_spec",
+    "PlannerSpecError": "fleetsim.specs.python",
     "Progress": "fleetsim.enums",
     "Rejection": "fleetsim.planning",
     "RejectionCode": "fleetsim.planning",

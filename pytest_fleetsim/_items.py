@@ -14,7 +14,7 @@ from typing import Any
 import pytest
 
 from fleetsim.errors import FleetsimError
-from fleetsim.load.suite import ScenarioSpec, Suite, load_suite
+from fleetsim.load.suites.suite import ScenarioSpec, Suite, load_suite
 from pytest_fleetsim._key import STATE_KEY
 
 __all__ = ["ScenarioFailed", "ScenarioItem", "ScenarioNotLoaded", "SuiteFile"]

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Protocol
 import pytest
 
 if TYPE_CHECKING:
-    from fleetsim.sim.planner_spec import PlannerFactory
+    from fleetsim.specs.python import PlannerFactory
 
 __all__ = ["STATE_KEY", "SessionState"]
 

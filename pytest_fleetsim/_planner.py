@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from typing import cast
 
 from fleetsim.planning.protocol import Planner
-from fleetsim.sim.planner_spec import METHODS, PlannerFactory, PlannerSpecError, import_planner_factory
+from fleetsim.specs.python import METHODS, PlannerFactory, PlannerSpecError, import_planner_factory
 
 __all__ = ["PlannerSource", "load_factory", "planner_source"]
 

@@ -32,14 +32,14 @@ from fleetsim.gating.baseline import (
 )
 from fleetsim.gating.lockfile import HashLock, LockEntry, LockFileError, lock_path_for
 from fleetsim.gating.verify import in_ci, run_checked
-from fleetsim.load.scenario import load_scenario
-from fleetsim.load.suite import load_suite
+from fleetsim.load.suites.scenario import load_scenario
+from fleetsim.load.suites.suite import load_suite
 from fleetsim.recording.artifacts import artifact_folder, discard_run_folder, start_run_folder, write_run_artifacts
 from fleetsim.scenario import Scenario
 from fleetsim.sim.interrupt import StopSignals
-from fleetsim.sim.planner_spec import PlannerFactory, PlannerSpecError
 from fleetsim.sim.report import SUMMARY_COLUMNS, failure_report, format_table, summary_cells
 from fleetsim.sim.result import RunResult
+from fleetsim.specs.python import PlannerFactory, PlannerSpecError
 from pytest_fleetsim._items import ScenarioFailed, ScenarioItem, ScenarioNotLoaded
 from pytest_fleetsim._planner import load_factory, planner_source
 

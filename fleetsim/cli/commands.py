@@ -16,12 +16,12 @@ from fleetsim.enums import ConflictModel
 from fleetsim.errors import LoadError, UnreachableTaskError
 from fleetsim.exec.protocol import encode_layout
 from fleetsim.layout.layout import Layout, build_layout
-from fleetsim.load.map_options import MapOptions, SiteMap
-from fleetsim.load.scenario import load_scenario, load_scenario_dir
-from fleetsim.load.scenario_files import MAP_FILE_NAMES, VEHICLES_FILE_NAME, map_candidates
-from fleetsim.load.site_map import load_site_map
-from fleetsim.load.suite import SUITE_SUFFIX, ScenarioSpec, Suite, discover_suites, load_suite
-from fleetsim.load.text import write_text_atomically
+from fleetsim.load.common.map_options import MapOptions, SiteMap
+from fleetsim.load.common.text import write_text_atomically
+from fleetsim.load.maps.site_map import load_site_map
+from fleetsim.load.suites.scenario import load_scenario, load_scenario_dir
+from fleetsim.load.suites.suite import SUITE_SUFFIX, ScenarioSpec, Suite, discover_suites, load_suite
+from fleetsim.load.tables.scenario_files import MAP_FILE_NAMES, VEHICLES_FILE_NAME, map_candidates
 from fleetsim.recording.svg import render_layout_svg
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Scenario
 
@@ -277,7 +277,7 @@ def convert(args: argparse.Namespace) -> int:
     OUT ending in .lif.json is LIF 1.0 (one layout; two-way segments as an edge each way); .json, .tmj or
     .tmx is a Tiled map (free-form segments as polylines of class path) that the Tiled editor opens.
     """
-    from fleetsim.load.convert import convert_map  # only this command writes maps
+    from fleetsim.load.maps.convert import convert_map  # only this command writes maps
 
     site, written = convert_map(
         Path(args.map), Path(args.output), map_options(args), connection_tolerance=args.connection_tolerance

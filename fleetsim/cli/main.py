@@ -359,7 +359,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     else:
         args = build_parser().parse_args(words)
     from fleetsim.cli.run import UsageError
-    from fleetsim.sim.planner_spec import PlannerSpecError
+    from fleetsim.specs.python import PlannerSpecError
 
     try:
         return int(_command(args.run)(args))

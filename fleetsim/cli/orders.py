@@ -57,7 +57,7 @@ def orders(args: argparse.Namespace) -> int:
     """
     from fleetsim.cli.recorded import read_recorded_run
     from fleetsim.cli.run import UsageError
-    from fleetsim.load.text import write_text_atomically
+    from fleetsim.load.common.text import write_text_atomically
     from fleetsim.recording.replay import TraceError
     from fleetsim.vda5050.export import ExportError, export_orders, order_line
 

@@ -16,10 +16,10 @@ from pathlib import Path
 from typing import Any
 
 from fleetsim.cli.run import UsageError
-from fleetsim.load.scenario import load_scenario
-from fleetsim.load.scenario_files import did_you_mean
-from fleetsim.load.suite import load_suite
-from fleetsim.load.text import json_problem, write_text_atomically
+from fleetsim.load.common.closest import did_you_mean
+from fleetsim.load.common.text import json_problem, write_text_atomically
+from fleetsim.load.suites.scenario import load_scenario
+from fleetsim.load.suites.suite import load_suite
 from fleetsim.recording.artifacts import (
     MCAP_FILE,
     RESULT_FILE,

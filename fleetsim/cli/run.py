@@ -34,15 +34,15 @@ from fleetsim.gating.generated import (
     hunt_label,
     record_counterexample,
 )
-from fleetsim.load.scenario import load_scenario
-from fleetsim.load.scenario_files import did_you_mean
-from fleetsim.load.suite import SUITE_SUFFIX, ScenarioSpec, Suite, discover_suites, load_suite
+from fleetsim.load.common.closest import did_you_mean
+from fleetsim.load.suites.scenario import load_scenario
+from fleetsim.load.suites.suite import SUITE_SUFFIX, ScenarioSpec, Suite, discover_suites, load_suite
 from fleetsim.recording.artifacts import artifact_folder, start_run_folder, write_run_artifacts
 from fleetsim.sim.interrupt import StopSignals, signal_name
 from fleetsim.sim.loop import RunProgress, run_scenario
-from fleetsim.sim.planner_spec import PlannerFactory, PlannerSpecError
 from fleetsim.sim.report import failure_lines, format_table, summary_cells
 from fleetsim.sim.result import Failure, RunResult
+from fleetsim.specs.python import PlannerFactory, PlannerSpecError
 
 if TYPE_CHECKING:
     from fleetsim.view.session import LiveSession

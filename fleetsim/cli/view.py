@@ -13,7 +13,7 @@ from pathlib import Path
 
 from fleetsim.cli.recorded import RecordedRun, read_recorded_run
 from fleetsim.cli.run import UsageError
-from fleetsim.load.text import write_text_atomically
+from fleetsim.load.common.text import write_text_atomically
 from fleetsim.recording.replay import TraceError
 
 __all__ = ["view", "view_page"]

@@ -6,7 +6,7 @@ from __future__ import annotations
 import sys
 
 from fleetsim.exec.client import serve
-from fleetsim.sim.planner_spec import PlannerSpecError, import_planner_factory
+from fleetsim.specs.python import PlannerSpecError, import_planner_factory
 
 
 def main(argv: list[str]) -> int:

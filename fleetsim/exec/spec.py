@@ -1,5 +1,5 @@
 """A planner spec of any form (SPEC §14): ``module:attr``, a planner imported into this process
-(``fleetsim.sim.planner_spec``), ``exec:COMMAND``, a planner process per run speaking the JSON-lines
+(``fleetsim.specs.python``), ``exec:COMMAND``, a planner process per run speaking the JSON-lines
 protocol, or ``vda5050:...``, the vehicles as VDA 5050 vehicles driven by a master control
 (``fleetsim.vda5050.spec``). The command line, the pytest plugin and sweeps read ``--planner`` through
 this module.
@@ -10,7 +10,7 @@ from __future__ import annotations
 import functools
 
 from fleetsim.exec.process import SubprocessPlanner
-from fleetsim.sim.planner_spec import PlannerFactory, command_words, import_planner_factory
+from fleetsim.specs.python import PlannerFactory, command_words, import_planner_factory
 
 __all__ = ["EXEC_PREFIX", "VDA5050_PREFIX", "load_planner_factory"]
 
@@ -24,7 +24,7 @@ def load_planner_factory(spec: str, *, call_timeout: float | None = 10.0) -> Pla
     (whose per-call timeout is ``call_timeout`` seconds).
 
     The factory makes a fresh planner for every run; the current working directory is importable.
-    Every mistake in ``spec`` is a [`PlannerSpecError`][fleetsim.sim.planner_spec.PlannerSpecError].
+    Every mistake in ``spec`` is a [`PlannerSpecError`][fleetsim.specs.python.PlannerSpecError].
     """
     if isinstance(spec, str) and spec.startswith(EXEC_PREFIX):
         return _exec_factory(spec, call_timeout)

@@ -21,7 +21,7 @@ from types import MappingProxyType
 from typing import Any, Literal, NamedTuple, get_args
 
 from fleetsim.errors import FleetsimError, Location
-from fleetsim.load.text import json_problem, write_text_atomically
+from fleetsim.load.common.text import json_problem, write_text_atomically
 from fleetsim.sim.result import RunResult
 
 __all__ = [

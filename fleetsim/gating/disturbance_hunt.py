@@ -15,7 +15,7 @@ from dataclasses import replace
 
 from hypothesis import strategies as st
 
-from fleetsim.load.disturbances import HuntDisturbances
+from fleetsim.load.suites.disturbances import HuntDisturbances
 from fleetsim.scenario import Disturbance, Scenario
 
 __all__ = ["disturbance_lines", "disturbed", "stop_schedules"]

@@ -31,8 +31,8 @@ from hypothesis.strategies import SearchStrategy
 from fleetsim.errors import Location, SuiteError
 from fleetsim.gating.disturbance_hunt import disturbance_lines, disturbed, stop_schedules
 from fleetsim.gating.verify import in_ci
-from fleetsim.load.scenario import default_vehicle_type, load_scenario
-from fleetsim.load.suite import ScenarioSpec, Suite
+from fleetsim.load.suites.scenario import default_vehicle_type, load_scenario
+from fleetsim.load.suites.suite import ScenarioSpec, Suite
 from fleetsim.planning.protocol import Planner
 from fleetsim.recording.artifacts import start_run_folder, write_run_artifacts
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Disturbance, Expectations, Scenario

@@ -16,8 +16,8 @@ from pathlib import Path
 from typing import Any, NoReturn
 
 from fleetsim.errors import LoadError, Location, MapError
-from fleetsim.load.text import read_text_file, write_text_atomically
-from fleetsim.load.tiled_templates import parse_json
+from fleetsim.load.common.text import read_text_file, write_text_atomically
+from fleetsim.load.tiled.templates import parse_json
 from fleetsim.sim.trace import CHECKPOINT_EVERY, TRACE_FORMAT
 
 __all__ = ["LOCK_FORMAT", "HashLock", "HashMismatch", "LockEntry", "LockFileError", "compare_run", "lock_path_for"]

@@ -28,7 +28,7 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from fleetsim.load.text import write_text_atomically
+from fleetsim.load.common.text import write_text_atomically
 from fleetsim.scenario import Scenario
 from fleetsim.sim.result import Failure, RunResult
 

@@ -12,9 +12,9 @@ import io
 from collections.abc import Iterable
 from pathlib import Path
 
-from fleetsim.load.scenario import load_scenario_dir
-from fleetsim.load.scenario_files import TASK_COLUMNS, TASKS_FILE_NAME, VEHICLE_COLUMNS, VEHICLES_FILE_NAME
-from fleetsim.load.tiled_writer import write_map
+from fleetsim.load.suites.scenario import load_scenario_dir
+from fleetsim.load.tables.scenario_files import TASK_COLUMNS, TASKS_FILE_NAME, VEHICLE_COLUMNS, VEHICLES_FILE_NAME
+from fleetsim.load.tiled.writer import write_map
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Scenario, ScenarioSettings, VehicleType
 from fleetsim.strategies._scenarios import GenerationSpec
 

@@ -24,7 +24,7 @@ from hypothesis.strategies import SearchStrategy
 from fleetsim.enums import ConflictModel, Progress, Traverse, TurnCapability
 from fleetsim.layout.layout import Layout, build_layout
 from fleetsim.layout.segment import Segment
-from fleetsim.load.scenario import default_vehicle_type
+from fleetsim.load.suites.scenario import default_vehicle_type
 from fleetsim.planners.routing import State, next_states
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Scenario, ScenarioSettings, Task, Vehicle, VehicleType
 from fleetsim.strategies._layouts import SMALLEST_FIRST, check_kind, check_range, draw_kind_layout, plainest_layout

@@ -23,8 +23,8 @@ from hypothesis.errors import HypothesisWarning, NoSuchExample
 
 from fleetsim.errors import LoadError
 from fleetsim.gating.generated import generation_spec, hypothesis_storage_elsewhere
-from fleetsim.load.scenario import load_scenario
-from fleetsim.load.suite import discover_suites, load_suite
+from fleetsim.load.suites.scenario import load_scenario
+from fleetsim.load.suites.suite import discover_suites, load_suite
 from fleetsim.scenario import RandomDisturbances, Scenario
 from fleetsim.strategies import scenarios
 from fleetsim.sweep.payload import scenario_payload

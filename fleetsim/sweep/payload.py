@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from fleetsim.enums import ConflictModel, TurnCapability
-from fleetsim.load.scenario import load_scenario_dir
+from fleetsim.load.suites.scenario import load_scenario_dir
 from fleetsim.scenario import Disturbance, Expectations, RandomDisturbances, Scenario, ScenarioSettings, VehicleType
 from fleetsim.strategies import save_scenario
 

@@ -33,8 +33,10 @@ from typing import Any, Literal
 from fleetsim.errors import LoadError, Location, SuiteError
 from fleetsim.exec.spec import EXEC_PREFIX, VDA5050_PREFIX
 from fleetsim.gating.generated import check_generate_block
-from fleetsim.load.scenario_files import did_you_mean
-from fleetsim.load.suite import (
+from fleetsim.load.common.closest import did_you_mean
+from fleetsim.load.common.yaml_source import Locate, YamlPath, load_yaml_with_marks
+from fleetsim.load.suites.schema import check_against_schema, suite_schema
+from fleetsim.load.suites.suite import (
     ScenarioSpec,
     Suite,
     load_suite,
@@ -42,8 +44,6 @@ from fleetsim.load.suite import (
     parse_settings,
     parse_vehicle_types,
 )
-from fleetsim.load.suite_schema import check_against_schema, suite_schema
-from fleetsim.load.yaml_source import Locate, YamlPath, load_yaml_with_marks
 from fleetsim.scenario import ScenarioSettings
 
 __all__ = [

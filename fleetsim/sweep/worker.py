@@ -17,8 +17,8 @@ from typing import Any
 from fleetsim.exec.spec import load_planner_factory
 from fleetsim.recording.artifacts import artifact_folder, discard_run_folder, start_run_folder, write_run_artifacts
 from fleetsim.sim.loop import run_scenario
-from fleetsim.sim.planner_spec import PlannerSpecError
 from fleetsim.sim.result import Ending, Failure, RunResult
+from fleetsim.specs.python import PlannerSpecError
 from fleetsim.sweep.items import RunItem
 from fleetsim.sweep.payload import scenario_from_payload
 from fleetsim.view import write_view_file

@@ -13,15 +13,15 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from fleetsim.sim.planner_spec import PlannerFactory
+    from fleetsim.specs.python import PlannerFactory
 
 __all__ = ["load_vda5050_factory"]
 
 
 def load_vda5050_factory(spec: str) -> PlannerFactory:
     """The factory a ``vda5050:`` planner spec names (:mod:`fleetsim.vda5050.spec`); without the
-    ``vda5050`` extra installed, a :class:`~fleetsim.sim.planner_spec.PlannerSpecError` saying so."""
-    from fleetsim.sim.planner_spec import PlannerSpecError
+    ``vda5050`` extra installed, a :class:`~fleetsim.specs.python.PlannerSpecError` saying so."""
+    from fleetsim.specs.python import PlannerSpecError
 
     try:
         from fleetsim.vda5050.spec import vda5050_factory

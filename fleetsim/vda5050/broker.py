@@ -24,7 +24,7 @@ from types import TracebackType
 from typing import Any
 from urllib.parse import unquote, urlsplit
 
-from fleetsim.sim.planner_spec import PlannerSpecError
+from fleetsim.specs.python import PlannerSpecError
 
 __all__ = [
     "BrokerAddress",

@@ -44,8 +44,8 @@ from fleetsim.planning.checks import CheckContext, Rejection, RejectionCode, che
 from fleetsim.planning.plans import FleetLeg, FleetPlan, Response
 from fleetsim.planning.snapshot import FleetSnapshot, VehicleState
 from fleetsim.scenario import Task
-from fleetsim.sim.planner_spec import PlannerSpecError
 from fleetsim.sim.result import Pacing
+from fleetsim.specs.python import PlannerSpecError
 from fleetsim.vda5050.broker import BrokerAddress, EmbeddedBroker
 from fleetsim.vda5050.link import MqttLink, Will
 from fleetsim.vda5050.messages import (

@@ -18,7 +18,7 @@ from __future__ import annotations
 import functools
 from dataclasses import replace
 
-from fleetsim.sim.planner_spec import PlannerFactory, PlannerSpecError, command_words
+from fleetsim.specs.python import PlannerFactory, PlannerSpecError, command_words
 from fleetsim.vda5050.broker import BrokerError, check_reachable, parse_broker_url
 from fleetsim.vda5050.fleet import Vda5050Fleet, Vda5050Settings
 from fleetsim.vda5050.model import VERSIONS

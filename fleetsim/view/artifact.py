@@ -12,7 +12,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from fleetsim.load.text import write_text_atomically
+from fleetsim.load.common.text import write_text_atomically
 from fleetsim.scenario import Scenario
 from fleetsim.sim.result import Failure, RunResult
 from fleetsim.view.document import outcome_part, view_document

@@ -12,8 +12,8 @@ import pytest
 
 from fleetsim.enums import Direction, Shape
 from fleetsim.layout import Segment
-from fleetsim.load.scenario import load_scenario_dir
-from fleetsim.load.tiled_writer import write_map
+from fleetsim.load.suites.scenario import load_scenario_dir
+from fleetsim.load.tiled.writer import write_map
 from fleetsim.planners import BFSPlanner
 from fleetsim.recording.picture import failure_picture
 from fleetsim.recording.replay import replay

@@ -13,8 +13,8 @@ from mcap.reader import make_reader
 
 from fleetsim.enums import Progress, Traverse
 from fleetsim.errors import SuiteError
-from fleetsim.load.scenario import load_scenario
-from fleetsim.load.suite import load_suite
+from fleetsim.load.suites.scenario import load_scenario
+from fleetsim.load.suites.suite import load_suite
 from fleetsim.planners import BFSPlanner, ReservingPlanner
 from fleetsim.recording.artifacts import write_run_artifacts
 from fleetsim.recording.picture import contact_moment, failure_picture

@@ -6,7 +6,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from fleetsim.load.tiled_writer import write_map
+from fleetsim.load.tiled.writer import write_map
 from fleetsim.strategies.geometry import grid
 
 

@@ -9,9 +9,9 @@ from typing import TYPE_CHECKING
 import pytest
 
 from fleetsim.enums import Shape
-from fleetsim.load.convert import convert_map
-from fleetsim.load.map_options import MapOptions
-from fleetsim.load.site_map import load_site_map
+from fleetsim.load.common.map_options import MapOptions
+from fleetsim.load.maps.convert import convert_map
+from fleetsim.load.maps.site_map import load_site_map
 
 if TYPE_CHECKING:  # the fixture's type; conftest modules are not importable packages
     from conftest import TiledCli

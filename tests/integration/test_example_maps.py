@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 
 import pytest
 
-from fleetsim.load.tiled import load_map
+from fleetsim.load.tiled.reader import load_map
 
 if TYPE_CHECKING:  # the fixture's type; conftest modules are not importable packages
     from conftest import TiledCli

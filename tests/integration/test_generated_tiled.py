@@ -12,7 +12,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from fleetsim.layout import build_layout
-from fleetsim.load.tiled import load_map
+from fleetsim.load.tiled.reader import load_map
 from fleetsim.scenario import Scenario
 from fleetsim.strategies import LAYOUT_KINDS, GenerationSpec, save_scenario, scenarios
 

@@ -11,7 +11,7 @@ import json
 from pathlib import Path
 from types import ModuleType
 
-from fleetsim.load.scenario import load_scenario_dir
+from fleetsim.load.suites.scenario import load_scenario_dir
 from fleetsim.planners import GreedyPlanner
 from fleetsim.recording.artifacts import write_run_artifacts
 from fleetsim.scenario import ScenarioSettings

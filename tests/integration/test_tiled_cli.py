@@ -12,8 +12,8 @@ import pytest
 
 from fleetsim.enums import Direction, Shape
 from fleetsim.layout.segment import Point, Segment
-from fleetsim.load.tiled import load_map
-from fleetsim.load.tiled_writer import write_map
+from fleetsim.load.tiled.reader import load_map
+from fleetsim.load.tiled.writer import write_map
 
 if TYPE_CHECKING:  # the fixture's type; conftest modules are not importable packages
     from conftest import TiledCli

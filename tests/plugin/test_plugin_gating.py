@@ -27,8 +27,8 @@ from mcap_ros2.decoder import DecoderFactory
 from result_document import RESULT_KEYS, schema_errors
 
 from fleetsim.gating.lockfile import HashLock, LockEntry, lock_path_for
-from fleetsim.load.scenario import load_scenario
-from fleetsim.load.suite import load_suite
+from fleetsim.load.suites.scenario import load_scenario
+from fleetsim.load.suites.suite import load_suite
 from fleetsim.planners import ReservingPlanner
 from fleetsim.sim import run_scenario
 from fleetsim.sim.report import SUMMARY_COLUMNS

@@ -7,7 +7,7 @@ from plugin_helpers import RESERVING, copy_example_suites
 
 from fleetsim.enums import Direction, Shape
 from fleetsim.layout import Segment
-from fleetsim.load.tiled_writer import write_map
+from fleetsim.load.tiled.writer import write_map
 
 SUITE = """\
 fleetsim: 1

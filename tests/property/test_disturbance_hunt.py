@@ -12,8 +12,8 @@ import yaml
 from on_time_planner import OnTimePlanner
 
 from fleetsim.gating.generated import counterexample_entry, hunt, record_counterexample
-from fleetsim.load.scenario import load_scenario, load_scenario_dir
-from fleetsim.load.suite import load_suite
+from fleetsim.load.suites.scenario import load_scenario, load_scenario_dir
+from fleetsim.load.suites.suite import load_suite
 from fleetsim.planners import ReservingPlanner
 from fleetsim.sim.loop import run_scenario
 

@@ -11,8 +11,8 @@ from hypothesis import strategies as st
 from fleetsim.enums import Direction, Shape
 from fleetsim.layout.conflicts import all_pairs_conflicts, swept_conflicts
 from fleetsim.layout.segment import Segment, polyline_length
-from fleetsim.load.tiled import load_map
-from fleetsim.load.tiled_writer import write_map
+from fleetsim.load.tiled.reader import load_map
+from fleetsim.load.tiled.writer import write_map
 
 coordinate = st.floats(min_value=-40.0, max_value=40.0, allow_nan=False, allow_infinity=False)
 point = st.tuples(coordinate, coordinate)

@@ -33,8 +33,8 @@ from hypothesis import strategies as st
 
 from fleetsim.errors import FleetsimError, LayoutError, LoadError, LoadErrors
 from fleetsim.gating.generated import check_generate_block
-from fleetsim.load.scenario import load_scenario
-from fleetsim.load.suite import load_suite
+from fleetsim.load.suites.scenario import load_scenario
+from fleetsim.load.suites.suite import load_suite
 
 SHIPPED = Path(__file__).resolve().parents[2] / "scenario_suites"
 HANG_SECONDS = 20.0

@@ -19,8 +19,8 @@ from fleetsim.cli import main
 from fleetsim.enums import ConflictModel, Progress, TurnCapability
 from fleetsim.layout import build_layout
 from fleetsim.layout.segment import Segment
-from fleetsim.load.scenario import load_scenario
-from fleetsim.load.suite import load_suite
+from fleetsim.load.suites.scenario import load_scenario
+from fleetsim.load.suites.suite import load_suite
 from fleetsim.planners import BFSPlanner, ReservingPlanner
 from fleetsim.planners.routing import State, next_states, shortest_route
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Scenario, ScenarioSettings, VehicleType

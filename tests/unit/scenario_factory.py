@@ -7,8 +7,8 @@ from pathlib import Path
 
 from fleetsim.enums import TurnCapability
 from fleetsim.layout import Segment
-from fleetsim.load.scenario import load_scenario_dir
-from fleetsim.load.tiled_writer import write_map
+from fleetsim.load.suites.scenario import load_scenario_dir
+from fleetsim.load.tiled.writer import write_map
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Scenario, ScenarioSettings, VehicleType
 
 VEHICLES_HEADER = "vehicle_id,start_segment_id,segment_orientation,progress_direction,type\n"

@@ -9,8 +9,8 @@ from pathlib import Path
 from typing import Any
 
 from fleetsim.layout.layout import Layout, build_layout
-from fleetsim.load.map_options import MapOptions, SiteMap
-from fleetsim.load.site_map import load_site_map
+from fleetsim.load.common.map_options import MapOptions, SiteMap
+from fleetsim.load.maps.site_map import load_site_map
 
 Json = dict[str, Any]
 HALF = math.sqrt(0.5)

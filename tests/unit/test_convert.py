@@ -14,9 +14,9 @@ from fleetsim.cli.main import main
 from fleetsim.enums import Direction, Traverse
 from fleetsim.layout.layout import Layout
 from fleetsim.layout.segment import Segment
-from fleetsim.load.convert import convert_map
-from fleetsim.load.map_options import MapOptions
-from fleetsim.load.site_map import load_site_map
+from fleetsim.load.common.map_options import MapOptions
+from fleetsim.load.maps.convert import convert_map
+from fleetsim.load.maps.site_map import load_site_map
 
 ROOT = Path(__file__).resolve().parents[2] / "scenario_suites"
 HALL = ROOT / "sites" / "packing-hall" / "map.lif.json"
@@ -257,7 +257,7 @@ def test_a_tiled_map_given_lif_options_notes_that_they_do_not_apply(tmp_path: Pa
 
 
 def test_segments_keep_their_names_through_a_tiled_file(tmp_path: Path) -> None:
-    from fleetsim.load.tiled_writer import write_map
+    from fleetsim.load.tiled.writer import write_map
 
     segment = Segment(
         3, load_site_map(MIXED).segments[0].shape, Direction.BOTH, ((0.0, 0.0), (2.0, 0.0)), ('a "quoted" name',)

@@ -11,10 +11,10 @@ from fleetsim.cli import main
 from fleetsim.enums import Direction, Progress, Shape, Traverse
 from fleetsim.errors import LoadError, LoadErrors, MapError, ScenarioFileError
 from fleetsim.layout.segment import Segment
-from fleetsim.load.collect import CAP_PER_FILE
-from fleetsim.load.scenario import load_scenario_dir
-from fleetsim.load.scenario_files import read_tasks, read_vehicles
-from fleetsim.load.tiled_writer import write_map
+from fleetsim.load.common.collect import CAP_PER_FILE
+from fleetsim.load.suites.scenario import load_scenario_dir
+from fleetsim.load.tables.scenario_files import read_tasks, read_vehicles
+from fleetsim.load.tiled.writer import write_map
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, ScenarioSettings, Vehicle
 
 SEGMENTS = {

@@ -8,9 +8,9 @@ from pathlib import Path
 import pytest
 
 from fleetsim.errors import SuiteError
-from fleetsim.load.disturbances import HuntDisturbances
-from fleetsim.load.scenario import load_scenario
-from fleetsim.load.suite import load_suite
+from fleetsim.load.suites.disturbances import HuntDisturbances
+from fleetsim.load.suites.scenario import load_scenario
+from fleetsim.load.suites.suite import load_suite
 from fleetsim.scenario import Disturbance, RandomDisturbances, Scenario
 
 CROSSING = Path(__file__).resolve().parents[2] / "scenario_suites" / "examples" / "crossing"

@@ -10,8 +10,8 @@ import pytest
 import yaml
 
 from fleetsim.errors import LoadError
-from fleetsim.load.scenario import load_scenario
-from fleetsim.load.suite import load_suite
+from fleetsim.load.suites.scenario import load_scenario
+from fleetsim.load.suites.suite import load_suite
 
 SUITES = Path(__file__).resolve().parents[2] / "scenario_suites"
 

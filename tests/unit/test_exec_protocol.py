@@ -29,7 +29,7 @@ from fleetsim.exec.protocol import (
     loads,
 )
 from fleetsim.exec.rounds import RoundAnswerError, nothing_changed, read_round_answer
-from fleetsim.load.scenario import load_scenario_dir
+from fleetsim.load.suites.scenario import load_scenario_dir
 from fleetsim.planners import ReservingPlanner
 from fleetsim.planning.controller import ROUND_CALLS, FleetController
 from fleetsim.planning.plans import FleetPlan, RouteError

@@ -19,8 +19,8 @@ from scenario_factory import AGV, TUGGER
 import fleetsim.sim.loop as loop
 from fleetsim.enums import Direction, Progress, Shape, Traverse
 from fleetsim.layout import Segment, build_layout
-from fleetsim.load.scenario import load_scenario
-from fleetsim.load.suite import load_suite
+from fleetsim.load.suites.scenario import load_scenario
+from fleetsim.load.suites.suite import load_suite
 from fleetsim.motion.driver import Driver
 from fleetsim.motion.fleet_cruise import FleetCruise
 from fleetsim.motion.slowdown import SlowDownProfile

@@ -12,9 +12,9 @@ import pytest
 from site_documents import edge, layout, lif_v1, node, quarter, save_json, save_yaml, to_v2
 
 from fleetsim.errors import LoadError, LoadErrors, MapError
-from fleetsim.load.map_options import MapOptions
-from fleetsim.load.scenario import load_scenario_dir
-from fleetsim.load.site_map import load_site_map
+from fleetsim.load.common.map_options import MapOptions
+from fleetsim.load.maps.site_map import load_site_map
+from fleetsim.load.suites.scenario import load_scenario_dir
 
 BASE = lif_v1(
     layout(

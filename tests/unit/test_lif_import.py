@@ -12,8 +12,8 @@ from site_documents import edge, layout, lif_v1, load, node, nurbs, quarter, sav
 from fleetsim.enums import Direction, Shape
 from fleetsim.errors import LoadErrors, MapError
 from fleetsim.layout.nurbs import CHORD_TOLERANCE
-from fleetsim.load.map_options import MapOptions
-from fleetsim.load.site_map import load_site_map
+from fleetsim.load.common.map_options import MapOptions
+from fleetsim.load.maps.site_map import load_site_map
 
 SQUARE_NODES = [node("A", 0, 0), node("B", 10, 0), node("C", 10, 10)]
 STRAIGHTS = lif_v1(

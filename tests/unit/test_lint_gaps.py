@@ -11,7 +11,7 @@ from fleetsim.cli import main
 from fleetsim.enums import Direction, Shape
 from fleetsim.layout import Layout, Segment, build_layout
 from fleetsim.load import load_scenario, load_suite
-from fleetsim.load.tiled_writer import write_map
+from fleetsim.load.tiled.writer import write_map
 
 SUITES = Path(__file__).resolve().parents[2] / "scenario_suites"
 

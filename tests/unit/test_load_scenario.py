@@ -10,9 +10,9 @@ import pytest
 from fleetsim.enums import ConflictModel, Direction, Shape, TurnCapability
 from fleetsim.errors import LoadError, MapError, ScenarioFileError, SuiteError
 from fleetsim.layout.segment import Segment
-from fleetsim.load.scenario import load_scenario, load_scenario_dir
-from fleetsim.load.suite import load_suite
-from fleetsim.load.tiled_writer import write_map
+from fleetsim.load.suites.scenario import load_scenario, load_scenario_dir
+from fleetsim.load.suites.suite import load_suite
+from fleetsim.load.tiled.writer import write_map
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Expectations, Scenario, ScenarioSettings, VehicleType
 
 # Segments 1 and 2 touch at x=5 (so they conflict); segment 3 is far away from both.

@@ -15,8 +15,8 @@ from scenario_factory import make_scenario
 from fleetsim.enums import Direction, JointKind, Shape, Traverse
 from fleetsim.layout.layout import build_layout
 from fleetsim.layout.segment import Segment
-from fleetsim.load.tiled import load_map
-from fleetsim.load.tiled_writer import write_map
+from fleetsim.load.tiled.reader import load_map
+from fleetsim.load.tiled.writer import write_map
 from fleetsim.planners import ReservingPlanner
 from fleetsim.recording.recorder import record_mcap
 from fleetsim.recording.svg import render_layout_svg

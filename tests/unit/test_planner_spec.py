@@ -14,7 +14,7 @@ from fleetsim.errors import FleetsimError
 from fleetsim.exec import SubprocessPlanner
 from fleetsim.exec.spec import load_planner_factory
 from fleetsim.planners import BFSPlanner, ReservingPlanner
-from fleetsim.sim.planner_spec import PlannerFactory, PlannerSpecError
+from fleetsim.specs.python import PlannerFactory, PlannerSpecError
 
 WriteModule = Callable[[str, str], Path]
 

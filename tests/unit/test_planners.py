@@ -17,8 +17,8 @@ import pytest
 from fleetsim import load_scenario, load_suite
 from fleetsim.enums import Direction, Progress, Shape, TurnCapability
 from fleetsim.layout import Segment
-from fleetsim.load.scenario import load_scenario_dir
-from fleetsim.load.tiled_writer import write_map
+from fleetsim.load.suites.scenario import load_scenario_dir
+from fleetsim.load.tiled.writer import write_map
 from fleetsim.planners import BFSPlanner, ReservingPlanner
 from fleetsim.planning import FleetController, FleetPlan, Planner
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Scenario, Task

@@ -8,8 +8,8 @@ import pytest
 from site_documents import save_yaml
 
 from fleetsim.enums import Direction, Shape
-from fleetsim.load.map_options import MapOptions
-from fleetsim.load.site_map import load_site_map
+from fleetsim.load.common.map_options import MapOptions
+from fleetsim.load.maps.site_map import load_site_map
 
 TWO_LEVELS = """\
 name: test
@@ -123,7 +123,7 @@ def test_the_first_level_is_the_default_and_others_are_chosen_by_name(tmp_path: 
 
 
 def test_tasks_name_lanes_by_their_waypoints(tmp_path: Path) -> None:
-    from fleetsim.load.scenario import load_scenario_dir
+    from fleetsim.load.suites.scenario import load_scenario_dir
 
     save_yaml(
         tmp_path,

@@ -19,8 +19,8 @@ import pytest
 import yaml
 
 from fleetsim.errors import FleetsimError, LoadError, LoadErrors, MapError
-from fleetsim.load.map_options import MapOptions
-from fleetsim.load.site_map import load_site_map
+from fleetsim.load.common.map_options import MapOptions
+from fleetsim.load.maps.site_map import load_site_map
 
 CLINIC = Path(__file__).resolve().parents[2] / "scenario_suites" / "sites" / "clinic" / "map.building.yaml"
 TEXT = CLINIC.read_text(encoding="utf-8")

@@ -9,7 +9,7 @@ import pytest
 from fleetsim.enums import Direction, Progress, Shape, Traverse
 from fleetsim.errors import ScenarioFileError
 from fleetsim.layout.segment import Segment
-from fleetsim.load.scenario_files import read_tasks, read_vehicles
+from fleetsim.load.tables.scenario_files import read_tasks, read_vehicles
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Vehicle
 
 SEGMENTS = {

@@ -11,7 +11,7 @@ import pytest
 import fleetsim
 from fleetsim.enums import Direction, Progress, Shape, Traverse
 from fleetsim.layout import Segment
-from fleetsim.load.tiled_writer import write_map
+from fleetsim.load.tiled.writer import write_map
 from fleetsim.planning import FleetController, FleetLeg, FleetPlan
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Scenario, Task
 

@@ -10,8 +10,8 @@ from pathlib import Path
 import pytest
 
 from fleetsim.layout.layout import Layout
-from fleetsim.load.scenario import load_scenario
-from fleetsim.load.suite import load_suite
+from fleetsim.load.suites.scenario import load_scenario
+from fleetsim.load.suites.suite import load_suite
 from fleetsim.planners import ReservingPlanner
 from fleetsim.planning.checks import Rejection, RejectionCode
 from fleetsim.planning.plans import Response

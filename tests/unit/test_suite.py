@@ -9,7 +9,7 @@ import pytest
 
 from fleetsim.enums import ConflictModel, TurnCapability
 from fleetsim.errors import SuiteError
-from fleetsim.load.suite import Suite, discover_suites, load_suite
+from fleetsim.load.suites.suite import Suite, discover_suites, load_suite
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Expectations, ScenarioSettings
 
 SUITES = Path(__file__).resolve().parents[2] / "scenario_suites"

@@ -14,10 +14,10 @@ import pytest
 
 from fleetsim.cli import main
 from fleetsim.errors import LoadErrors, SuiteError, SuiteErrors
-from fleetsim.load.collect import CAP_PER_FILE
-from fleetsim.load.suite import load_suite
-from fleetsim.load.suite_schema import check_against_schema
-from fleetsim.load.yaml_source import load_yaml_with_marks
+from fleetsim.load.common.collect import CAP_PER_FILE
+from fleetsim.load.common.yaml_source import load_yaml_with_marks
+from fleetsim.load.suites.schema import check_against_schema
+from fleetsim.load.suites.suite import load_suite
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "scenario_suites" / "examples"
 PLANNER = "fleetsim.planners:ReservingPlanner"

@@ -13,8 +13,8 @@ import pytest
 from jsonschema import Draft202012Validator
 
 from fleetsim.errors import SuiteError
-from fleetsim.load.suite import load_suite
-from fleetsim.load.suite_schema import suite_schema
+from fleetsim.load.suites.schema import suite_schema
+from fleetsim.load.suites.suite import load_suite
 from fleetsim.scenario import ScenarioSettings
 
 REPO = Path(__file__).resolve().parents[2]

@@ -8,7 +8,7 @@ from typing import Any
 import pytest
 
 from fleetsim.errors import ScenarioFileError, SuiteError
-from fleetsim.load.yaml_source import Locate, load_yaml_with_marks
+from fleetsim.load.common.yaml_source import Locate, load_yaml_with_marks
 
 DOCUMENT = """\
 name: demo

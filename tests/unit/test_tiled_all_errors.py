@@ -12,8 +12,8 @@ import pytest
 
 from fleetsim.cli import main
 from fleetsim.errors import LoadError, LoadErrors, MapError
-from fleetsim.load.site_map import load_site_map
-from fleetsim.load.tiled import load_map
+from fleetsim.load.maps.site_map import load_site_map
+from fleetsim.load.tiled.reader import load_map
 
 SUITES = Path(__file__).resolve().parents[2] / "scenario_suites"
 LOOP_SUITE = """\

@@ -13,7 +13,7 @@ import pytest
 from fleetsim.enums import Direction, Shape
 from fleetsim.errors import Location
 from fleetsim.layout.segment import Segment
-from fleetsim.load.tiled import load_map, parse_direction
+from fleetsim.load.tiled.reader import load_map, parse_direction
 
 ASSETS = Path(__file__).resolve().parents[2] / "scenario_suites" / "tiled"
 

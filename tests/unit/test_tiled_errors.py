@@ -12,7 +12,7 @@ from typing import Any
 import pytest
 
 from fleetsim.errors import LoadErrors, MapError
-from fleetsim.load.tiled import load_map
+from fleetsim.load.tiled.reader import load_map
 
 HEADER = (
     '<?xml version="1.0" encoding="UTF-8"?>\n<map version="1.8" orientation="orthogonal" '

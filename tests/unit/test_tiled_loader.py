@@ -11,8 +11,8 @@ import pytest
 
 from fleetsim.enums import Direction, Shape
 from fleetsim.errors import MapError
-from fleetsim.load import tiled_templates
-from fleetsim.load.tiled import TiledMap, load_map
+from fleetsim.load.tiled import templates as tiled_templates
+from fleetsim.load.tiled.reader import TiledMap, load_map
 
 # --- maps as Tiled JSON dicts, rendered to either format ------------------------------------------
 # The tests describe maps in Tiled's JSON structure; `tmx_text` renders the same structure as TMX,

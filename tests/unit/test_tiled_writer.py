@@ -12,8 +12,8 @@ import pytest
 from fleetsim.enums import Direction, Shape
 from fleetsim.errors import LayoutError
 from fleetsim.layout.segment import Segment
-from fleetsim.load.tiled import load_map
-from fleetsim.load.tiled_writer import write_map
+from fleetsim.load.tiled.reader import load_map
+from fleetsim.load.tiled.writer import write_map
 
 ARC = tuple((3 + 2 * math.sin(math.radians(a)), -1 / 3 + 2 - 2 * math.cos(math.radians(a))) for a in range(0, 91, 10))
 SEGMENTS = (

@@ -10,8 +10,8 @@ from pathlib import Path
 
 import pytest
 
-from fleetsim.load.scenario import load_scenario
-from fleetsim.load.suite import load_suite
+from fleetsim.load.suites.scenario import load_scenario
+from fleetsim.load.suites.suite import load_suite
 from fleetsim.planners import BFSPlanner
 from fleetsim.recording.replay import replay
 from fleetsim.sim.loop import run_scenario

@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 from tooling import mosquitto_executable
 
-from fleetsim.sim.planner_spec import PlannerSpecError
+from fleetsim.specs.python import PlannerSpecError
 from fleetsim.vda5050 import broker as broker_module
 from fleetsim.vda5050.broker import (
     BrokerAddress,

@@ -17,8 +17,8 @@ import pytest
 from paho.mqtt.client import CallbackAPIVersion, Client, MQTTv311
 from scripted_master import ScriptedMaster
 
-from fleetsim.load.scenario import load_scenario
-from fleetsim.load.suite import load_suite
+from fleetsim.load.suites.scenario import load_scenario
+from fleetsim.load.suites.suite import load_suite
 from fleetsim.scenario import Disturbance, Scenario
 from fleetsim.sim.loop import run_scenario
 from fleetsim.vda5050.broker import BrokerAddress

@@ -14,8 +14,8 @@ import pytest
 from official import validate
 from scripted_master import ScriptedMaster
 
-from fleetsim.load.scenario import load_scenario
-from fleetsim.load.suite import load_suite
+from fleetsim.load.suites.scenario import load_scenario
+from fleetsim.load.suites.suite import load_suite
 from fleetsim.planners import ReservingPlanner
 from fleetsim.planning.checks import RejectionCode
 from fleetsim.scenario import Scenario, Task

@@ -18,8 +18,8 @@ from paho.mqtt.enums import CallbackAPIVersion
 from result_document import schema_errors
 from scripted_master import ScriptedMaster
 
-from fleetsim.load.scenario import load_scenario
-from fleetsim.load.suite import load_suite
+from fleetsim.load.suites.scenario import load_scenario
+from fleetsim.load.suites.suite import load_suite
 from fleetsim.scenario import Scenario
 from fleetsim.sim.loop import run_scenario
 from fleetsim.sim.result import RunResult

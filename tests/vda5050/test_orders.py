@@ -12,8 +12,8 @@ from pathlib import Path
 import pytest
 
 from fleetsim.enums import JointKind, Progress, Traverse, TurnCapability
-from fleetsim.load.scenario import load_scenario
-from fleetsim.load.suite import load_suite
+from fleetsim.load.suites.scenario import load_scenario
+from fleetsim.load.suites.suite import load_suite
 from fleetsim.planning.checks import CheckContext, Rejection, RejectionCode, check_plans
 from fleetsim.planning.plans import FleetLeg, FleetPlan
 from fleetsim.planning.snapshot import initial_plan

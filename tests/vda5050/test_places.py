@@ -9,8 +9,8 @@ import pytest
 
 from fleetsim.enums import Direction, Shape, Traverse
 from fleetsim.layout import Segment, build_layout
-from fleetsim.load.scenario import load_scenario
-from fleetsim.load.suite import load_suite
+from fleetsim.load.suites.scenario import load_scenario
+from fleetsim.load.suites.suite import load_suite
 from fleetsim.vda5050.places import EdgeProblem, SiteGraph, site_graph
 
 SUITES = Path(__file__).resolve().parents[2] / "scenario_suites"

@@ -12,7 +12,7 @@ import pytest
 from runs import run_example
 
 from fleetsim.exec.spec import load_planner_factory
-from fleetsim.sim.planner_spec import PlannerSpecError
+from fleetsim.specs.python import PlannerSpecError
 from fleetsim.vda5050.fleet import Vda5050Fleet
 from fleetsim.vda5050.spec import _parse
 

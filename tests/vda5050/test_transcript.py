@@ -21,8 +21,8 @@ import official
 from paho.mqtt.client import Client, MQTTMessage, MQTTv311
 from paho.mqtt.enums import CallbackAPIVersion
 
-from fleetsim.load.scenario import load_scenario
-from fleetsim.load.suite import load_suite
+from fleetsim.load.suites.scenario import load_scenario
+from fleetsim.load.suites.suite import load_suite
 from fleetsim.sim.loop import run_scenario
 from fleetsim.vda5050.broker import BrokerAddress
 from fleetsim.vda5050.fleet import Vda5050Fleet, Vda5050Settings

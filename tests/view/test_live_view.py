@@ -17,8 +17,8 @@ from typing import Any
 import pytest
 from viewer import EXAMPLES, ready, short_suite, state
 
-from fleetsim.load.scenario import load_scenario
-from fleetsim.load.suite import load_suite
+from fleetsim.load.suites.scenario import load_scenario
+from fleetsim.load.suites.suite import load_suite
 from fleetsim.planners import ReservingPlanner
 from fleetsim.scenario import Scenario
 from fleetsim.sim.loop import run_scenario

@@ -20,8 +20,8 @@ import pytest
 from viewer import EXAMPLES, REPO, ready, short_suite, state
 
 from fleetsim.cli.main import main
-from fleetsim.load.scenario import load_scenario, load_scenario_dir
-from fleetsim.load.suite import load_suite
+from fleetsim.load.suites.scenario import load_scenario, load_scenario_dir
+from fleetsim.load.suites.suite import load_suite
 from fleetsim.planners import GreedyPlanner, ReservingPlanner
 from fleetsim.recording.artifacts import write_run_artifacts
 from fleetsim.scenario import ScenarioSettings

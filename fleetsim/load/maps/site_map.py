@@ -13,13 +13,13 @@ import os
 from pathlib import Path
 
 from fleetsim.errors import Location, MapError
-from fleetsim.load.import_notes import ImportNotes
-from fleetsim.load.lif import is_lif_document, load_lif
-from fleetsim.load.map_options import MapOptions, SiteMap
-from fleetsim.load.rmf import load_building
-from fleetsim.load.text import read_text_file
-from fleetsim.load.tiled import load_map
-from fleetsim.load.tiled_templates import parse_json
+from fleetsim.load.common.import_notes import ImportNotes
+from fleetsim.load.common.map_options import MapOptions, SiteMap
+from fleetsim.load.common.text import read_text_file
+from fleetsim.load.lif.reader import is_lif_document, load_lif
+from fleetsim.load.rmf.reader import load_building
+from fleetsim.load.tiled.reader import load_map
+from fleetsim.load.tiled.templates import parse_json
 
 __all__ = ["MAP_SUFFIXES", "load_site_map", "map_format"]
 

@@ -6,10 +6,10 @@ from dataclasses import replace
 from pathlib import Path
 
 from fleetsim.errors import Location, MapError
-from fleetsim.load.lif_writer import DEFAULT_ROBOT_TYPE, write_lif
-from fleetsim.load.map_options import MapOptions, SiteMap
-from fleetsim.load.site_map import load_site_map
-from fleetsim.load.tiled_writer import write_map
+from fleetsim.load.common.map_options import MapOptions, SiteMap
+from fleetsim.load.lif.writer import DEFAULT_ROBOT_TYPE, write_lif
+from fleetsim.load.maps.site_map import load_site_map
+from fleetsim.load.tiled.writer import write_map
 
 __all__ = ["convert_map"]
 

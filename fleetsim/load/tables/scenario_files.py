@@ -9,8 +9,8 @@ Conventions shared by both files:
   rows, so task ids count data rows only (first data row = task 1).
 - An unknown column is an error (a typo would otherwise be silently ignored); so is a row with more or
   fewer cells than the header.
-- Every row is read and every bad cell reported, all at once (:mod:`fleetsim.load.collect`): fixing a
-  file takes one pass, not one run per row. Reading itself is :mod:`fleetsim.load.csv_table`.
+- Every row is read and every bad cell reported, all at once (:mod:`fleetsim.load.common.collect`): fixing a
+  file takes one pass, not one run per row. Reading itself is :mod:`fleetsim.load.tables.table`.
 """
 
 from __future__ import annotations
@@ -25,9 +25,9 @@ from typing import ParamSpec, TypeVar
 from fleetsim.enums import Progress, Traverse
 from fleetsim.errors import ScenarioFileError
 from fleetsim.layout.segment import Segment
-from fleetsim.load.closest import did_you_mean
-from fleetsim.load.collect import ErrorCollector
-from fleetsim.load.csv_table import Columns, Row, read_table
+from fleetsim.load.common.closest import did_you_mean
+from fleetsim.load.common.collect import ErrorCollector
+from fleetsim.load.tables.table import Columns, Row, read_table
 from fleetsim.scenario import Task, Vehicle, VehicleType
 
 __all__ = [
@@ -39,7 +39,6 @@ __all__ = [
     "VehicleRows",
     "collect_tasks",
     "collect_vehicles",
-    "did_you_mean",
     "map_candidates",
     "read_tasks",
     "read_tasks_with_lines",

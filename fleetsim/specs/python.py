@@ -23,7 +23,7 @@ from types import ModuleType
 from typing import cast
 
 from fleetsim.errors import FleetsimError
-from fleetsim.load.scenario_files import did_you_mean
+from fleetsim.load.common.closest import did_you_mean
 from fleetsim.planning.protocol import Planner
 
 __all__ = ["METHODS", "PlannerFactory", "PlannerSpecError", "command_words", "import_planner_factory"]
@@ -73,7 +73,7 @@ def import_planner_factory(spec: str) -> PlannerFactory:
     """The factory that a ``module:attr`` spec names: a planner class or zero-argument factory (attr
     possibly dotted), from a module imported once; the current working directory is importable.
 
-    Every mistake in ``spec`` is a [`PlannerSpecError`][fleetsim.sim.planner_spec.PlannerSpecError].
+    Every mistake in ``spec`` is a [`PlannerSpecError`][fleetsim.specs.python.PlannerSpecError].
     """
     module_name, attr_path = _split(spec)
     module = _import(spec, module_name)

@@ -1,6 +1,6 @@
 """One of a scenario's CSV tables (``vehicles.csv``, ``tasks.csv``) read into rows, every problem collected.
 
-The conventions are those of :mod:`fleetsim.load.scenario_files`: a header row first (required), blank
+The conventions are those of :mod:`fleetsim.load.tables.scenario_files`: a header row first (required), blank
 and ``#`` comment rows skipped but kept in the file's line numbers, names and values trimmed, column
 names case-insensitive, unknown columns and rows of the wrong width refused.
 
@@ -22,9 +22,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from fleetsim.errors import LoadError, Location, ScenarioFileError
-from fleetsim.load.closest import did_you_mean
-from fleetsim.load.collect import ErrorCollector
-from fleetsim.load.text import read_text_file
+from fleetsim.load.common.closest import did_you_mean
+from fleetsim.load.common.collect import ErrorCollector
+from fleetsim.load.common.text import read_text_file
 
 __all__ = ["Columns", "Row", "check_table", "read_table"]
 

@@ -14,7 +14,7 @@ they are metres already. A lane is named after its end waypoints, ``START--END``
 The file is not trusted: every value is checked for its type and range before it is used, and each
 problem is a :class:`~fleetsim.errors.MapError` at its YAML line with its key path
 (``levels.L1.lanes[3][2].graph_idx``). The problems of every vertex, measurement and lane of the chosen
-level are reported together (:class:`~fleetsim.load.collect.ErrorCollector`).
+level are reported together (:class:`~fleetsim.load.common.collect.ErrorCollector`).
 """
 
 from __future__ import annotations
@@ -28,11 +28,11 @@ from typing import Any
 from fleetsim.enums import Direction, Shape
 from fleetsim.errors import MapError
 from fleetsim.layout.segment import Point, Segment
-from fleetsim.load.collect import ErrorCollector
-from fleetsim.load.import_notes import ImportNotes
-from fleetsim.load.map_options import MapOptions, SiteMap
-from fleetsim.load.scenario_files import did_you_mean
-from fleetsim.load.yaml_source import Locate, YamlPath, load_yaml_with_marks
+from fleetsim.load.common.closest import did_you_mean
+from fleetsim.load.common.collect import ErrorCollector
+from fleetsim.load.common.import_notes import ImportNotes
+from fleetsim.load.common.map_options import MapOptions, SiteMap
+from fleetsim.load.common.yaml_source import Locate, YamlPath, load_yaml_with_marks
 
 __all__ = ["load_building"]
 

@@ -20,7 +20,7 @@ from types import MappingProxyType
 from typing import TypeVar
 
 from fleetsim.errors import Location, MapError
-from fleetsim.load.text import json_problem, read_text_file
+from fleetsim.load.common.text import json_problem, read_text_file
 
 __all__ = [
     "ObjectFields",

@@ -4,7 +4,7 @@ Segment ends that meet (within the connection tolerance) share one node, placed 
 segment order. Each segment becomes one edge per direction it allows: ``forward`` first waypoint to last,
 ``backward`` last to first, ``both`` one edge each way (LIF edges are directed). A segment of more than
 two waypoints carries them as a degree-1 NURBS trajectory through its waypoints, which
-:mod:`fleetsim.load.lif` samples back to the same polyline. Edge ids are the segment's names when they are
+:mod:`fleetsim.load.lif.reader` samples back to the same polyline. Edge ids are the segment's names when they are
 unique, else ``E<id>`` (``E<id>-back`` for the second direction). The timestamp is the current time in UTC,
 or ``SOURCE_DATE_EPOCH`` when that is set (for reproducible files).
 """
@@ -25,7 +25,7 @@ import numpy as np
 from fleetsim.enums import Direction
 from fleetsim.layout.geometry import close_point_pairs
 from fleetsim.layout.segment import Point, Segment
-from fleetsim.load.text import write_text_atomically
+from fleetsim.load.common.text import write_text_atomically
 
 __all__ = ["DEFAULT_ROBOT_TYPE", "lif_document", "write_lif"]
 

@@ -20,9 +20,9 @@ from jsonschema import Draft202012Validator
 from jsonschema.exceptions import ValidationError, best_match
 
 from fleetsim.errors import LoadErrors, Location, SuiteError, SuiteErrors
-from fleetsim.load.collect import ErrorCollector
-from fleetsim.load.scenario_files import did_you_mean
-from fleetsim.load.yaml_source import Locate
+from fleetsim.load.common.closest import did_you_mean
+from fleetsim.load.common.collect import ErrorCollector
+from fleetsim.load.common.yaml_source import Locate
 
 __all__ = [
     "SchemaCheck",

@@ -10,7 +10,7 @@ names no shape is an error (with a "did you mean"): a typo must not silently dro
 a segment. A polyline with no class at all, and every other object, is ignored.
 
 Every broken object is reported, each by its first problem, together with the header's and the layers'
-problems, in the order of the file (a :class:`~fleetsim.load.collect.ErrorCollector`); a map with any
+problems, in the order of the file (a :class:`~fleetsim.load.common.collect.ErrorCollector`); a map with any
 error gives no segments at all.
 """
 
@@ -26,11 +26,11 @@ from pathlib import Path
 from fleetsim.enums import Direction, Shape
 from fleetsim.errors import Location, MapError
 from fleetsim.layout.segment import Point, Segment
-from fleetsim.load.collect import ErrorCollector
-from fleetsim.load.scenario_files import did_you_mean
-from fleetsim.load.text import read_text_file
-from fleetsim.load.tiled_header import MapHeader, read_header
-from fleetsim.load.tiled_templates import (
+from fleetsim.load.common.closest import did_you_mean
+from fleetsim.load.common.collect import ErrorCollector
+from fleetsim.load.common.text import read_text_file
+from fleetsim.load.tiled.header import MapHeader, read_header
+from fleetsim.load.tiled.templates import (
     ObjectFields,
     PropertyValue,
     TemplateCache,

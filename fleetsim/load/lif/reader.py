@@ -26,11 +26,11 @@ from fleetsim.errors import Location, MapError
 from fleetsim.layout.geometry import point_segment_distances
 from fleetsim.layout.nurbs import Nurbs, sample_nurbs
 from fleetsim.layout.segment import Point, Segment
-from fleetsim.load.collect import ErrorCollector
-from fleetsim.load.import_notes import ImportNotes
-from fleetsim.load.json_at import JsonAt
-from fleetsim.load.map_options import MapOptions, SiteMap
-from fleetsim.load.scenario_files import did_you_mean
+from fleetsim.load.common.closest import did_you_mean
+from fleetsim.load.common.collect import ErrorCollector
+from fleetsim.load.common.import_notes import ImportNotes
+from fleetsim.load.common.json_at import JsonAt
+from fleetsim.load.common.map_options import MapOptions, SiteMap
 
 __all__ = ["END_TOLERANCE", "is_lif_document", "load_lif"]
 

@@ -15,9 +15,9 @@ from pathlib import Path
 from typing import Any
 
 from fleetsim.errors import Location, SuiteError
-from fleetsim.load.collect import ErrorCollector
-from fleetsim.load.suite_schema import raise_suite_errors, suite_error
-from fleetsim.load.yaml_source import Locate
+from fleetsim.load.common.collect import ErrorCollector
+from fleetsim.load.common.yaml_source import Locate
+from fleetsim.load.suites.schema import raise_suite_errors, suite_error
 from fleetsim.scenario import Disturbance, RandomDisturbances, Scenario
 
 __all__ = ["HuntDisturbances", "check_disturbances", "declared_disturbances", "hunt_block", "random_block"]

@@ -1,6 +1,6 @@
 """The header of a Tiled map: its size in pixels and metres per pixel, the facts the world transform needs.
 
-Each bad header value is collected (with the objects' errors, see :mod:`fleetsim.load.tiled`) and a
+Each bad header value is collected (with the objects' errors, see :mod:`fleetsim.load.tiled.reader`) and a
 stand-in used, so that one load reports the header's problems and every object's together.
 """
 
@@ -11,8 +11,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from fleetsim.errors import Location, MapError
-from fleetsim.load.collect import ErrorCollector
-from fleetsim.load.tiled_templates import PropertyValue, as_bool, as_int, as_number
+from fleetsim.load.common.collect import ErrorCollector
+from fleetsim.load.tiled.templates import PropertyValue, as_bool, as_int, as_number
 
 __all__ = ["MapHeader", "read_header"]
 

@@ -3,7 +3,7 @@
 Loading a suite checks the YAML against ``schemas/suite.schema.json`` and then what a schema cannot
 say (unique names, known vehicle types, files that exist). Every mistake of the file is reported at
 once, each at its line; a suite with any mistake is not loaded. It does not open the maps or CSV files:
-that is :func:`fleetsim.load.scenario.load_scenario`, one scenario at a time.
+that is :func:`fleetsim.load.suites.scenario.load_scenario`, one scenario at a time.
 """
 
 from __future__ import annotations
@@ -17,18 +17,18 @@ from typing import Any
 
 from fleetsim.enums import ConflictModel, TurnCapability
 from fleetsim.errors import Location, SuiteError
-from fleetsim.load.collect import ErrorCollector
-from fleetsim.load.disturbances import HuntDisturbances, declared_disturbances, hunt_block, random_block
-from fleetsim.load.map_options import MapOptions
-from fleetsim.load.scenario_files import (
+from fleetsim.load.common.closest import did_you_mean
+from fleetsim.load.common.collect import ErrorCollector
+from fleetsim.load.common.map_options import MapOptions
+from fleetsim.load.common.yaml_source import Locate, load_yaml_with_marks
+from fleetsim.load.suites.disturbances import HuntDisturbances, declared_disturbances, hunt_block, random_block
+from fleetsim.load.suites.schema import SchemaCheck, raise_suite_errors, schema_check, suite_error, suite_schema
+from fleetsim.load.tables.scenario_files import (
     MAP_FILE_NAMES,
     TASKS_FILE_NAME,
     VEHICLES_FILE_NAME,
-    did_you_mean,
     map_candidates,
 )
-from fleetsim.load.suite_schema import SchemaCheck, raise_suite_errors, schema_check, suite_error, suite_schema
-from fleetsim.load.yaml_source import Locate, load_yaml_with_marks
 from fleetsim.scenario import (
     DEFAULT_VEHICLE_TYPE,
     Checks,

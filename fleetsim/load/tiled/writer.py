@@ -1,4 +1,4 @@
-"""Write segments as a Tiled 1.8 map (TMX or JSON) that :func:`fleetsim.load.tiled.load_map` reads back.
+"""Write segments as a Tiled 1.8 map (TMX or JSON) that :func:`fleetsim.load.tiled.reader.load_map` reads back.
 
 Used to save generated scenarios and to make benchmark maps, so it writes text directly (one object per
 line in JSON) rather than building a document tree: 10,000 segments take a fraction of a second.
@@ -19,7 +19,7 @@ from xml.sax.saxutils import quoteattr
 
 from fleetsim.errors import LayoutError
 from fleetsim.layout.segment import Segment
-from fleetsim.load.tiled import MAP_SUFFIXES
+from fleetsim.load.tiled.reader import MAP_SUFFIXES
 
 __all__ = ["write_map"]
 

@@ -14,7 +14,7 @@ from typing import Any, Protocol
 import yaml
 
 from fleetsim.errors import LoadError, Location, SuiteError
-from fleetsim.load.text import read_text_file
+from fleetsim.load.common.text import read_text_file
 
 __all__ = ["Locate", "YamlPath", "load_yaml_with_marks"]
 

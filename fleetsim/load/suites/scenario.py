@@ -4,7 +4,7 @@ The order is forced by the data: the vehicle rows are checked against the map's 
 conflict radius depends on the vehicle types those rows use, and the start-conflict check and the task
 check (every goal reachable, :mod:`.task_reach`) need the layout.
 
-Errors are collected stage by stage (:class:`~fleetsim.load.collect.ErrorCollector`): the map's; then
+Errors are collected stage by stage (:class:`~fleetsim.load.common.collect.ErrorCollector`): the map's; then
 every row error of ``vehicles.csv`` and of ``tasks.csv`` together (a task naming a vehicle whose row is
 bad is not also called unknown); then the layout checks (start conflicts, reachability), which only run
 on clean files. When the map cannot be loaded, the CSV files' structure (header, row widths) is still
@@ -22,11 +22,13 @@ from types import MappingProxyType
 from fleetsim.enums import ConflictModel
 from fleetsim.errors import Location, ScenarioFileError, SuiteError, UnreachableTaskError
 from fleetsim.layout.layout import Layout, build_layout
-from fleetsim.load.collect import ErrorCollector
-from fleetsim.load.csv_table import check_table
-from fleetsim.load.disturbances import check_disturbances
-from fleetsim.load.map_options import MapOptions, SiteMap
-from fleetsim.load.scenario_files import (
+from fleetsim.load.common.collect import ErrorCollector
+from fleetsim.load.common.map_options import MapOptions, SiteMap
+from fleetsim.load.maps.site_map import load_site_map
+from fleetsim.load.suites.disturbances import check_disturbances
+from fleetsim.load.suites.suite import ScenarioSpec, Suite
+from fleetsim.load.suites.task_reach import check_tasks_reachable
+from fleetsim.load.tables.scenario_files import (
     MAP_FILE_NAMES,
     TASK_COLUMNS,
     TASKS_FILE_NAME,
@@ -36,9 +38,7 @@ from fleetsim.load.scenario_files import (
     collect_vehicles,
     map_candidates,
 )
-from fleetsim.load.site_map import load_site_map
-from fleetsim.load.suite import ScenarioSpec, Suite
-from fleetsim.load.task_reach import check_tasks_reachable
+from fleetsim.load.tables.table import check_table
 from fleetsim.scenario import (
     DEFAULT_VEHICLE_TYPE,
     Expectations,

@@ -1,0 +1,1 @@
+"""Open-RMF building maps (``*.building.yaml``): lanes of a level as segments."""

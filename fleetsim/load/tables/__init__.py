@@ -1,0 +1,1 @@
+"""Scenario CSV files (SPEC §5): a located CSV table reader, and ``vehicles.csv`` and ``tasks.csv``."""
