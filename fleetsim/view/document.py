@@ -133,15 +133,17 @@ def outcome_part(
         if details is not None:
             stuck = _stuck(details, f"{failure.kind}: {failure.message}")
             break
+    # A contact's moment is its failure's time: read back from result.json, its details have no "time" of
+    # their own (the failure's and the contact's are one key there).
     contacts = [
         {
-            "time": float(f.details["time"]),
+            "time": round(f.time, 6),
             "x": float(f.details["x"]),
             "y": float(f.details["y"]),
             "vehicles": [int(v) for v in f.details["vehicles"]],
         }
         for f in failures
-        if f.kind == "contact" and {"time", "x", "y", "vehicles"} <= set(f.details)
+        if f.kind == "contact" and {"x", "y", "vehicles"} <= set(f.details)
     ]
     return {
         "status": document.get("status"),

@@ -835,6 +835,7 @@
       if (e.key === " ") togglePlay();
       else if (e.key === "ArrowRight") stepBy(1);
       else if (e.key === "ArrowLeft") stepBy(-1);
+      else if (e.key === "Home") seek(0);
       else if (e.key === "n") nextEvent();
       else if (e.key === "f") toFailure();
       else return;
@@ -971,8 +972,11 @@
     } else {
       begin(doc);
       for (const record of doc.steps) run.add(record);
-      run.seek(0);
       showOutcome();
+      // A failed run opens at its failure, as `f` goes there (what a reviewer asks first; Home is the
+      // start); any other at its start. A live page follows its run instead.
+      if (run.outcome && run.outcome.failure) toFailure();
+      else seek(0);
       el("notes").textContent = (doc.notes || []).join("; ");
       hook.ready = true;
     }

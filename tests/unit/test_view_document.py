@@ -77,6 +77,17 @@ def test_the_outcome_names_the_failure_step_and_who_waits_for_whom() -> None:
     }  # fmt: skip
 
 
+def test_a_contact_read_back_from_result_json_keeps_its_place_on_the_page() -> None:
+    details = {"time": 15.603448, "until": 16.7, "vehicles": [1, 2], "x": -5.7612, "y": -1.9659, "depth": 0.6392}
+    touched = Failure("contact", 15.6034481, "vehicles 1 and 2 touched", details)
+    # as result.json holds it and `fleetsim view` reads it: the failure's time and the contact's are one key
+    saved = touched.to_dict()
+    read_back = Failure("contact", saved["time"], saved["message"], {k: saved[k] for k in details if k != "time"})
+    expected = [{"time": 15.603448, "x": -5.7612, "y": -1.9659, "vehicles": [1, 2]}]
+    assert outcome_part({}, [touched], 0.1, 200)["contacts"] == expected
+    assert outcome_part({}, [read_back], 0.1, 200)["contacts"] == expected
+
+
 def test_the_page_keeps_a_script_in_a_name_inert() -> None:
     scenario, result = _run("crossing")
     assert result.trace is not None

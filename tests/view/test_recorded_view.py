@@ -26,12 +26,23 @@ from fleetsim.view.document import outcome_part
 
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
-    """Two recorded runs: mixed-shapes with ReservingPlanner (passes, 393 steps), loop-one-way with
-    BFSPlanner (fails on a collision alert at its last step)."""
+    """Three recorded runs: mixed-shapes with ReservingPlanner (passes, 393 steps), loop-one-way with
+    BFSPlanner (fails on a collision alert at its last step, 50) and the same run going on after its
+    failure (``stop_on: []``, to t = 20 s: 200 steps, failed at step 50)."""
     root = tmp_path_factory.mktemp("recorded")
     for name, planner in (("mixed-shapes", "ReservingPlanner"), ("loop-one-way", "BFSPlanner")):
         main(["run", f"{EXAMPLES}::{name}", "--planner", f"fleetsim.planners:{planner}", "--record", str(root)])
-    return {"passing": root / "examples" / "mixed-shapes", "failing": root / "examples" / "loop-one-way"}
+    text = EXAMPLES.read_text(encoding="utf-8")
+    head = text[: text.index("scenarios:")].replace("time_limit: 300", "time_limit: 20\n  stop_on: []")
+    loop = EXAMPLES.parent / "examples" / "loop"
+    suite = root / "onward.fleetsim.yaml"
+    suite.write_text(f"{head}scenarios:\n  - name: loop-one-way\n    dir: {loop}/\n", encoding="utf-8")
+    main(["run", f"{suite}::loop-one-way", "--planner", "fleetsim.planners:BFSPlanner", "--record", str(root)])
+    return {
+        "passing": root / "examples" / "mixed-shapes",
+        "failing": root / "examples" / "loop-one-way",
+        "failing-midway": root / "onward" / "loop-one-way",
+    }
 
 
 def _open(page: Any, html: Path) -> None:
@@ -149,6 +160,31 @@ def test_next_event_and_failure_jump_to_their_steps(page: Any, runs: dict[str, P
     assert page.locator('#events li[data-kind="failure"]').count() == 1
 
 
+def test_a_failed_run_opens_paused_at_its_failure_and_home_goes_to_the_start(page: Any, runs: dict[str, Path]) -> None:
+    folder = runs["failing-midway"]
+    result = json.loads((folder / "result.json").read_text(encoding="utf-8"))
+    assert result["status"] == "failed" and result["failures"][0]["time"] == pytest.approx(5.1)
+    _open(page, folder / "view.html")
+    opened = state(page)
+    assert (opened["step"], opened["last"], opened["playing"]) == (50, 199, False), opened
+    assert opened["time"] == pytest.approx(result["failures"][0]["time"])
+    _assert_drawn_is_traced(page, folder, 50)
+    assert state(page)["shown"].startswith("t = 5.10 s \u00b7 step 50 of 199")
+    # as `f` leaves it: the failure is the shown step's event
+    assert page.locator('#events li.current[data-kind="failure"]').count() == 1
+    page.wait_for_timeout(300)
+    assert state(page)["step"] == 50  # paused there
+    page.keyboard.press("Home")
+    assert state(page)["step"] == 0
+    _assert_drawn_is_traced(page, folder, 0)
+    page.keyboard.press("f")
+    assert state(page)["step"] == 50
+    # a passed run opens at its start, as before
+    _open(page, runs["passing"] / "view.html")
+    assert state(page)["step"] == 0
+    _assert_drawn_is_traced(page, runs["passing"], 0)
+
+
 def test_hovering_a_vehicle_shows_its_state_plan_and_task(page: Any, runs: dict[str, Path]) -> None:
     _open(page, runs["passing"] / "view.html")
     page.evaluate("fleetsimView.seek(40)")
@@ -246,6 +282,10 @@ def test_fleetsim_view_serves_the_page_on_a_loopback_port(page: Any, runs: dict[
         page.goto(url)
         ready(page)
         assert state(page)["last"] == 50
+        # as view.html: at the failure (its last step here), the start one key away
+        assert state(page)["step"] == 50 and state(page)["time"] == pytest.approx(5.1)
+        page.keyboard.press("Home")
+        assert state(page)["step"] == 0
         process.send_signal(signal.SIGINT)
         assert process.wait(timeout=10) == 0
     finally:
