@@ -1,5 +1,5 @@
 """The JSON Schemas shipped in ``fleetsim/schemas/``, compiled twice: once to decide quickly whether a
-document is valid, once to explain a violation (the planner protocol's messages, a run's result)."""
+document is valid, once to explain a violation (the planner protocol's messages, a run's result, its trace's lines)."""
 
 from __future__ import annotations
 
