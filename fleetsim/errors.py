@@ -17,8 +17,10 @@ __all__ = [
     "LoadErrors",
     "Location",
     "MapError",
+    "MasterControlError",
     "PlannerError",
     "PlannerProcessError",
+    "ScenarioError",
     "ScenarioFileError",
     "SuiteError",
     "SuiteErrors",
@@ -132,6 +134,20 @@ class SuiteErrors(LoadErrors, SuiteError):
     also a `SuiteError`, so code that catches either keeps working."""
 
 
+class ScenarioError(FleetsimError, ValueError):
+    """A scenario built in code names what it does not have: a task's goal segment or a vehicle's start
+    segment that is not in its layout, or a task for a vehicle it does not have. Raised when the
+    [`Scenario`][fleetsim.scenario.Scenario] is made, before any run; loaded scenarios have these checked
+    at their files' rows (a [`ScenarioFileError`][fleetsim.errors.ScenarioFileError]).
+
+    ``problems`` lists each, in the scenario's order (vehicles, then tasks).
+    """
+
+    def __init__(self, message: str, problems: Sequence[str] = ()) -> None:
+        self.problems = tuple(problems)
+        super().__init__(message)
+
+
 class LayoutError(FleetsimError, ValueError):
     """Segments cannot form a layout (for example two segments share an id)."""
 
@@ -153,3 +169,9 @@ class PlannerProcessError(PlannerError):
     def __init__(self, message: str, details: str = "") -> None:
         self.details = details
         super().__init__(message)
+
+
+class MasterControlError(PlannerError):
+    """A VDA 5050 master control cannot drive the run (see :mod:`fleetsim.vda5050`): it could not be
+    started, exited, lost its connection, went OFFLINE with tasks queued, or never spoke. A fault fleetsim
+    expects: the message is the whole sentence the run's ``planner-error`` shows, with no traceback."""

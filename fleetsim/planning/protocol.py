@@ -110,11 +110,18 @@ class SteppedPlanner(Planner, Protocol):
     def begin_step(self, fleet: FleetSnapshot, layout: Layout) -> Sequence[Rejection]:
         """The step at ``fleet.time`` begins (every vehicle's state up to date); return the messages refused
         since the last step, as rejections made by hand (code ``order-invalid``, no plan), which the run
-        records and judges as any rejection. Raising fails the run as a ``planner-error``.
+        records and judges as any rejection. Raising fails the run as a ``planner-error``: a
+        :class:`~fleetsim.errors.PlannerError` (a fault the planner expects, such as a VDA 5050 master
+        control that exited) with its message alone, anything else as ``begin_step raised ...`` with its
+        traceback.
 
         A stepped planner may also have ``paused() -> set of vehicle ids``, asked right after: the vehicles
         held still from this step on (a VDA 5050 ``startPause``), each braking to rest within the distance
-        its fixed legs leave it and staying until it is no longer named. And ``explain_wait(vehicle_id, now)
-        -> str``, asked when a run ends stuck (deadlock or time limit) for each vehicle with a pending task:
-        a sentence the stuck-fleet diagnosis adds to that vehicle's finding (empty: nothing to add)."""
+        its fixed legs leave it and staying until it is no longer named. And ``awaiting_plan() -> set of
+        vehicle ids``, asked then too: the vehicles that stand still, with no event (nothing disturbs them),
+        until a plan of this planner's is accepted for them (a VDA 5050 vehicle without an order moves only
+        along released base, not along the start leg every plan begins fixed with); the accepted plan lets
+        one drive at once, in that step. And ``explain_wait(vehicle_id, now) -> str``, asked when a run ends
+        stuck (deadlock or time limit) for each vehicle with a pending task: a sentence the stuck-fleet
+        diagnosis adds to that vehicle's finding (empty: nothing to add)."""
         ...

@@ -119,7 +119,9 @@ class _Run:
         self.planner_error: Failure | None = None
         self.interrupted_planning = False
         self.stepped = planner if isinstance(planner, SteppedPlanner) else None
-        self.paused: set[int] = set()  # the vehicles a stepped planner holds still
+        self.paused: set[int] = set()  # the vehicles a stepped planner holds still (a pause: an event)
+        self.awaiting: set[int] = set()  # those that stand until a plan of its is accepted for them
+        self.held: set[int] = set()  # both: the drivers halted
         # The contact check (fleetsim.contact): every vehicle's pose, by index, kept up to date from what
         # moved; contacts, clearance and near misses are judged from it and enter no trace.
         checks = scenario.settings.checks
@@ -151,6 +153,9 @@ class _Run:
         self.cruise.release_all()  # the snapshot holds every vehicle where it is now
         try:
             refused = list(self.stepped.begin_step(self.controller.snapshot(now), self.scenario.layout))
+        except PlannerError as exc:  # a fault the planner names itself (a master control gone): its sentence
+            self._planner_failed(exc, stamp, events)
+            return False
         except Exception as exc:
             fault = PlannerFault(f"begin_step raised {type(exc).__name__}: {exc}", details=traceback.format_exc())
             self._planner_failed(fault, stamp, events)
@@ -160,14 +165,23 @@ class _Run:
             events.append(["reject", rejection.code.value, rejection.vehicle_id, rejection.leg_index])
         asked = getattr(self.stepped, "paused", None)
         paused = set(asked()) if callable(asked) else set()
+        awaiting = getattr(self.stepped, "awaiting_plan", None)
+        self.awaiting = set(awaiting()) if callable(awaiting) else set()
+        self._hold(paused | self.awaiting)
         for vehicle in sorted(paused - self.paused):
-            self.drivers[vehicle].halt()
             events.append(["disturb", vehicle, "pause"])  # shown and recorded as a stop
         for vehicle in sorted(self.paused - paused):
-            self.drivers[vehicle].release()
             events.append(["resume", vehicle, "pause"])
         self.paused = paused
         return True
+
+    def _hold(self, held: set[int]) -> None:
+        """Halt the vehicles newly held still (they brake within their fixed legs), release the others."""
+        for vehicle in sorted(held - self.held):
+            self.drivers[vehicle].halt()
+        for vehicle in sorted(self.held - held):
+            self.drivers[vehicle].release()
+        self.held = held
 
     def plan(self, now: float, stamp: float, events: list[list[Any]], plans: list[list[Any]]) -> bool:
         """Step 2 at ``now`` (what the planner sees); its events are stamped ``stamp``, the step's end.
@@ -196,6 +210,9 @@ class _Run:
     ) -> None:
         for plan in outcome.accepted:
             plans.append(plan_record(plan))
+            if plan.vehicle_id in self.awaiting:  # it may drive what the plan fixes from this step on
+                self.awaiting.discard(plan.vehicle_id)
+                self._hold(self.paused | self.awaiting)
             if plan.vehicle_id != outcome.vehicle_id or plan != outcome.previous:
                 self.last_activity = now
                 self.plan_changed[plan.vehicle_id] = stamp

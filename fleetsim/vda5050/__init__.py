@@ -4,7 +4,7 @@ plans (released nodes and edges fixed legs, the horizon planned ones), and the r
 
 The map as nodes and edges: :mod:`.places`; the messages: :mod:`.model` and :mod:`.messages`; the broker
 and the MQTT link: :mod:`.broker` and :mod:`.link`; the vehicles as a planner: :mod:`.fleet`, named by a
-``vda5050:`` planner spec (:mod:`.spec`). Needs the ``vda5050`` extra (paho-mqtt, amqtt); this package's
+``vda5050:`` planner spec (:mod:`.spec`); a master control the spec starts: :mod:`.master`. Needs the ``vda5050`` extra (paho-mqtt, amqtt); this package's
 own module imports neither, so a spec without the extra gets a clear error.
 """
 

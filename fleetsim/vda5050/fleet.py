@@ -6,7 +6,8 @@ publishes ``connection`` (ONLINE, OFFLINE at the end, CONNECTIONBROKEN as its la
 ``state`` and ``visualization``, and takes ``order`` and ``instantActions``. Every step begins
 (:meth:`begin_step`) with pacing the run at ``speed`` times real time, taking in what arrived, and
 telling the master control where the fleet is; an order that makes a plan is handed to the harness at
-the vehicle's next planner call, where fleetsim's checks judge it as any planner's.
+the vehicle's next planner call, where fleetsim's checks judge it as any planner's. A vehicle moves only
+along released base: until its first order is accepted it stands on its start edge (:meth:`awaiting_plan`).
 
 Instant actions: ``stateRequest`` and ``factsheetRequest`` answer at once; ``startPause`` and
 ``stopPause`` hold a vehicle still and let it go (it brakes within its fixed legs); ``cancelOrder``
@@ -28,9 +29,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import shlex
-import subprocess
 import sys
 import time
 from collections.abc import Sequence
@@ -39,15 +37,16 @@ from datetime import datetime, timedelta, timezone
 from typing import Any
 
 from fleetsim.enums import Disturbed, Progress, TurnCapability
+from fleetsim.errors import MasterControlError
 from fleetsim.layout.layout import Layout
 from fleetsim.planning.checks import CheckContext, Rejection, RejectionCode, check_plans
 from fleetsim.planning.plans import FleetLeg, FleetPlan, Response
 from fleetsim.planning.snapshot import FleetSnapshot, VehicleState
 from fleetsim.scenario import Task
 from fleetsim.sim.result import Pacing
-from fleetsim.specs.python import PlannerSpecError
 from fleetsim.vda5050.broker import BrokerAddress, EmbeddedBroker
 from fleetsim.vda5050.link import MqttLink, Will
+from fleetsim.vda5050.master import MasterProcess
 from fleetsim.vda5050.messages import (
     MessageInvalid,
     decode_connection,
@@ -130,6 +129,7 @@ class _Vehicle:
     pending: FleetPlan | None = None  # an order's plan, for the next planner call
     pending_path: list[_Leg] | None = None
     pending_status: OrderStatus | None = None
+    pending_last: tuple[str, int] | None = None  # a new order's first node: its last node once accepted
     handed: FleetPlan | None = None  # handed to the harness, its verdict not seen yet
     errors: list[VdaError] = field(default_factory=list)
     last_node: tuple[str, int] = ("", 0)
@@ -152,7 +152,7 @@ class Vda5050Fleet:
         self.settings = settings or Vda5050Settings()
         self.paced = self.settings.speed  # the run goes on a wall clock (RunResult.paced): its hash is not gated
         self.master_command = tuple(master_command) if master_command is not None else None
-        self.master: subprocess.Popen[bytes] | None = None
+        self.master: MasterProcess | None = None
         self.broker: EmbeddedBroker | None = None
         self.address: BrokerAddress | None = self.settings.broker
         self.vehicles: dict[int, _Vehicle] = {}
@@ -203,6 +203,11 @@ class Vda5050Fleet:
     def paused(self) -> set[int]:
         """The vehicles a ``startPause`` holds still (the harness brakes them)."""
         return {vid for vid, vehicle in self.vehicles.items() if vehicle.paused}
+
+    def awaiting_plan(self) -> set[int]:
+        """The vehicles that have had no order: a VDA 5050 vehicle moves only along released base, so each
+        stands on its start edge until an order's plan is accepted (the harness holds them still)."""
+        return {vid for vid, vehicle in self.vehicles.items() if not vehicle.status.order_id}
 
     def explain_wait(self, vehicle_id: int, now: float) -> str:
         """For the stuck-fleet diagnosis, in VDA 5050's terms: which order the vehicle holds and what it
@@ -256,12 +261,7 @@ class Vda5050Fleet:
         if self._site_link is not None and self._site_link.connected:
             self._site_link.disconnect()
         if self.master is not None:
-            self.master.terminate()
-            try:
-                self.master.wait(timeout=5.0)
-            except subprocess.TimeoutExpired:
-                self.master.kill()
-                self.master.wait()
+            self.master.stop()  # with everything it started
             self.master = None
         if self.broker is not None:
             self.broker.__exit__(None, None, None)
@@ -306,12 +306,12 @@ class Vda5050Fleet:
             self.master = self._start_master(self.master_command)
         self.started = time.monotonic()
 
-    def _start_master(self, command: tuple[str, ...]) -> subprocess.Popen[bytes]:
-        """The master control as a child process, told where the broker is (``spec.ENVIRONMENT``)."""
+    def _start_master(self, command: tuple[str, ...]) -> MasterProcess:
+        """The master control as a child process in a session of its own, told where the broker is
+        (``spec.ENVIRONMENT``)."""
         assert self.address is not None
         settings = self.settings
         environment = {
-            **os.environ,
             "FLEETSIM_MQTT_URL": self.address.url,
             "FLEETSIM_VDA5050_INTERFACE": settings.interface_name,
             "FLEETSIM_VDA5050_MANUFACTURER": settings.manufacturer,
@@ -321,11 +321,7 @@ class Vda5050Fleet:
             environment["FLEETSIM_MQTT_USERNAME"] = self.address.username
         if self.address.password is not None:
             environment["FLEETSIM_MQTT_PASSWORD"] = self.address.password
-        try:
-            return subprocess.Popen(command, env=environment, stdin=subprocess.DEVNULL)
-        except OSError as error:
-            msg = f"the master control {shlex.join(command)!r} could not be started: {error.strerror or error}"
-            raise PlannerSpecError(msg, shlex.join(command)) from None
+        return MasterProcess(command, environment)
 
     def _await_master(self, fleet: FleetSnapshot) -> None:
         """Hold the run at t = 0 until the master control sends its first message to any vehicle, telling it
@@ -343,7 +339,7 @@ class Vda5050Fleet:
                     f"the master control sent no message to any vehicle within {self.settings.start_timeout:g} s; the "
                     f"vehicles were ONLINE on {self.address.url} (uagv/v2/.../connection) and waited at t = 0"
                 )
-                raise TimeoutError(msg)
+                raise MasterControlError(msg)
             for vehicle in self.vehicles.values():
                 state = fleet.vehicles[vehicle.vehicle_id]
                 self._publish(vehicle, "state", self._state(vehicle, state, 0.0))
@@ -351,16 +347,17 @@ class Vda5050Fleet:
         self.started = time.monotonic()
 
     def _check_master(self, fleet: FleetSnapshot) -> None:
-        """A master control that has gone ends the run, naming how: started with ``exec=`` and exited, or
-        announced on ``master/connection`` and then CONNECTIONBROKEN (its last will: it crashed or its
-        network failed) or OFFLINE while tasks are queued. Retained messages from before the run are
-        history: only a retained ONLINE counts (the master control connected before the vehicles)."""
+        """A master control that has gone ends the run with a :class:`MasterControlError` naming how:
+        started with ``exec=`` and exited (whatever it started is stopped with it), or announced on
+        ``master/connection`` and then CONNECTIONBROKEN (its last will: it crashed or its network failed)
+        or OFFLINE while tasks are queued. Retained messages from before the run are history: only a
+        retained ONLINE counts (the master control connected before the vehicles)."""
         now = fleet.time
-        if self.master is not None and self.master.poll() is not None:
-            status = self.master.returncode
+        status = self.master.exit_status() if self.master is not None else None
+        if self.master is not None and status is not None:
+            self.master.stop()
             self.master = None
-            msg = f"the master control exited with status {status} at t = {now:.1f} s; the run cannot go on without it"
-            raise RuntimeError(msg)
+            raise MasterControlError(f"the master control exited with status {status} at t = {now:.1f} s")
         assert self._site_link is not None
         where = self._own_topic("master/connection")
         for inbound in self._site_link.drain():
@@ -381,12 +378,12 @@ class Vda5050Fleet:
             if state is ConnectionState.CONNECTIONBROKEN:
                 msg = (
                     f"the master control {name!r} lost its connection at t = {now:.1f} s (its last will on {where}: "
-                    f"CONNECTIONBROKEN) with {queued} task(s) queued; the run cannot go on without it"
+                    f"CONNECTIONBROKEN) with {queued} task(s) queued"
                 )
-                raise RuntimeError(msg)
+                raise MasterControlError(msg)
             if queued:
                 msg = f"the master control {name!r} went OFFLINE at t = {now:.1f} s with {queued} task(s) queued"
-                raise RuntimeError(msg)
+                raise MasterControlError(msg)
             self.master_left = f"the master control {name!r} went OFFLINE at t = {now:.1f} s"
 
     # -- each step ----------------------------------------------------------------------------------
@@ -417,7 +414,9 @@ class Vda5050Fleet:
             vehicle.path = vehicle.pending_path  # the legs it has left since are dropped by _follow
             vehicle.status = vehicle.pending_status
             vehicle.errors = [e for e in vehicle.errors if e.error_type != "orderUpdateError"]
-        vehicle.pending_path = vehicle.pending_status = None
+            if vehicle.pending_last is not None:  # a new order
+                vehicle.last_node = vehicle.pending_last
+        vehicle.pending_path = vehicle.pending_status = vehicle.pending_last = None
 
     def _follow(self, vehicle: _Vehicle, fleet: FleetSnapshot) -> None:
         """Drop the legs the vehicle has left; each passed order node becomes its last node."""
@@ -472,7 +471,17 @@ class Vda5050Fleet:
                     "fleetsim's vehicles carry out no node or edge actions; the order is driven without it",
                 )
             vehicle.pending = plan
-            vehicle.pending_path = vehicle.path[:fixed] + [
+            kept = vehicle.path[:fixed]  # a copy: the path in force stays as it is until the verdict
+            vehicle.pending_last = None
+            if join is Join.NEW and reading.nodes:
+                # Sequence ids start again with a new orderId (VDA 5050 6.7): the order's first node is the
+                # vehicle's last node at once (6.10.6: in the current order), and the end of the leg it is
+                # on when the order begins there.
+                first = reading.nodes[0]
+                vehicle.pending_last = (first.node_id, first.sequence_id)
+                if kept:
+                    kept[-1] = replace(kept[-1], end=first)
+            vehicle.pending_path = kept + [
                 _Leg(leg, edge, node)
                 for leg, edge, node in zip(plan.legs[fixed:], reading.edges, reading.nodes[1:], strict=False)
             ]
