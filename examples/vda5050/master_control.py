@@ -341,7 +341,7 @@ class MasterControl:
             return 0
         passed = int(state.get("lastNodeSequenceId", 0)) // 2
         nodes = [job.start, *(leg.end for leg in job.legs)]
-        # A new order's state may still carry the last order's sequence id until a node is passed.
+        # The node named must be this order's own (VDA 5050 §6.10.6: the current order's ids); else none is passed.
         return passed if passed < len(nodes) and nodes[passed] == state.get("lastNodeId") else 0
 
     def _holds(self, vehicle: Vehicle) -> list[str]:
