@@ -6,9 +6,11 @@ import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Literal
+from types import MappingProxyType
+from typing import TYPE_CHECKING, Any, Literal
 
 from fleetsim.enums import ConflictModel, Progress, Traverse, TurnCapability
+from fleetsim.errors import ScenarioError
 
 if TYPE_CHECKING:
     from fleetsim.layout.layout import Layout
@@ -18,6 +20,7 @@ __all__ = [
     "Checks",
     "Disturbance",
     "Expectations",
+    "PlannerSetup",
     "RandomDisturbances",
     "Scenario",
     "ScenarioSettings",
@@ -247,8 +250,33 @@ class Expectations:
 
 
 @dataclass(frozen=True, slots=True)
+class PlannerSetup:
+    """What a suite entry gives its planner: ``planner_options`` and the data ``files`` it reads.
+
+    Attributes:
+        options: The entry's ``planner_options`` (JSON values, by option name): the planner factory is
+            called with them as keyword arguments; an ``exec:`` planner gets them in its init message.
+        folder: The scenario's folder: the entry's ``dir``, else the suite file's folder; ``None`` for a
+            scenario without one. A factory that declares a ``scenario_dir`` parameter gets it.
+        files: The entry's data files (or folders of them), relative to ``folder`` with ``/`` between
+            parts: a sweep sends them to its workers, which put them at the same paths in the folder
+            their planner gets as ``scenario_dir``.
+        where: Where the options are written (``suite.yaml:12:7``), for messages; empty when unknown.
+    """
+
+    options: Mapping[str, Any] = field(default_factory=lambda: MappingProxyType({}))
+    folder: Path | None = None
+    files: tuple[str, ...] = ()
+    where: str = ""
+
+
+@dataclass(frozen=True, slots=True)
 class Scenario:
     """A completely loaded scenario: layout, fleet, tasks, settings and expectations.
+
+    One made in code is checked as loading checks files: every vehicle must start on a segment of the
+    layout, and every task must be for one of the vehicles and have its goal on a segment of the layout;
+    otherwise [`ScenarioError`][fleetsim.errors.ScenarioError] names each task or vehicle and the segment.
 
     Attributes:
         name: The scenario's name (its suite entry's, or its folder's).
@@ -264,6 +292,7 @@ class Scenario:
         disturbances: Declared disturbances (stops and slow-downs), in suite order.
         random_disturbances: Randomly drawn stops, if the entry asks for them.
         warnings: Notes from loading that did not stop it (shapes given to non-polylines, say).
+        planner_setup: What the suite entry gives the planner: its options, folder and data files.
     """
 
     name: str
@@ -279,9 +308,51 @@ class Scenario:
     disturbances: tuple[Disturbance, ...] = ()
     random_disturbances: RandomDisturbances | None = None
     warnings: tuple[str, ...] = ()
+    planner_setup: PlannerSetup = field(default_factory=PlannerSetup)
+
+    def __post_init__(self) -> None:
+        # A scenario built in code (not loaded from files, whose rows are checked) is refused here,
+        # before any run: a goal on a segment the map lacks would otherwise reach the planner and the checks.
+        segments = self.layout.segments
+        vehicle_ids = {vehicle.id for vehicle in self.vehicles}
+        if all(vehicle.start_segment in segments for vehicle in self.vehicles) and all(
+            task.goal_segment in segments and task.vehicle_id in vehicle_ids for task in self.tasks
+        ):
+            return
+        problems = _missing_references(self, vehicle_ids)
+        shown = "; ".join(problems[:_PROBLEMS_SHOWN])
+        more = f"; and {len(problems) - _PROBLEMS_SHOWN} more" if len(problems) > _PROBLEMS_SHOWN else ""
+        raise ScenarioError(f"scenario {self.name!r}: {shown}{more}", problems)
 
     @property
     def vehicle_length(self) -> float:
         """Metres: the length of the longest vehicle type the scenario's vehicles use (lint reports gaps
         up to this long)."""
         return longest_vehicle(self.vehicles, self.vehicle_types.values())
+
+
+_PROBLEMS_SHOWN = 5  # in a ScenarioError's message; its ``problems`` hold them all
+
+
+def _missing_references(scenario: Scenario, vehicle_ids: set[int]) -> list[str]:
+    """Each vehicle starting, and each task ending, on a segment the layout lacks; each task for a
+    vehicle the scenario lacks."""
+    from fleetsim.layout.segment_ids import not_in_map  # here, so importing this module stays cheap
+
+    segments = scenario.layout.segments
+    problems = [
+        f"vehicle {vehicle.id} starts on {not_in_map(vehicle.start_segment, segments)}"
+        for vehicle in scenario.vehicles
+        if vehicle.start_segment not in segments
+    ]
+    for task in scenario.tasks:
+        if task.vehicle_id not in vehicle_ids:
+            known = ", ".join(str(v) for v in sorted(vehicle_ids)) or "none"
+            problems.append(
+                f"task {task.id} is for vehicle {task.vehicle_id}, which is not in the scenario (vehicles: {known})"
+            )
+        if task.goal_segment not in segments:
+            problems.append(
+                f"task {task.id} of vehicle {task.vehicle_id} has its goal on {not_in_map(task.goal_segment, segments)}"
+            )
+    return problems

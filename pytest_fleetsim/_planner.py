@@ -19,6 +19,7 @@ from dataclasses import dataclass
 from typing import cast
 
 from fleetsim.planning.protocol import Planner
+from fleetsim.scenario import PlannerSetup
 from fleetsim.specs.python import METHODS, PlannerFactory, PlannerSpecError, import_planner_factory
 
 __all__ = ["PlannerSource", "load_factory", "planner_source"]
@@ -48,6 +49,20 @@ class PlannerSource:
     identity: str
     make: Callable[[], Planner]
     from_option: bool  # built from --planner / the ini option (so a command can repeat it)
+
+    def for_setup(self, setup: PlannerSetup) -> Callable[[], Planner]:
+        """Fresh planners made with a suite entry's ``setup`` (its planner_options and folder); a planner
+        instance (copied for each run) cannot take options: a :class:`PlannerSpecError` if there are any."""
+        if isinstance(self.make, PlannerFactory):
+            return self.make.for_setup(setup)
+        if setup.options:
+            where = f"{setup.where}: " if setup.where else ""
+            msg = (
+                f"{where}the fleetsim_planner fixture returned a planner instance, which cannot be made with the "
+                f"scenario's planner_options {dict(setup.options)!r}; return its class or a factory instead"
+            )
+            raise PlannerSpecError(msg, self.identity)
+        return self.make
 
 
 def _path(obj: object) -> str:

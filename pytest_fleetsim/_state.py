@@ -37,7 +37,15 @@ from fleetsim.load.suites.suite import load_suite
 from fleetsim.recording.artifacts import artifact_folder, discard_run_folder, start_run_folder, write_run_artifacts
 from fleetsim.scenario import Scenario
 from fleetsim.sim.interrupt import StopSignals
-from fleetsim.sim.report import SUMMARY_COLUMNS, failure_report, format_table, summary_cells
+from fleetsim.sim.record import RunOrigin
+from fleetsim.sim.report import (
+    SUMMARY_COLUMNS,
+    failure_report,
+    format_table,
+    outcome_cell,
+    outcome_notes,
+    summary_cells,
+)
 from fleetsim.sim.result import RunResult
 from fleetsim.specs.python import PlannerFactory, PlannerSpecError
 from pytest_fleetsim._items import ScenarioFailed, ScenarioItem, ScenarioNotLoaded
@@ -177,11 +185,12 @@ class FleetsimState:
                 # Located at the scenario, not here, so -rs points at the suite file.
                 raise pytest.skip.Exception(NO_PLANNER, _use_item_location=True)
             source = planner_source(fixture_value)
+            make = source.for_setup(item.spec.planner_setup)
         except PlannerSpecError as error:
             raise ScenarioFailed(_story(str(error), heading)) from None
         heading += f" with planner {source.identity}"
         if item.spec.hunts:
-            self._hunt(item, source.make, source.identity, heading, stop)
+            self._hunt(item, make, source.identity, heading, stop)
             return
         try:
             scenario = load_scenario(item.spec, item.suite)
@@ -202,7 +211,7 @@ class FleetsimState:
         try:
             checked = run_checked(
                 scenario,
-                source.make,
+                make,
                 identity=source.identity,
                 mode="update" if self.update_hashes else "check",
                 recorded=lock.get(source.identity, item.spec.name),
@@ -303,8 +312,8 @@ class FleetsimState:
                         + counts_story(found, item.spec.hunt_examples)
                     )
             return
-        extra = {"suite": str(item.path), "nodeid": item.nodeid, "line": item.spec.line, **hunt_facts(found)}
-        paths = record_counterexample(found, folder, extra, record_every=self.record_every, streamed=True)
+        origin = RunOrigin.of_entry(item.path, item.spec, nodeid=item.nodeid, **hunt_facts(found))
+        paths = record_counterexample(found, folder, origin, record_every=self.record_every, streamed=True)
         shown = {kind: _relative(self.config, Path(path)) for kind, path in paths.items()}
         result = replace(found.result, artifacts={**found.result.artifacts, **shown})
         self._describe(item, result, None, identity, label=label, generated=True)
@@ -323,13 +332,13 @@ class FleetsimState:
         self, item: ScenarioItem, scenario: Scenario, result: RunResult, *, streamed: bool
     ) -> RunResult:
         folder = artifact_folder(self.artifacts, item.path, item.spec.name)
-        extra = {"suite": str(item.path), "nodeid": item.nodeid, "line": item.spec.line}
+        origin = RunOrigin.of_entry(item.path, item.spec, nodeid=item.nodeid)
         from fleetsim.view import write_view_file
 
         paths = write_run_artifacts(
             folder,
             result,
-            extra,
+            origin,
             scenario=scenario,
             record_every=self.record_every,
             streamed=streamed,
@@ -381,6 +390,7 @@ class FleetsimState:
             "planner": identity,
             "metrics": ScenarioMetrics.from_result(item.nodeid, "failed", result).to_dict(),  # outcome: see _metrics
             "cells": cells,
+            "outcome_notes": outcome_notes(item.spec.expect, result),  # by the word the report gives
             "generated": generated,
             "interrupted": result.ended == "interrupted",
             "record": None
@@ -574,7 +584,8 @@ class FleetsimState:
         for outcome in ordered:
             cells = list(outcome.payload["cells"])
             cells[0] = f"{Path(outcome.suite).name}::{cells[0]}" if several else cells[0]
-            cells[1] = outcome.outcome
+            notes = outcome.payload.get("outcome_notes") or {}  # none for a scenario that never ran
+            cells[1] = outcome_cell(outcome.outcome, notes.get(outcome.outcome, ""))
             rows.append(cells)
         lines = format_table(rows) if rows else []
         lines += self._unrecorded_lines(ordered)

@@ -40,7 +40,8 @@ from fleetsim.load.suites.suite import SUITE_SUFFIX, ScenarioSpec, Suite, discov
 from fleetsim.recording.artifacts import artifact_folder, start_run_folder, write_run_artifacts
 from fleetsim.sim.interrupt import StopSignals, signal_name
 from fleetsim.sim.loop import RunProgress, run_scenario
-from fleetsim.sim.report import failure_lines, format_table, summary_cells
+from fleetsim.sim.record import RunOrigin, run_record
+from fleetsim.sim.report import failure_lines, format_table, outcome_cell, outcome_notes, summary_cells
 from fleetsim.sim.result import Failure, RunResult
 from fleetsim.specs.python import PlannerFactory, PlannerSpecError
 
@@ -84,6 +85,12 @@ class _Outcome:
         return self.target.spec.xfail if self.target.spec is not None else None
 
     @property
+    def origin(self) -> RunOrigin:
+        """Where the run comes from, for its record: the suite entry, and a hunt's counts."""
+        own = hunt_facts(self.hunt) if self.hunt is not None else {}
+        return RunOrigin.of_entry(self.target.suite_path, self.target.spec, **own)
+
+    @property
     def word(self) -> str:
         """passed, failed, interrupted, load error (a scenario whose files did not load: it never ran), or
         pytest's xfailed/xpassed for scenarios marked ``xfail`` that loaded and ran to their end."""
@@ -94,6 +101,13 @@ class _Outcome:
         if self.xfail is not None and self.loaded:
             return "xpassed" if self.result.passed else "xfailed"
         return self.result.status
+
+    @property
+    def note(self) -> str:
+        """What the word alone would hide (``expected collisions happened``), or ``""``."""
+        if not self.loaded or self.target.spec is None:
+            return ""
+        return outcome_notes(self.target.spec.expect, self.result).get(self.word, "")
 
     @property
     def counts_as_failure(self) -> bool:
@@ -227,6 +241,12 @@ def _run_target(
         scenario = load_scenario(target.spec, target.suite)
     except (LoadError, PlannerSpecError) as error:
         return _Outcome(target, _load_failure(target.spec.name, factory.spec, error), loaded=False)
+    try:
+        planner = factory(scenario.planner_setup)
+    except PlannerSpecError as error:  # a constructor that raised, planner_options it does not take
+        failure = Failure("planner-error", 0.0, str(error))
+        unmade = RunResult.unrun(target.spec.name, factory.spec, (failure,), ended="planner-error")
+        return _Outcome(target, unmade, loaded=False)
     extra = {"suite": str(target.suite_path), "line": target.spec.line}
     folder = artifact_folder(record[0], target.suite_path, target.spec.name) if record is not None else None
     # The trace goes into the artifact folder while the run goes: a run killed outright leaves it.
@@ -236,7 +256,7 @@ def _run_target(
     about = {"planner": factory.spec, "suite": str(target.suite_path)}
     watch = live.begin(scenario, about, lambda: stop is not None and stop.requested) if live else None
     result = run_scenario(
-        scenario, factory(), planner_name=factory.spec, planner_timeout=timeout, on_progress=on_progress,
+        scenario, planner, planner_name=factory.spec, planner_timeout=timeout, on_progress=on_progress,
         keep_trace=record is not None, stop=stop, trace_file=trace_file, watch=watch,
     )  # fmt: skip
     if live is not None:
@@ -244,8 +264,9 @@ def _run_target(
     if record is not None and folder is not None:
         from fleetsim.view import write_view_file
 
+        origin = RunOrigin.of_entry(target.suite_path, target.spec)
         paths = write_run_artifacts(
-            folder, result, extra, scenario=scenario, record_every=record[1], streamed=True, more=write_view_file
+            folder, result, origin, scenario=scenario, record_every=record[1], streamed=True, more=write_view_file
         )
         result = replace(result, artifacts={**result.artifacts, **paths})
     return _Outcome(target, result, loaded=True)
@@ -272,7 +293,7 @@ def _hunt_target(
     found = hunt(
         target.spec,
         target.suite,
-        factory,
+        factory.for_setup(target.spec.planner_setup),
         identity=factory.spec,
         planner_timeout=timeout,
         stop=stop,
@@ -283,8 +304,8 @@ def _hunt_target(
         return _Outcome(target, unrun, loaded=True, hunt=found)
     result = found.result
     if found.counterexample is not None:
-        extra = {"suite": str(target.suite_path), "line": target.spec.line, **hunt_facts(found)}
-        paths = record_counterexample(found, folder, extra, record_every=every, streamed=True)
+        origin = RunOrigin.of_entry(target.suite_path, target.spec, **hunt_facts(found))
+        paths = record_counterexample(found, folder, origin, record_every=every, streamed=True)
         result = replace(result, artifacts={**result.artifacts, **paths})
         entry = counterexample_entry(
             target.spec, Path(paths["scenario"]), target.suite_path, found.counterexample.disturbances
@@ -302,12 +323,7 @@ def _load_failure(name: str, planner: str, error: LoadError | PlannerSpecError) 
 
 
 def _document(outcome: _Outcome) -> dict[str, Any]:
-    document = outcome.result.to_dict()
-    document["suite"] = str(outcome.target.suite_path)
-    document["xfail"] = outcome.xfail
-    if outcome.hunt is not None:
-        document.update(hunt_facts(outcome.hunt))
-    return document
+    return run_record(outcome.result, outcome.origin)
 
 
 def artifact_lines(results: Iterable[RunResult]) -> list[str]:
@@ -368,6 +384,8 @@ class _Progress:
             return
         r = outcome.result
         facts = f"tasks {r.tasks_completed}/{r.tasks_total}, t={r.sim_time:.1f} s" if outcome.loaded else "not loaded"
+        if outcome.note:
+            facts = f"{outcome.note}; {facts}"
         if outcome.word == "interrupted":
             facts += f", stopped by {r.failures[0].details.get('signal', 'a signal')}" if r.failures else ""
         print(f"{self._prefix}: {outcome.word} ({facts})", file=self.stream, flush=True)
@@ -387,7 +405,7 @@ def _print_summary(outcomes: list[_Outcome], stream: TextIO) -> None:
     if not outcomes:
         print("no scenario ran", file=stream)
         return
-    rows = [summary_cells(o.label, o.word, o.result if o.loaded else None) for o in outcomes]
+    rows = [summary_cells(o.label, outcome_cell(o.word, o.note), o.result if o.loaded else None) for o in outcomes]
     for line in format_table(rows):
         print(line, file=stream)
     words = [o.word for o in outcomes]

@@ -19,13 +19,13 @@ def main(argv: list[str]) -> int:
         )
         return 2
     try:
-        planner = import_planner_factory(argv[0])()
+        factory = import_planner_factory(argv[0])  # the planner is made with the init message's options
     except PlannerSpecError as error:
         print(f"fleetsim.exec: {error}", file=sys.stderr)
         if error.details:
             print(error.details, file=sys.stderr)
         return 2
-    return serve(planner, rounds=rounds)
+    return serve(factory, rounds=rounds)
 
 
 if __name__ == "__main__":

@@ -9,6 +9,9 @@ this way makes the same decisions, and the run the same trace hash, as in proces
     python -m fleetsim.exec mypackage.planner:MyPlanner        # a planner class or factory
     fleetsim run SUITE --planner "exec:python -m fleetsim.exec mypackage.planner:MyPlanner"
 
+Served from a factory, the planner is made when the init message has come, with its ``planner_options``
+(protocol 1.4) as keyword arguments and ``scenario_dir`` if the factory declares it, as in process.
+
 A planner that raises a ``RouteError`` answers with a route error; any other exception is printed to
 stderr with its traceback and ends the process with status 1 (the run then fails with a
 ``planner-error`` showing that stderr).
@@ -25,6 +28,7 @@ import sys
 import time
 import traceback
 from collections.abc import Callable, Mapping
+from pathlib import Path
 from types import MappingProxyType
 from typing import IO, Any
 
@@ -45,7 +49,8 @@ from fleetsim.layout.segment import Segment
 from fleetsim.planning.plans import FleetPlan, RouteError, hands_back
 from fleetsim.planning.protocol import Planner
 from fleetsim.planning.snapshot import FleetSnapshot, VehicleState
-from fleetsim.scenario import Task, VehicleType
+from fleetsim.scenario import PlannerSetup, Task, VehicleType
+from fleetsim.specs.python import PlannerFactory, PlannerSpecError
 
 __all__ = ["ProtocolError", "serve"]
 
@@ -201,15 +206,24 @@ def _view(entries: dict[int, Any], changed: list[Any], before: Mapping[int, Any]
     return before if before is not None and not changed else MappingProxyType(dict(entries))
 
 
-def serve(planner: Planner, stdin: IO[str] | None = None, stdout: IO[str] | None = None, *, rounds: bool = True) -> int:
+def serve(
+    planner: Planner | PlannerFactory,
+    stdin: IO[str] | None = None,
+    stdout: IO[str] | None = None,
+    *,
+    rounds: bool = True,
+) -> int:
     """Answer fleetsim's messages on ``stdin`` (default: the process's) until it closes; the exit status.
-    With ``rounds`` (and fleetsim 1.2 or later) a planning round comes in one message.
+    With ``rounds`` (and fleetsim 1.2 or later) a planning round comes in one message. A
+    :class:`~fleetsim.specs.python.PlannerFactory` makes the planner once the init message has come, with
+    its ``planner_options`` and ``scenario_dir``; a factory that refuses them ends the process (status 1).
 
     The process's own streams are read as bytes (JSON is UTF-8) and answers written straight to its
     stdout's file descriptor: a call then costs no text layer and no buffer to fill and flush."""
     source: IO[Any] = stdin if stdin is not None else sys.stdin.buffer
     send = _writer(stdout)
     session: _Session | None = None
+    made = None if isinstance(planner, PlannerFactory) else planner
     for line in source:
         if line.isspace():
             continue
@@ -217,14 +231,16 @@ def serve(planner: Planner, stdin: IO[str] | None = None, stdout: IO[str] | None
             message = loads(line)
             if session is None:
                 session = _Session(message)
+                if isinstance(planner, PlannerFactory):
+                    made = planner(_setup(message))
                 answer: dict[str, Any] = {"type": "ready"}
                 if rounds and session.speaks_rounds:
                     answer["rounds"] = True
-            elif message.get("type") == "round":
-                answer = session.answer_round(planner, message)
             else:
-                answer = session.answer(planner, message)
-        except ProtocolError as error:
+                assert made is not None  # made with the session
+                ask = session.answer_round if message.get("type") == "round" else session.answer
+                answer = ask(made, message)
+        except (ProtocolError, PlannerSpecError) as error:
             print(f"fleetsim.exec: {error}", file=sys.stderr)
             return 1
         except Exception:  # the planner's own error: its traceback goes to fleetsim's report via stderr
@@ -232,6 +248,12 @@ def serve(planner: Planner, stdin: IO[str] | None = None, stdout: IO[str] | None
             return 1
         send(dumps(answer) + b"\n")
     return 0
+
+
+def _setup(init: Mapping[str, Any]) -> PlannerSetup:
+    """What the planner is made with: the init message's planner options and scenario folder (1.4)."""
+    options, folder = init.get("planner_options") or {}, init.get("scenario_dir")
+    return PlannerSetup(MappingProxyType(dict(options)), None if folder is None else Path(folder))
 
 
 def _writer(stdout: IO[str] | None) -> Callable[[bytes], None]:

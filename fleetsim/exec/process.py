@@ -28,7 +28,8 @@ import subprocess
 import tempfile
 import time
 import weakref
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from pathlib import Path
 from typing import IO, Any
 
 from fleetsim.errors import PlannerProcessError
@@ -82,6 +83,8 @@ class SubprocessPlanner:
         timeout: float | None = 10.0,
         startup_timeout: float = 30.0,
         cwd: str | os.PathLike[str] | None = None,
+        planner_options: Mapping[str, Any] | None = None,
+        scenario_dir: str | os.PathLike[str] | None = None,
     ) -> None:
         self.command = shlex.split(command) if isinstance(command, str) else list(command)
         if not self.command:
@@ -90,6 +93,9 @@ class SubprocessPlanner:
         self.timeout = timeout
         self.startup_timeout = startup_timeout
         self.cwd = cwd
+        # What the init message tells the process it is made with: the suite entry's options, its folder.
+        self.planner_options = dict(planner_options or {})
+        self.scenario_dir = None if scenario_dir is None else str(Path(scenario_dir).resolve())
         self.requests = 0
         self.rounds: bool | None = None  # the process answers rounds (None: not started yet)
         self._process: subprocess.Popen[bytes] | None = None
@@ -215,7 +221,7 @@ class SubprocessPlanner:
         self._pipes = (process.stdin.fileno(), process.stdout.fileno())  # looked up once, used every call
         self._finalizer = weakref.finalize(self, _kill_group, process)
         self._asking = self._round = None
-        self._send(dumps(encode_init(layout, fleet)) + b"\n")
+        self._send(dumps(encode_init(layout, fleet, self.planner_options, self.scenario_dir)) + b"\n")
         answer = self._receive(self.startup_timeout)
         problem = violation(load_schema("ready"), answer)
         if problem is not None:

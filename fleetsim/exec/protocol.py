@@ -8,9 +8,10 @@ are in ``schemas/planner-*.schema.json``.
 
 Versions: ``fleetsim-planner/MAJOR.MINOR`` (``fleetsim-planner/1`` is 1.0). A minor version only adds
 optional fields, so a client checks the major part; 1.1 added ``disturbed``; 1.2 planning rounds in one
-message, which a client opts into (``fleetsim/exec/rounds.py``); 1.3 the segments' ``names``.
+message, which a client opts into (``fleetsim/exec/rounds.py``); 1.3 the segments' ``names``; 1.4 the
+init message's ``planner_options`` and ``scenario_dir``.
 
-1. ``{"type": "init", "protocol": "fleetsim-planner/1.3", "layout": {...}, "scenario": {...}}``
+1. ``{"type": "init", "protocol": "fleetsim-planner/1.4", "layout": {...}, "scenario": {...}}``
    - ``layout``: exactly the layout part of what ``fleetsim inspect --json`` prints for the map (which
      adds the map file, its format and part, ``meters_per_pixel``, ``lint`` and ``warnings``):
      ``segments`` (``id, shape, direction, length, waypoints`` in metres, ``names``: what the site
@@ -22,6 +23,10 @@ message, which a client opts into (``fleetsim/exec/rounds.py``); 1.3 the segment
    - ``scenario``: ``vehicle_types`` (``name, length, width, height, max_speed, acceleration,
      turn_capability, turn_rate``), ``vehicles`` (``id, type``) and ``tasks`` (``id, vehicle_id,
      goal_segment, goal_progress``).
+   - ``planner_options`` (1.4): the suite entry's options for the planner (a JSON object, ``{}`` when it
+     gives none), and ``scenario_dir``: the scenario's folder on this machine (absolute), where the
+     entry's data ``files`` are (on a sweep's worker, the folder they were sent to), or ``null`` when the
+     scenario has none.
 
    Answer: ``{"type": "ready"}``, or (to a 1.2 init or later) ``{"type": "ready", "rounds": true}`` to be
    sent each planning round's calls in one ``round`` message instead of one request per call.
@@ -92,7 +97,7 @@ __all__ = [
     "loads",
 ]
 
-PROTOCOL = "fleetsim-planner/1.3"
+PROTOCOL = "fleetsim-planner/1.4"
 PROTOCOL_FAMILY = "fleetsim-planner/1"  # what a client checks: the same major version
 
 # Both sides of every planner call encode and decode a message, so JSON is orjson's (compiled): a call's
@@ -165,8 +170,14 @@ def encode_task(task: Task) -> dict[str, Any]:
     return {"id": task.id, "vehicle_id": task.vehicle_id, "goal_segment": task.goal_segment, "goal_progress": progress}
 
 
-def encode_init(layout: Layout, fleet: FleetSnapshot) -> dict[str, Any]:
-    """The init message, from what the first planner call knows: the layout and the fleet."""
+def encode_init(
+    layout: Layout,
+    fleet: FleetSnapshot,
+    planner_options: Mapping[str, Any] | None = None,
+    scenario_dir: str | None = None,
+) -> dict[str, Any]:
+    """The init message, from what the first planner call knows (the layout and the fleet), and the
+    suite entry's ``planner_options`` and the scenario's folder, which the planner process is made with."""
     types = {state.type.name: state.type for state in fleet.vehicles.values()}
     tasks = sorted((task for queue in fleet.tasks.values() for task in queue), key=lambda task: task.id)
     return {
@@ -178,6 +189,8 @@ def encode_init(layout: Layout, fleet: FleetSnapshot) -> dict[str, Any]:
             "vehicles": [{"id": vid, "type": fleet.vehicles[vid].type.name} for vid in sorted(fleet.vehicles)],
             "tasks": [encode_task(task) for task in tasks],
         },
+        "planner_options": dict(planner_options or {}),
+        "scenario_dir": scenario_dir,
     }
 
 

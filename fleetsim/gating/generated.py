@@ -38,6 +38,7 @@ from fleetsim.recording.artifacts import start_run_folder, write_run_artifacts
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Disturbance, Expectations, Scenario
 from fleetsim.sim.interrupt import StopSignals
 from fleetsim.sim.loop import run_scenario
+from fleetsim.sim.record import RunOrigin
 from fleetsim.sim.result import RunResult
 from fleetsim.strategies import GenerationSpec, NoRoomError, save_scenario, scenarios
 
@@ -253,14 +254,15 @@ def counterexample_entry(
 
 
 def record_counterexample(
-    found: Hunt, folder: Path, extra: Mapping[str, Any], *, record_every: int = 1, streamed: bool = False
+    found: Hunt, folder: Path, origin: RunOrigin, *, record_every: int = 1, streamed: bool = False
 ) -> dict[str, str]:
-    """The shrunk counterexample's run artifacts in ``folder`` and the scenario itself as a folder
-    (map, vehicles.csv, tasks.csv) under it; their paths by kind, the scenario folder as ``scenario``.
-    ``streamed``: its run streamed its trace into ``folder`` (``hunt``'s ``record_to``)."""
+    """The shrunk counterexample's run artifacts in ``folder`` (its ``result.json`` the record of a run
+    from ``origin``) and the scenario itself as a folder (map, vehicles.csv, tasks.csv) under it; their
+    paths by kind, the scenario folder as ``scenario``. ``streamed``: its run streamed its trace into
+    ``folder`` (``hunt``'s ``record_to``)."""
     assert found.counterexample is not None and found.result is not None
     paths = write_run_artifacts(
-        folder, found.result, extra, scenario=found.counterexample, record_every=record_every, streamed=streamed
+        folder, found.result, origin, scenario=found.counterexample, record_every=record_every, streamed=streamed
     )
     paths["scenario"] = str(save_scenario(found.counterexample, folder / COUNTEREXAMPLE_FOLDER))
     return paths

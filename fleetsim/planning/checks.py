@@ -10,13 +10,14 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
 from collections.abc import Set as AbstractSet
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from enum import Enum
 from itertools import pairwise
 
 from fleetsim.enums import JointKind
 from fleetsim.layout.continuations import progresses_after
 from fleetsim.layout.layout import Layout
+from fleetsim.layout.segment_ids import not_in_map, segment_ids
 from fleetsim.planning.plans import FleetLeg, FleetPlan
 from fleetsim.scenario import Task, VehicleType
 
@@ -136,6 +137,31 @@ def _reject(code: RejectionCode, plan: FleetPlan, index: int | None, message: st
     return Rejection(code, plan.vehicle_id, index, segment, message, plan)
 
 
+def _segment(layout: Layout, segment: int) -> str:
+    """``segment 7``; a segment the map lacks says so (``segment 999, which is not in the map (...)``)."""
+    return f"segment {segment}" if segment in layout.segments else not_in_map(segment, layout.segments)
+
+
+def _naming_missing_segments(rejection: Rejection, plan: FleetPlan, layout: Layout) -> Rejection:
+    """``rejection``, its message ending with the legs that name segments the map does not have.
+
+    The first failing check sets the code (a goal marker on segment 999 is ``goal-segment-mismatch``),
+    but a segment that does not exist is what the planner's author must hear about, whichever check
+    came first.
+    """
+    missing = [(index, leg.segment) for index, leg in enumerate(plan.legs) if leg.segment not in layout.segments]
+    if not missing:
+        return rejection
+    if len(missing) == 1:
+        index, segment = missing[0]
+        news = f"leg {index} names {not_in_map(segment, layout.segments)}"
+    else:
+        legs = ", ".join(str(index) for index, _ in missing)
+        named = ", ".join(str(segment) for segment in dict.fromkeys(segment for _, segment in missing))
+        news = f"legs {legs} name segments {named}, which are not in the map ({segment_ids(layout.segments)})"
+    return replace(rejection, message=f"{rejection.message}; besides, {news}")
+
+
 def _goal_legs(plan: FleetPlan) -> list[tuple[int, FleetLeg]]:
     return [(index, leg) for index, leg in enumerate(plan.legs) if leg.goal_for_task is not None]
 
@@ -186,7 +212,8 @@ def goal_segment_mismatch(plan: FleetPlan, ctx: CheckContext) -> Rejection | Non
     for index, leg in _goal_legs(plan):
         task = tasks[leg.goal_for_task]  # type: ignore[index]  # goal_not_assigned ran first
         if leg.segment != task.goal_segment:
-            msg = f"marks the goal of task {task.id} on segment {leg.segment}, but its goal is segment {task.goal_segment}"
+            goal = _segment(ctx.layout, task.goal_segment)
+            msg = f"marks the goal of task {task.id} on segment {leg.segment}, but its goal is {goal}"
             return _reject(RejectionCode.GOAL_SEGMENT_MISMATCH, plan, index, msg)
     return None
 
@@ -221,7 +248,8 @@ def empty_plan(plan: FleetPlan, ctx: CheckContext) -> Rejection | None:
 def unknown_segment(plan: FleetPlan, ctx: CheckContext) -> Rejection | None:
     for index, leg in enumerate(plan.legs):
         if leg.segment not in ctx.layout.segments:
-            return _reject(RejectionCode.UNKNOWN_SEGMENT, plan, index, f"segment {leg.segment} is not in the map")
+            msg = f"segment {leg.segment} is not in the map ({segment_ids(ctx.layout.segments)})"
+            return _reject(RejectionCode.UNKNOWN_SEGMENT, plan, index, msg)
     return None
 
 
@@ -313,11 +341,18 @@ SANITY_CHECKS: tuple[Check, ...] = (
 
 
 def check_plan(plan: FleetPlan, ctx: CheckContext) -> Rejection | None:
-    """The first failed check of a plan for a known vehicle, or ``None`` when it passes them all."""
+    """The first failed check of a plan for a known vehicle, or ``None`` when it passes them all.
+
+    The first failed check gives the code; when a leg names a segment the map does not have, the message
+    says so too, whichever check that was (``...; besides, leg 2 names segment 999, which is not in the
+    map (segments 1–8)``).
+    """
     for check in (*TASK_CHECKS, *SANITY_CHECKS):
         rejection = check(plan, ctx)
         if rejection is not None:
-            return rejection
+            if rejection.code is RejectionCode.UNKNOWN_SEGMENT:
+                return rejection
+            return _naming_missing_segments(rejection, plan, ctx.layout)
     return None
 
 

@@ -25,11 +25,13 @@ import json
 import re
 import shutil
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 from fleetsim.load.common.text import write_text_atomically
 from fleetsim.scenario import Scenario
+from fleetsim.sim.record import RunOrigin, run_record
 from fleetsim.sim.result import Failure, RunResult
 
 __all__ = [
@@ -107,7 +109,7 @@ def discard_run_folder(folder: Path, root: Path) -> None:
 def write_run_artifacts(
     folder: Path,
     result: RunResult,
-    extra: Mapping[str, Any] | None = None,
+    origin: RunOrigin | None = None,
     *,
     scenario: Scenario | None = None,
     record_every: int = 1,
@@ -116,12 +118,15 @@ def write_run_artifacts(
 ) -> dict[str, str]:
     """Write the run's files into ``folder`` (replacing what was there); their paths by kind.
 
-    ``extra`` adds keys to ``result.json`` (the suite file, the pytest node id, ...). With the run's
+    ``result.json`` is the run's record (:func:`fleetsim.sim.record.run_record`) from ``origin`` (the
+    suite entry, and the producer's own keys: the pytest node id, a sweep's, ...). With the run's
     ``scenario`` and a kept trace, the recording (every ``record_every``-th step) and, for a failed run,
     the failure picture are written too. ``streamed``: the folder was made by :func:`start_run_folder`
     and holds the run's trace already; it is kept. ``more(folder, scenario, result, extra)``: writes
-    further files of a run with a trace and a scenario (the viewer page, ``fleetsim.view``) and names them.
+    further files of a run with a trace and a scenario (the viewer page, ``fleetsim.view``) and names them;
+    ``extra`` is the origin's keys.
     """
+    origin = origin if origin is not None else RunOrigin()
     if not streamed:
         if folder.exists():
             shutil.rmtree(folder)
@@ -141,7 +146,7 @@ def write_run_artifacts(
         if picture is not None:
             write_text_atomically(folder / PICTURE_FILE, picture[1])
             paths["picture"] = str(folder / PICTURE_FILE)
-        _write_result(folder, result, paths, extra)  # in case the recording is cut short
+        _write_result(folder, result, paths, origin)  # in case the recording is cut short
         paths["mcap"] = str(
             record_mcap(
                 folder / MCAP_FILE,
@@ -155,14 +160,12 @@ def write_run_artifacts(
         write_text_atomically(folder / RVIZ_FILE, rviz_config(scenario, RVIZ_CONFIG.read_text(encoding="utf-8")))
         paths["rviz"] = str(folder / RVIZ_FILE)
         if more is not None:
-            paths.update(more(folder, scenario, result, extra or {}))
-    _write_result(folder, result, paths, extra)
+            paths.update(more(folder, scenario, result, origin.keys()))
+    _write_result(folder, result, paths, origin)
     (folder / RUN_FILE).unlink(missing_ok=True)
     return paths
 
 
-def _write_result(folder: Path, result: RunResult, paths: Mapping[str, str], extra: Mapping[str, Any] | None) -> None:
-    document = result.to_dict()
-    document["artifacts"] = {**document["artifacts"], **paths}
-    document.update(extra or {})
+def _write_result(folder: Path, result: RunResult, paths: Mapping[str, str], origin: RunOrigin) -> None:
+    document = run_record(replace(result, artifacts={**result.artifacts, **paths}), origin)
     write_text_atomically(folder / RESULT_FILE, json.dumps(document, indent=2, sort_keys=True) + "\n")

@@ -10,16 +10,20 @@ from collections.abc import Sequence
 from typing import Any
 
 from fleetsim.contact.monitor import ContactReport
+from fleetsim.scenario import Expectations
 from fleetsim.sim.result import MOMENTLESS, Failure, RunResult
 
 __all__ = [
     "SUMMARY_COLUMNS",
     "broken_expectation",
+    "expected_failures",
     "failure_lines",
     "failure_report",
     "failure_text",
     "first_line",
     "format_table",
+    "outcome_cell",
+    "outcome_notes",
     "route_error_lines",
     "summary_cells",
     "when",
@@ -75,6 +79,72 @@ def summary_cells(label: str, outcome: str, result: RunResult | None) -> tuple[s
         result.trace_hash[:12],
         "-" if factor is None else f"{factor:.0f}x",
     )
+
+
+def expected_failures(expect: Expectations, result: RunResult) -> str:
+    """What a passed run showed because its ``expect`` asked for it, in words for its row, or ``""``.
+
+    ``expected collisions happened``, ``expected goal-direction rejection and deadlock happened``; a run
+    that was only allowed to leave tasks undone (``expect.tasks``) says ``1 of 2 tasks, as expected``. A
+    pass beside ``tasks 0/2, alerts 4`` would otherwise read as a pass that did nothing.
+    """
+    happened = []
+    if expect.collisions != "none" and result.collisions:
+        happened.append(_named("collision", len(result.collisions), expect.collisions, "on segment"))
+    if expect.rejections != "none" and result.rejections:
+        if isinstance(expect.rejections, str):
+            happened.append(_plural("rejection", len(result.rejections)))
+        else:
+            happened.append(f"{_listed(expect.rejections)} {_plural('rejection', len(expect.rejections))}")
+    if expect.deadlock and result.deadlock is not None:
+        happened.append("deadlock")
+    if expect.contacts == "any" and result.contact is not None and result.contact.contacts:
+        happened.append(_plural("contact", len(result.contact.contacts)))
+    if happened:
+        return f"expected {_listed(happened)} happened"
+    if result.tasks_completed < result.tasks_total:
+        return f"{result.tasks_completed} of {result.tasks_total} tasks, as expected"
+    return ""
+
+
+def _named(noun: str, count: int, which: str | tuple[int, ...], where: str) -> str:
+    """``collisions``, or those the scenario named: ``collision on segment 2``, ``collisions on segments 2, 3``."""
+    if isinstance(which, str):
+        return _plural(noun, count)
+    return f"{_plural(noun, count)} {_plural(where, len(which))} {', '.join(map(str, which))}"
+
+
+def _plural(words: str, count: int) -> str:
+    """``words`` for one, else with an ``s`` (``on segment``: ``on segments``)."""
+    return words if count == 1 else f"{words}s"
+
+
+def _listed(words: Sequence[str]) -> str:
+    """``a``, ``a and b``, ``a, b and c``."""
+    return words[0] if len(words) == 1 else f"{', '.join(words[:-1])} and {words[-1]}"
+
+
+def outcome_notes(expect: Expectations, result: RunResult) -> dict[str, str]:
+    """What a summary row adds to its outcome word, by the word (only the runner knows which it will be).
+
+    A pass (or an xfail scenario's pass) that expected a failure says the failure happened
+    (:func:`expected_failures`); an ``xfailed`` row says what failed it (``failed: collision``).
+    """
+    notes = {}
+    expected = expected_failures(expect, result) if result.passed else ""
+    if expected:
+        notes["passed"] = notes["xpassed"] = expected
+    # What happened (a collision, a deadlock); the expectations it left unmet only when nothing else did.
+    kinds = dict.fromkeys(failure.kind for failure in result.failures if failure.kind != "expectation")
+    kinds = kinds or dict.fromkeys(broken_expectation(failure) for failure in result.failures)
+    if kinds:
+        notes["xfailed"] = f"failed: {', '.join(kinds)}"
+    return notes
+
+
+def outcome_cell(word: str, note: str) -> str:
+    """The outcome column: ``passed``, or with its note ``passed (expected collisions happened)``."""
+    return f"{word} ({note})" if note else word
 
 
 def _clearance(contact: ContactReport | None) -> str:

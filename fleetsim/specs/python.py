@@ -2,14 +2,18 @@
 
 ``import_planner_factory`` imports the module once and returns a ``PlannerFactory`` that makes a fresh
 planner for every run (``exec:COMMAND`` specs, planners in other processes, are read by
-``fleetsim.exec.spec``, which builds on this module). The current working directory is importable, so ``--planner
-my_planner:MyPlanner`` works from a user's project folder. Every mistake is one
+``fleetsim.exec.spec``, which builds on this module). A suite entry's ``planner_options`` are given to
+the factory as keyword arguments, over its parameters' defaults, and ``scenario_dir`` (the scenario's
+folder) to a factory that declares a parameter of that name. The current working directory is
+importable, so ``--planner my_planner:MyPlanner`` works from a user's project folder. Every mistake is one
 ``PlannerSpecError`` saying what is wrong and how to fix it; the user's own import-time or
 construction errors are shown as their message and location, not as a harness traceback.
 """
 
 from __future__ import annotations
 
+import copy
+import functools
 import importlib
 import inspect
 import os
@@ -17,20 +21,30 @@ import shlex
 import shutil
 import sys
 import traceback
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from types import ModuleType
-from typing import cast
+from typing import Any, cast
 
 from fleetsim.errors import FleetsimError
 from fleetsim.load.common.closest import did_you_mean
 from fleetsim.planning.protocol import Planner
+from fleetsim.scenario import PlannerSetup
 
-__all__ = ["METHODS", "PlannerFactory", "PlannerSpecError", "command_words", "import_planner_factory"]
+__all__ = [
+    "METHODS",
+    "SCENARIO_DIR",
+    "PlannerFactory",
+    "PlannerSpecError",
+    "command_words",
+    "import_planner_factory",
+]
 
 EXAMPLE = "fleetsim.planners:ReservingPlanner"
 METHODS = ("plan_routes", "fix_legs")
 _SHOWN_NAMES = 8  # public names listed when an attribute is missing
+SCENARIO_DIR = "scenario_dir"  # the parameter a factory declares to be given the scenario's folder
+_BY_NAME = (inspect.Parameter.POSITIONAL_OR_KEYWORD, inspect.Parameter.KEYWORD_ONLY)
 
 
 class PlannerSpecError(FleetsimError, ValueError):
@@ -47,16 +61,26 @@ class PlannerSpecError(FleetsimError, ValueError):
 
 @dataclass(frozen=True, slots=True)
 class PlannerFactory:
-    """Makes a fresh planner per call; ``spec`` is the identity shown in results."""
+    """Makes a fresh planner per call; ``spec`` is the identity shown in results.
+
+    ``make`` is called with a run's planner options as keyword arguments (a fresh copy each time, so no
+    run sees what another's planner did to them), plus ``scenario_dir`` when it declares a parameter of
+    that name: without options, and without that parameter, it is called with no arguments.
+    """
 
     spec: str
-    make: Callable[[], object]
+    make: Callable[..., object]
 
-    def __call__(self) -> Planner:
+    def __call__(self, setup: PlannerSetup | None = None) -> Planner:
+        """A fresh planner made with ``setup`` (a suite entry's ``planner_options``, and its folder as
+        ``scenario_dir`` when the factory asks for it); a :class:`PlannerSpecError` when it cannot be made."""
+        setup = setup if setup is not None else PlannerSetup()
+        arguments = self._arguments(setup)
         try:
-            planner = self.make()
+            planner = self.make(**arguments)
         except Exception as exc:  # the user's constructor: report it, do not crash the harness
-            msg = f"planner spec {self.spec!r}: {_name(self.make)}() raised {_exception_line(exc)}{_where(exc)}"
+            where, given = (f"{setup.where}: ", "**planner_options") if setup.options else ("", "")
+            msg = f"{where}planner spec {self.spec!r}: {_name(self.make)}({given}) raised {_exception_line(exc)}{_where(exc)}"
             raise PlannerSpecError(msg, self.spec, _user_traceback(exc)) from None
         missing = [name for name in METHODS if not callable(getattr(planner, name, None))]
         if missing:
@@ -67,6 +91,51 @@ class PlannerFactory:
             )
             raise PlannerSpecError(msg, self.spec)
         return cast(Planner, planner)
+
+    def for_setup(self, setup: PlannerSetup) -> Callable[[], Planner]:
+        """Fresh planners for a scenario whose entry gives ``setup`` (its options and folder)."""
+        return functools.partial(self, setup)
+
+    def _arguments(self, setup: PlannerSetup) -> dict[str, Any]:
+        """The keyword arguments of a call: the options (copied) and ``scenario_dir`` if it is asked for;
+        options the factory does not take are a :class:`PlannerSpecError` naming them and where they are."""
+        options = setup.options
+        arguments = copy.deepcopy(dict(options))
+        try:
+            signature = inspect.signature(self.make)
+        except (TypeError, ValueError):  # some builtins have none; the call will tell
+            return arguments
+        asked = signature.parameters.get(SCENARIO_DIR)
+        if asked is not None and asked.kind in _BY_NAME:
+            arguments[SCENARIO_DIR] = setup.folder
+        if options:
+            problem = _options_problem(signature, options, arguments)
+            if problem is not None:
+                where = f"{setup.where}: " if setup.where else ""
+                msg = f"{where}planner spec {self.spec!r}: {_name(self.make)} {problem}"
+                raise PlannerSpecError(msg, self.spec)
+        return arguments
+
+
+def _options_problem(signature: inspect.Signature, options: Mapping[str, Any], arguments: dict[str, Any]) -> str | None:
+    """What is wrong with calling a factory of ``signature`` with planner ``options``, or ``None``."""
+    parameters = signature.parameters
+    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters.values()):
+        return None
+    takes = [name for name, p in parameters.items() if p.kind in _BY_NAME and name != SCENARIO_DIR]
+    unknown = [name for name in options if name not in takes]
+    if unknown:
+        name = unknown[0]
+        offered = f"its options: {', '.join(takes)}" if takes else "it takes no options"
+        return (
+            f"does not take the planner option {name}={options[name]!r} (planner_options); {offered}"
+            f"{did_you_mean(name, takes)}"
+        )
+    try:
+        signature.bind(**arguments)
+    except TypeError as error:
+        return f"cannot be called with the planner_options {dict(options)!r}: {error}"
+    return None
 
 
 def import_planner_factory(spec: str) -> PlannerFactory:
@@ -185,8 +254,9 @@ def _check_target(spec: str, target: object) -> None:
         signature.bind()
     except TypeError:
         msg = (
-            f"planner spec {spec!r}: {_name(target)}{signature} needs arguments, but a planner is made with none; "
-            "give its parameters defaults, or name a zero-argument function that supplies them"
+            f"planner spec {spec!r}: {_name(target)}{signature} needs arguments, but a planner is made with none "
+            "(a suite entry's planner_options only override defaults); give its parameters defaults, or name "
+            "a zero-argument function that supplies them"
         )
         raise PlannerSpecError(msg, spec) from None
 

@@ -26,6 +26,7 @@ from fleetsim.gating.generated import generation_spec, hypothesis_storage_elsewh
 from fleetsim.load.suites.scenario import load_scenario
 from fleetsim.load.suites.suite import discover_suites, load_suite
 from fleetsim.scenario import RandomDisturbances, Scenario
+from fleetsim.sim.record import RunOrigin
 from fleetsim.strategies import scenarios
 from fleetsim.sweep.payload import scenario_payload
 from fleetsim.sweep.spec import GeneratedSource, SuiteSource, SweepDisturbances, SweepSpec
@@ -44,6 +45,7 @@ class RunItem(TypedDict):
     repetition: int
     vehicles: int  # fleet size, for the report's metric-vs-fleet-size plot
     scenario: dict[str, Any] | None  # scenario_payload(); None when it did not load
+    origin: dict[str, Any]  # the suite entry, as RunOrigin's fields: suite, line, xfail, planner_options
     load_error: str | None
     planner_timeout: float | None
     record: str  # failed | all | none
@@ -85,12 +87,13 @@ def _named(scenario: Scenario, name: str) -> Scenario:
     return replace(scenario, name=name)
 
 
-Case = tuple[str, str, int | None, Scenario | None, str | None]
+Case = tuple[str, str, int | None, Scenario | None, str | None, dict[str, Any]]
 
 
 def _cases(spec: SweepSpec) -> list[Case]:
-    """(id, source kind, seed, scenario or None, load error) for every scenario of every source (and, with
-    the spec's ``disturbances``, every disturbance seed)."""
+    """(id, source kind, seed, scenario or None, load error, origin) for every scenario of every source
+    (and, with the spec's ``disturbances``, every disturbance seed); the origin is the suite entry's
+    facts for the record (a generated source's scenarios have none)."""
     cases: list[Case] = []
     for source in spec.sources:
         if isinstance(source, SuiteSource):
@@ -99,10 +102,12 @@ def _cases(spec: SweepSpec) -> list[Case]:
                 for entry in suite.scenarios:
                     if entry.generate is not None or (source.name is not None and entry.name != source.name):
                         continue  # a suite's hunts are pytest's; a sweep generates through its own sources
+                    key = scenario_id(file, entry.name)
+                    origin = RunOrigin.of_entry(key.rpartition("::")[0], entry).keys()
                     try:
-                        cases.append((scenario_id(file, entry.name), "suite", None, load_scenario(entry, suite), None))
+                        cases.append((key, "suite", None, load_scenario(entry, suite), None, origin))
                     except LoadError as error:
-                        cases.append((scenario_id(file, entry.name), "suite", None, None, str(error)))
+                        cases.append((key, "suite", None, None, str(error), origin))
         else:
             for index, scenario in enumerate(generate_scenarios(source)):
                 cases.append(
@@ -112,6 +117,7 @@ def _cases(spec: SweepSpec) -> list[Case]:
                         source.seed + index,
                         scenario,
                         None,
+                        RunOrigin().keys(),
                     )
                 )
     return cases if spec.disturbances is None else _disturbed(cases, spec.disturbances)
@@ -120,18 +126,18 @@ def _cases(spec: SweepSpec) -> list[Case]:
 def _disturbed(cases: list[Case], drawn: SweepDisturbances) -> list[Case]:
     """Each case once per disturbance seed (``ID~dSEED``), with random stops drawn from that seed."""
     out: list[Case] = []
-    for key, kind, seed, scenario, error in cases:
+    for key, kind, seed, scenario, error, origin in cases:
         for stops in drawn.seeds:
             random_stops = RandomDisturbances(stops, drawn.stops_per_vehicle_hour, drawn.stop)
             disturbed = None if scenario is None else replace(scenario, random_disturbances=random_stops)
-            out.append((f"{key}~d{stops}", kind, seed, disturbed, error))
+            out.append((f"{key}~d{stops}", kind, seed, disturbed, error, origin))
     return out
 
 
 def expand(spec: SweepSpec, artifacts: Path) -> list[RunItem]:
     """Every run of the sweep, ordered by key (the order is irrelevant to the results, but fixed)."""
     items: list[RunItem] = []
-    for scenario_key, kind, seed, scenario, error in _cases(spec):
+    for scenario_key, kind, seed, scenario, error, origin in _cases(spec):
         payload = scenario_payload(scenario) if scenario is not None else None
         for planner in spec.planners:
             for repetition in range(1, spec.repetitions + 1):
@@ -145,6 +151,7 @@ def expand(spec: SweepSpec, artifacts: Path) -> list[RunItem]:
                         repetition=repetition,
                         vehicles=len(scenario.vehicles) if scenario is not None else 0,
                         scenario=payload,
+                        origin=origin,
                         load_error=error,
                         planner_timeout=spec.planner_timeout,
                         record=spec.record,

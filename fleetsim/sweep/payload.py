@@ -2,20 +2,33 @@
 
 Workers get no paths into the machine that planned the sweep (they may be elsewhere: SLURM, Kubernetes),
 only the scenario folder's contents (``map.json``, ``vehicles.csv``, ``tasks.csv`` as written by
-:func:`fleetsim.strategies.save_scenario`) with the vehicle types, settings and expectations. A scenario
-sent this way runs exactly as the loaded one does (the same trace hash).
+:func:`fleetsim.strategies.save_scenario`) with the vehicle types, settings and expectations, and what the
+suite entry gives its planner: its ``planner_options`` and the bytes of its data ``files`` (a folder
+listed there sends every file below it), which a worker puts at the same relative paths in the folder
+its planner gets as ``scenario_dir``. A scenario sent this way runs exactly as the loaded one does (the
+same trace hash).
 """
 
 from __future__ import annotations
 
+import base64
 import dataclasses
 import tempfile
-from pathlib import Path
+from pathlib import Path, PurePosixPath
+from types import MappingProxyType
 from typing import Any
 
 from fleetsim.enums import ConflictModel, TurnCapability
 from fleetsim.load.suites.scenario import load_scenario_dir
-from fleetsim.scenario import Disturbance, Expectations, RandomDisturbances, Scenario, ScenarioSettings, VehicleType
+from fleetsim.scenario import (
+    Disturbance,
+    Expectations,
+    PlannerSetup,
+    RandomDisturbances,
+    Scenario,
+    ScenarioSettings,
+    VehicleType,
+)
 from fleetsim.strategies import save_scenario
 
 __all__ = ["scenario_from_payload", "scenario_payload"]
@@ -48,15 +61,30 @@ def scenario_payload(scenario: Scenario) -> dict[str, Any]:
         "random_disturbances": None
         if scenario.random_disturbances is None
         else dataclasses.asdict(scenario.random_disturbances),
+        "planner_setup": _setup_payload(scenario.planner_setup),
     }
+
+
+def _setup_payload(setup: PlannerSetup) -> dict[str, Any]:
+    """The entry's planner options and the bytes of its data files (base64), by path in its folder."""
+    files: dict[str, str] = {}
+    for name in setup.files:
+        assert setup.folder is not None  # the suite loader gives files a folder and checks they are in it
+        path = setup.folder / name
+        for found in sorted(path.rglob("*")) if path.is_dir() else [path]:
+            if found.is_file():
+                relative = found.relative_to(setup.folder).as_posix()
+                files[relative] = base64.b64encode(found.read_bytes()).decode("ascii")
+    return {"options": dict(setup.options), "where": setup.where, "files": files}
 
 
 def _tuple(value: Any) -> Any:
     return tuple(value) if isinstance(value, list) else value
 
 
-def scenario_from_payload(payload: dict[str, Any]) -> Scenario:
-    """The scenario :func:`scenario_payload` describes, loaded as any scenario folder is."""
+def scenario_from_payload(payload: dict[str, Any], scenario_dir: Path | None = None) -> Scenario:
+    """The scenario :func:`scenario_payload` describes, loaded as any scenario folder is; the entry's data
+    files are written into ``scenario_dir`` (which must outlive the run), the folder its planner gets."""
     types = {
         data["name"]: VehicleType(
             **{**data, "turn_capability": TurnCapability(data["turn_capability"]), "color": _tuple(data.get("color"))}
@@ -77,4 +105,21 @@ def scenario_from_payload(payload: dict[str, Any]) -> Scenario:
         scenario, name=payload["name"], expect=expect, map_path=None, vehicles_path=None, tasks_path=None,
         disturbances=tuple(Disturbance(**d) for d in payload.get("disturbances", ())),
         random_disturbances=None if drawn is None else RandomDisturbances(**{**drawn, "stop": tuple(drawn["stop"])}),
+        planner_setup=_setup_from(payload.get("planner_setup"), scenario_dir),
     )  # fmt: skip
+
+
+def _setup_from(sent: dict[str, Any] | None, folder: Path | None) -> PlannerSetup:
+    """The planner setup a payload sent, its data files written below ``folder``."""
+    if sent is None:
+        return PlannerSetup(folder=folder)
+    for name, data in sent["files"].items():
+        path = PurePosixPath(name)
+        if path.is_absolute() or ".." in path.parts or folder is None:  # only what scenario_payload writes
+            msg = f"planner_setup.files: {name!r} must be a path inside the scenario's folder"
+            raise ValueError(msg)
+        target = folder.joinpath(*path.parts)
+        target.parent.mkdir(parents=True, exist_ok=True)
+        target.write_bytes(base64.b64decode(data))
+    files = tuple(sorted(sent["files"]))
+    return PlannerSetup(MappingProxyType(dict(sent["options"])), folder, files, sent.get("where", ""))

@@ -2,9 +2,9 @@
 
 Rows are appended (and flushed) as runs finish, so a sweep killed at any moment leaves every finished
 run on disk; ``--resume`` reads the file, drops a last line cut short, and runs only the keys missing.
-Each row is a record: the run's ordinary result (``schemas/result.schema.json``, what ``fleetsim run
---json`` prints) plus the sweep's own keys (``key``, ``id``, ``source``, ``seed``, ``repetition``,
-``vehicles``, ``error``); ``pytest --fleetsim-compare`` reads the same file. Reading checks every row
+Each row is a run's record (``schemas/result.schema.json``: every key ``fleetsim run --json`` prints)
+with the sweep's own keys (``key``, ``id``, ``source``, ``seed``, ``repetition``, ``vehicles``,
+``error``); ``pytest --fleetsim-compare`` reads the same file. Reading checks every row
 against the schema, so a file that is not what this fleetsim writes fails at its line.
 """
 
@@ -18,6 +18,7 @@ from typing import IO, Any
 
 from fleetsim.errors import FleetsimError, Location
 from fleetsim.gating.baseline import SWEEP_RESULTS_FORMAT as RESULTS_FORMAT
+from fleetsim.sim.record import PRODUCER_KEYS
 from fleetsim.sim.result_schema import result_problem
 
 __all__ = [
@@ -31,7 +32,7 @@ __all__ = [
 ]
 
 _FAMILY = RESULTS_FORMAT.rpartition("/")[0] + "/"
-SWEEP_KEYS = ("key", "id", "source", "seed", "repetition", "vehicles", "error")  # a record's own, besides the run's
+SWEEP_KEYS = PRODUCER_KEYS["sweep"]  # a sweep record's own keys, besides the run's and its entry's
 
 
 class ResultsError(FleetsimError, ValueError):

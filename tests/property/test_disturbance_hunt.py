@@ -16,6 +16,7 @@ from fleetsim.load.suites.scenario import load_scenario, load_scenario_dir
 from fleetsim.load.suites.suite import load_suite
 from fleetsim.planners import ReservingPlanner
 from fleetsim.sim.loop import run_scenario
+from fleetsim.sim.record import RunOrigin
 
 LATE_CROSSING = Path(__file__).resolve().parents[2] / "scenario_suites" / "caught-bugs" / "late-crossing"
 
@@ -52,7 +53,7 @@ def test_a_hunt_finds_and_shrinks_a_one_stop_counterexample_and_saves_it(tmp_pat
     )
     assert barely.passed, "0.1 s shorter no longer fails: the duration is shrunk"
     assert any(f.kind == "collision" for f in found.result.failures)
-    paths = record_counterexample(found, tmp_path / "found", {"suite": str(path)})
+    paths = record_counterexample(found, tmp_path / "found", RunOrigin(str(path)))
     assert {"picture", "mcap", "scenario"} <= set(paths), paths
     entry = counterexample_entry(spec, Path(paths["scenario"]), path, found.counterexample.disturbances)
     pasted = yaml.safe_load("scenarios:\n" + entry)["scenarios"][0]

@@ -259,7 +259,8 @@ def test_wrong_way_is_reported_rather_than_not_connected() -> None:
 
 def test_rejection_reads_as_code_vehicle_leg_segment_and_message() -> None:
     rejection = check(leg(1, fixed=True), leg(99))
-    assert str(rejection) == "unknown-segment: vehicle 1, leg 1 (segment 99): segment 99 is not in the map"
+    where = "unknown-segment: vehicle 1, leg 1 (segment 99)"
+    assert str(rejection) == f"{where}: segment 99 is not in the map (segments 1–6)"
 
 
 def test_there_are_exactly_the_thirteen_codes_of_the_spec_and_the_vda5050_one() -> None:

@@ -15,6 +15,7 @@ from fleetsim.recording.artifacts import TRACE_FILE, write_run_artifacts
 from fleetsim.recording.picture import failure_picture
 from fleetsim.scenario import Scenario
 from fleetsim.sim.loop import run_scenario
+from fleetsim.sim.record import RunOrigin
 
 SUITE = Path(__file__).resolve().parents[2] / "scenario_suites" / "examples.fleetsim.yaml"
 
@@ -28,7 +29,7 @@ def crossing() -> Scenario:
 def collided(tmp_path: Path) -> Path:
     """The artifact folder of the BFS planner's collision in the crossing, as the pytest plugin writes it."""
     folder = tmp_path / "artifacts" / "examples" / "crossing"
-    write_run_artifacts(folder, run_scenario(crossing(), BFSPlanner(), keep_trace=True), {"suite": str(SUITE)})
+    write_run_artifacts(folder, run_scenario(crossing(), BFSPlanner(), keep_trace=True), RunOrigin(str(SUITE)))
     return folder
 
 
@@ -85,7 +86,7 @@ def test_the_trace_file_itself_can_be_named(collided: Path, tmp_path: Path, caps
 def test_a_passed_run_is_drawn_at_its_last_step(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     result = run_scenario(crossing(), ReservingPlanner(), keep_trace=True)
     folder = tmp_path / "passed"
-    write_run_artifacts(folder, result, {"suite": str(SUITE)})
+    write_run_artifacts(folder, result, RunOrigin(str(SUITE)))
     output = tmp_path / "last.svg"
     status, out, _ = render(capsys, "--trace", str(folder), "-o", str(output))
     assert status == 0
@@ -123,7 +124,7 @@ def test_a_step_out_of_range_is_a_usage_error(
 
 def test_a_missing_trace_is_a_usage_error(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     folder = tmp_path / "untraced"
-    write_run_artifacts(folder, run_scenario(crossing(), BFSPlanner(), keep_trace=False), {"suite": str(SUITE)})
+    write_run_artifacts(folder, run_scenario(crossing(), BFSPlanner(), keep_trace=False), RunOrigin(str(SUITE)))
     status, _, err = render(capsys, "--trace", str(folder), "-o", str(tmp_path / "out.svg"))
     assert status == 2
     assert err == f"fleetsim: error: {folder}: no {TRACE_FILE} in this folder (the run did not keep its trace)\n"

@@ -221,7 +221,7 @@ def test_the_disturbed_field_travels_only_while_set_and_protocol_1_0_clients_are
     controller = FleetController(scenario)
     first = controller.snapshot(0.0)
     init = json.loads(json.dumps(encode_init(scenario.layout, first)))
-    assert init["protocol"] == "fleetsim-planner/1.3"
+    assert init["protocol"] == "fleetsim-planner/1.4"
     assert all("disturbed" not in v for v in encode_fleet(first)["vehicles"])  # as in 1.0 when undisturbed
     session = _Session(init)
     session.snapshot(json.loads(json.dumps(encode_fleet(first))))

@@ -11,6 +11,7 @@ from fleetsim import load_scenario, load_suite
 from fleetsim.cli import main
 from fleetsim.gating.generated import counterexample_entry, hunt, record_counterexample
 from fleetsim.planners import BFSPlanner, ReservingPlanner
+from fleetsim.sim.record import RunOrigin
 
 SUITE = """\
 fleetsim: 1
@@ -53,7 +54,7 @@ def test_the_saved_counterexample_pasted_into_the_suite_runs_as_an_ordinary_scen
     [spec] = suite.scenarios
     found = hunt(spec, suite, BFSPlanner, identity="bfs", derandomize=True)
     assert found.counterexample is not None
-    saved = Path(record_counterexample(found, tmp_path / "results" / "random-loops", {})["scenario"])
+    saved = Path(record_counterexample(found, tmp_path / "results" / "random-loops", RunOrigin())["scenario"])
     entry = counterexample_entry(spec, saved, path)
     assert entry.startswith("  - name: random-loops-counterexample\n")
     assert "    dir: results/random-loops/counterexample/\n" in entry

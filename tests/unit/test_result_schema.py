@@ -21,6 +21,7 @@ from fleetsim import load_scenario, load_suite, run_scenario
 from fleetsim.cli import main
 from fleetsim.gating.baseline import BaselineError, ScenarioMetrics, read_metrics
 from fleetsim.planners import BFSPlanner, ReservingPlanner
+from fleetsim.sim.record import ENTRY_KEYS
 from fleetsim.sim.result_schema import result_problem, result_schema
 from fleetsim.sweep.items import RunItem, expand
 from fleetsim.sweep.results import SWEEP_KEYS, ResultsError, ResultsFile, read_results, record_problem
@@ -51,6 +52,10 @@ sources:
 def example(name: str):  # type: ignore[no-untyped-def]
     suite = load_suite(EXAMPLES)
     return load_scenario(next(spec for spec in suite.scenarios if spec.name == name), suite)
+
+
+def example_line(name: str) -> int:
+    return next(spec.line for spec in load_suite(EXAMPLES).scenarios if spec.name == name)
 
 
 def test_the_packaged_schema_is_the_published_one_and_a_valid_schema() -> None:
@@ -96,8 +101,14 @@ def test_a_sweep_record_is_the_runs_result_plus_the_sweeps_keys(tmp_path: Path) 
 
     assert schema_errors(record) == [] and record_problem(record) is None
     direct = run_scenario(example("crossing"), BFSPlanner(), planner_name=BFS).to_dict()
-    assert set(record) - set(direct) == set(SWEEP_KEYS)
-    ran = {k: v for k, v in record.items() if k not in SWEEP_KEYS}
+    assert set(record) - set(direct) == {*SWEEP_KEYS, *ENTRY_KEYS}
+    assert (record["suite"], record["line"], record["xfail"], record["planner_options"]) == (
+        crossing["id"].rpartition("::")[0],
+        example_line("crossing"),
+        None,
+        {},
+    )
+    ran = {k: v for k, v in record.items() if k not in (*SWEEP_KEYS, *ENTRY_KEYS)}
     for document in (ran, direct):  # wall-clock figures vary from run to run; artifacts: only the sweep kept any
         document["metrics"] = {k: v for k, v in document["metrics"].items() if k not in WALL_CLOCK}
         document.pop("artifacts")

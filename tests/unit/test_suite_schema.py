@@ -65,8 +65,8 @@ def test_the_packaged_schema_is_the_repository_file() -> None:
 def test_defaults_and_scenarios_accept_exactly_the_settings_of_scenario_settings() -> None:
     schema = suite_schema()
     settings = {f.name for f in fields(ScenarioSettings)}
-    # ... and the map options, which the defaults also hold (merged key by key with a scenario's own).
-    assert set(schema["properties"]["defaults"]["properties"]) == settings | {"map_options"}
+    # ... and the map options and planner options (merged key by key with a scenario's own) and files.
+    assert set(schema["properties"]["defaults"]["properties"]) == settings | {"map_options", "planner_options", "files"}
     assert settings <= set(schema["$defs"]["scenario"]["properties"])
 
 

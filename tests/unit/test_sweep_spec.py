@@ -153,13 +153,14 @@ def test_sweep_without_dask_says_how_to_install_it(
 
 def test_sweep_results_feed_fleetsim_compare(tmp_path: Path) -> None:
     from fleetsim.gating.baseline import BaselineError, read_metrics
+    from fleetsim.sim.record import RunOrigin
     from fleetsim.sweep.items import RunItem
     from fleetsim.sweep.results import ResultsFile
     from fleetsim.sweep.worker import failed_row
 
     def row(planner: str, source: str, sid: str) -> dict[str, object]:
         item = RunItem(key=f"{planner} | {sid} | 1", id=sid, planner=planner, source=source, seed=None, repetition=1, vehicles=1,
-                       scenario=None, load_error="x", planner_timeout=None, record="none", artifacts=str(tmp_path))  # fmt: skip
+                       scenario=None, origin=RunOrigin().keys(), load_error="x", planner_timeout=None, record="none", artifacts=str(tmp_path))  # fmt: skip
         return failed_row(item, "x")
 
     path = tmp_path / "r.jsonl"

@@ -15,6 +15,7 @@ from fleetsim.planners import BFSPlanner, ReservingPlanner
 from fleetsim.planning.plans import FleetPlan
 from fleetsim.recording.artifacts import artifact_folder, write_run_artifacts
 from fleetsim.scenario import Scenario
+from fleetsim.sim.record import RunOrigin
 from fleetsim.sim.report import broken_expectation, failure_report
 from fleetsim.sim.result import Pacing
 
@@ -137,7 +138,7 @@ def test_a_planner_error_run_is_not_gated_on_its_hash() -> None:
 def test_the_failure_report_opens_with_one_line_and_lists_broken_expectations_and_artifacts(tmp_path: Path) -> None:
     result = gated(crossing(), BFSPlanner, keep_trace=True).result
     folder = artifact_folder(tmp_path, SUITE, "crossing")
-    paths = write_run_artifacts(folder, result, {"nodeid": "x::crossing"})
+    paths = write_run_artifacts(folder, result, RunOrigin(own={"nodeid": "x::crossing"}))
     result = replace(result, artifacts=paths)
     report = failure_report(result, heading="fleetsim scenario 'crossing'")
     first, second = report.splitlines()[:2]

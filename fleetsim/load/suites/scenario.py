@@ -7,9 +7,10 @@ check (every goal reachable, :mod:`.task_reach`) need the layout.
 Errors are collected stage by stage (:class:`~fleetsim.load.common.collect.ErrorCollector`): the map's; then
 every row error of ``vehicles.csv`` and of ``tasks.csv`` together (a task naming a vehicle whose row is
 bad is not also called unknown); then the layout checks (start conflicts, reachability), which only run
-on clean files. When the map cannot be loaded, the CSV files' structure (header, row widths) is still
-checked. Nothing is returned half loaded: either a whole scenario, or its errors — one raised as itself,
-several as one :class:`~fleetsim.errors.LoadErrors`.
+on clean files. When the map cannot be loaded, the CSV files' rows are still checked for all that needs
+no map (ids, words, vehicle types, which vehicles exist), and their errors reported with the map's.
+Nothing is returned half loaded: either a whole scenario, or its errors — one raised as itself, several
+as one :class:`~fleetsim.errors.LoadErrors`.
 """
 
 from __future__ import annotations
@@ -30,10 +31,10 @@ from fleetsim.load.suites.suite import ScenarioSpec, Suite
 from fleetsim.load.suites.task_reach import check_tasks_reachable
 from fleetsim.load.tables.scenario_files import (
     MAP_FILE_NAMES,
-    TASK_COLUMNS,
     TASKS_FILE_NAME,
     VEHICLE_COLUMNS,
     VEHICLES_FILE_NAME,
+    VehicleRows,
     collect_tasks,
     collect_vehicles,
     map_candidates,
@@ -68,6 +69,7 @@ def load_scenario(spec: ScenarioSpec, suite: Suite) -> Scenario:
         Location(spec.suite_path, line=spec.line),
         spec.map_options,
     )
+    scenario = replace(scenario, planner_setup=spec.planner_setup)
     if not spec.disturbances and spec.random_disturbances is None:
         return scenario
     scenario = replace(scenario, disturbances=spec.disturbances, random_disturbances=spec.random_disturbances)
@@ -142,21 +144,23 @@ def _assemble(
     with errors.collecting():
         default_type = default_vehicle_type(vehicle_types, settings, origin)
         typed = True
-    if site is None or not typed:
-        # The rows cannot be checked without segments and types; their files' structure can.
+    # Without the map, the rows are still checked for all that needs no segments (reported with the
+    # map's errors); without the default type, vehicles.csv only for its structure (a row naming no type
+    # cannot be judged) and tasks.csv without knowing which vehicles exist.
+    segments = {segment.id: segment for segment in site.segments} if site is not None else None
+    vehicle_rows = VehicleRows((), None)
+    if typed:
+        vehicle_rows = collect_vehicles(
+            vehicles_path, segments, vehicle_types, default_type, errors, map_name=map_path.name
+        )
+    else:
         check_table(vehicles_path, VEHICLE_COLUMNS, errors)
-        check_table(tasks_path, TASK_COLUMNS, errors)
-        errors.raise_if_any()
-    assert site is not None  # raise_if_any raised the error that left it None
-    segments = {segment.id: segment for segment in site.segments}
-    vehicle_rows = collect_vehicles(
-        vehicles_path, segments, vehicle_types, default_type, errors, map_name=map_path.name
-    )
     # Tasks are checked against every vehicle id vehicles.csv names, bad rows' included.
     located_tasks = collect_tasks(
         tasks_path, segments, vehicle_rows.ids, errors, map_name=map_path.name, vehicles_name=vehicles_path.name
     )
     errors.raise_if_any()
+    assert site is not None and typed  # raise_if_any raised the error that left them unset
     located = vehicle_rows.located
     vehicles = tuple(vehicle for vehicle, _ in located)
     layout = build_layout(

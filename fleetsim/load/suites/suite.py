@@ -22,6 +22,8 @@ from fleetsim.load.common.collect import ErrorCollector
 from fleetsim.load.common.map_options import MapOptions
 from fleetsim.load.common.yaml_source import Locate, load_yaml_with_marks
 from fleetsim.load.suites.disturbances import HuntDisturbances, declared_disturbances, hunt_block, random_block
+from fleetsim.load.suites.entry_tables import check_entry_tables
+from fleetsim.load.suites.planner_setup import PLANNER_KEYS, planner_setup
 from fleetsim.load.suites.schema import SchemaCheck, raise_suite_errors, schema_check, suite_error, suite_schema
 from fleetsim.load.tables.scenario_files import (
     MAP_FILE_NAMES,
@@ -34,6 +36,7 @@ from fleetsim.scenario import (
     Checks,
     Disturbance,
     Expectations,
+    PlannerSetup,
     RandomDisturbances,
     ScenarioSettings,
     VehicleType,
@@ -92,6 +95,8 @@ class ScenarioSpec:
         disturbances: Declared disturbances, in entry order.
         random_disturbances: Randomly drawn stops, or ``None``.
         hunt_disturbances: A Hypothesis search for stop schedules that fail the planner, or ``None``.
+        planner_setup: What the entry gives its planner: ``planner_options`` (over the defaults'), the
+            scenario's folder and the data ``files``.
     """
 
     name: str
@@ -110,6 +115,7 @@ class ScenarioSpec:
     disturbances: tuple[Disturbance, ...] = ()
     random_disturbances: RandomDisturbances | None = None
     hunt_disturbances: HuntDisturbances | None = None
+    planner_setup: PlannerSetup = field(default_factory=PlannerSetup)
 
     @property
     def hunts(self) -> bool:
@@ -186,16 +192,21 @@ def load_suite(path: Path | str) -> Suite:
         found.add(error)
     suite = _read_suite(path, data, locate, check, found) if isinstance(data, dict) else None
     errors = ErrorCollector()
-    for each in sorted(found.errors, key=_position):
+    for each in sorted(found.errors, key=lambda error: _position(error, path)):
         errors.add(each)
     raise_suite_errors(errors)
     assert suite is not None  # no error, so every part was read
     return suite
 
 
-def _position(error: SuiteError | Exception) -> tuple[int, int]:
+def _position(error: SuiteError | Exception, suite: Path) -> tuple[int, int, int]:
+    """The suite's own errors in file order, then those of the files it names (CSV rows) as found."""
     location = getattr(error, "location", None)
-    return (0, 0) if location is None else (location.line or 0, location.column or 0)
+    if location is None:
+        return (0, 0, 0)
+    if Path(location.path) != suite:
+        return (1, 0, 0)
+    return (0, location.line or 0, location.column or 0)
 
 
 _ALL_CLEAN = SchemaCheck()  # for data the schema has passed
@@ -215,8 +226,10 @@ def _read_suite(
         return None
     _check_unique_names(entries, locate, errors)
     base_options = defaults.get("map_options", {}) if check.clean(("defaults", "map_options")) else None
+    planner = {key: defaults[key] for key in PLANNER_KEYS if key in defaults}
+    base_planner = planner if all(check.clean(("defaults", key)) for key in PLANNER_KEYS) else None
     scenarios = [
-        _scenario_entry(path, index, entry, base, names, locate, base_options, check, errors)
+        _scenario_entry(path, index, entry, base, names, locate, base_options, check, errors, base_planner)
         for index, entry in enumerate(entries)
     ]
     if errors or vehicle_types is None or any(spec is None for spec in scenarios):
@@ -454,8 +467,10 @@ def _scenario_entry(
     base_options: Mapping[str, Any] | None,
     check: SchemaCheck,
     errors: ErrorCollector,
+    base_planner: Mapping[str, Any] | None = MappingProxyType({}),
 ) -> ScenarioSpec | None:
     """The entry, or ``None`` when a part of it could not be read; each problem goes to ``errors``.
+    ``base_planner``: the defaults' ``planner_options`` and ``files`` (``None``: they are broken).
 
     A part the schema refused is not looked at further (it is reported already); the files are checked
     when the entry is whole (a misspelt ``dir`` leaves it without one, which is the same mistake).
@@ -466,6 +481,7 @@ def _scenario_entry(
     complete = True
     generate = None
     paths: tuple[Path, Path, Path] | None = None
+    files_missing = False
     if "generate" in entry:
         paths = (suite_path.parent,) * 3
         if check.clean((*where, "generate")) and types is not None:
@@ -475,13 +491,22 @@ def _scenario_entry(
     elif check.intact(where) and all(check.clean((*where, key)) for key in ("dir", "map", "vehicles", "tasks")):
         with errors.collecting():
             paths = _scenario_files(suite_path.parent, entry, locate, where)
+        files_missing = paths is None
     settings = _settings(base, entry, types, locate, where, check, errors)
+    if files_missing:  # a dir, say: the errors of the entry's CSV files that exist are reported with it
+        check_entry_tables(suite_path.parent, entry, settings.vehicle_type, types, errors)
     disturbances = _disturbance_keys(entry, "generate" in entry, locate, where, check, errors)
+    setup = None
+    if paths is not None and base_planner is not None and all(check.clean((*where, k)) for k in PLANNER_KEYS):
+        folder = suite_path.parent / entry["dir"] if "dir" in entry else suite_path.parent
+        with errors.collecting():
+            setup = planner_setup(entry, base_planner, folder, locate, where)
     expect = entry.get("expect", {})
     options = entry.get("map_options", {})
     if (
         not complete
         or paths is None
+        or setup is None
         or disturbances is None
         or base_options is None
         or not check.clean(where)
@@ -503,6 +528,7 @@ def _scenario_entry(
         description=entry.get("description", ""),
         generate=generate,
         map_options=MapOptions(**{**base_options, **options}),
+        planner_setup=setup,
         **disturbances,
     )
 

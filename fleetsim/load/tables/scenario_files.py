@@ -174,6 +174,21 @@ class _SegmentCells:
         return self.segments[segment_id]
 
 
+def _segment_form(row: Row, column: str) -> None:
+    """What a segment cell must be without a map to look it up in: not empty, a number after ``id:``."""
+    value = row.get(column)
+    if not value:
+        raise row.error(column, "missing: a segment id or name is required")
+    if value.startswith("id:") and not _WHOLE_NUMBER.fullmatch(value[3:].strip()):
+        raise row.error(column, f"{value!r}: after 'id:' comes a whole number >= 0")
+
+
+def _segment_reader(segments: Mapping[int, Segment] | None, map_name: str) -> Callable[[Row, str], Segment | None]:
+    """Reads a segment cell against the map's segments, or only for its form when there is no map (it
+    did not load): then the cell gives no segment, and the rows' other cells are still checked."""
+    return _segment_form if segments is None else _SegmentCells(segments, map_name).read
+
+
 # -- vehicles.csv ---------------------------------------------------------------------------------
 
 
@@ -227,7 +242,7 @@ def _check_way(row: Row, segment: Segment, traverse: Traverse) -> None:
 
 def collect_vehicles(
     path: Path,
-    segments: Mapping[int, Segment],
+    segments: Mapping[int, Segment] | None,
     vehicle_types: Mapping[str, VehicleType],
     default_type: VehicleType | None,
     errors: ErrorCollector,
@@ -235,12 +250,13 @@ def collect_vehicles(
     map_name: str = "the map",
 ) -> VehicleRows:
     """Every row of ``vehicles.csv`` checked, each bad cell's error added to ``errors`` (see
-    :func:`read_vehicles`); the vehicles of the rows without one."""
+    :func:`read_vehicles`); the vehicles of the rows without one. Without ``segments`` (the map did not
+    load) the rows are checked for all that needs no map, and give no vehicles."""
     rows = read_table(path, VEHICLE_COLUMNS, errors)
     if rows is None:
         return VehicleRows((), None)
     types_by_key = {name.casefold(): vehicle_type for name, vehicle_type in vehicle_types.items()}
-    segment_cells = _SegmentCells(segments, map_name)
+    read_segment = _segment_reader(segments, map_name)
     lines: dict[int, int] = {}  # vehicle id → the line of the first row naming it
     located = []
     for row in rows:
@@ -250,7 +266,7 @@ def collect_vehicles(
             cells.read(_already_used, row, vehicle_id, lines[vehicle_id])
         elif vehicle_id is not None:
             lines[vehicle_id] = row.line
-        segment = cells.read(segment_cells.read, row, "start_segment_id")
+        segment = cells.read(read_segment, row, "start_segment_id")
         traverse = cells.read(_orientation, row)
         if segment is not None and traverse is not None:
             cells.read(_check_way, row, segment, traverse)
@@ -314,7 +330,7 @@ def read_vehicles(
 
 def collect_tasks(
     path: Path,
-    segments: Mapping[int, Segment],
+    segments: Mapping[int, Segment] | None,
     vehicle_ids: frozenset[int] | None,
     errors: ErrorCollector,
     *,
@@ -323,18 +339,19 @@ def collect_tasks(
 ) -> tuple[tuple[Task, int], ...]:
     """Every row of ``tasks.csv`` checked, each bad cell's error added to ``errors`` (see
     :func:`read_tasks`); the tasks of the rows without one. ``vehicle_ids`` are the ids a task may
-    name; ``None`` (``vehicles.csv`` unreadable) skips that check rather than flag every row."""
+    name; ``None`` (``vehicles.csv`` unreadable) skips that check rather than flag every row. Without
+    ``segments`` (the map did not load) the rows are checked for all that needs no map, and give no tasks."""
     rows = read_table(path, TASK_COLUMNS, errors)
     if rows is None:
         return ()
-    segment_cells = _SegmentCells(segments, map_name)
+    read_segment = _segment_reader(segments, map_name)
     tasks = []
     for number, row in enumerate(rows, start=1):
         cells = _Cells(errors)
         vehicle_id = cells.read(_whole_number, row, "vehicle_id")
         if vehicle_id is not None and vehicle_ids is not None and vehicle_id not in vehicle_ids:
             cells.read(_unknown_vehicle, row, vehicle_id, vehicles_name)
-        segment = cells.read(segment_cells.read, row, "goal_segment_id")
+        segment = cells.read(read_segment, row, "goal_segment_id")
         progress = cells.read(_choice, row, "goal_progress_direction", Progress)
         if cells.ok and vehicle_id is not None and segment is not None:
             tasks.append((Task(number, vehicle_id, segment.id, progress), row.line))

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+from pathlib import Path
 from typing import Any
 
 from fleetsim.planners import BFSPlanner, ReservingPlanner
@@ -33,3 +34,18 @@ class Exploding:
 
     def fix_legs(self, *args: Any) -> list[Any]:
         return []
+
+
+class TablePlanner(ReservingPlanner):
+    """ReservingPlanner that needs a data file: ``planner_options: {table: PATH}``, read from the scenario's
+    folder (``scenario_dir``), whose first line must be ``fleetsim table``. Without it, it cannot start."""
+
+    def __init__(self, table: str = "", scenario_dir: Path | None = None) -> None:
+        if not table or scenario_dir is None:
+            msg = f"TablePlanner needs planner_options: {{table: FILE}} and a scenario folder (got {table=!r}, {scenario_dir=!r})"
+            raise ValueError(msg)
+        first = (Path(scenario_dir) / table).read_text(encoding="utf-8").splitlines()[0]
+        if first != "fleetsim table":
+            raise ValueError(f"{table}: the first line is {first!r}, not 'fleetsim table'")
+        self.table = table
+        super().__init__()
