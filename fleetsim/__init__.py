@@ -16,6 +16,7 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
+    from fleetsim.dispatch import Assignment, Dispatcher, OpenOrder, OrderBoard
     from fleetsim.enums import ConflictModel, Direction, Disturbed, JointKind, Progress, Shape, Traverse, TurnCapability
     from fleetsim.errors import (
         FleetsimError,
@@ -43,6 +44,7 @@ if TYPE_CHECKING:
         load_suite,
         write_map,
     )
+    from fleetsim.orders import Order, Shift, Stop
     from fleetsim.planning import (
         CollisionAlert,
         FleetLeg,
@@ -70,11 +72,13 @@ from fleetsim.version import __version__
 
 __all__ = [
     "DEFAULT_VEHICLE_TYPE",
+    "Assignment",
     "CollisionAlert",
     "ConflictModel",
     "Connection",
     "Continuation",
     "Direction",
+    "Dispatcher",
     "Disturbed",
     "Divergence",
     "Expectations",
@@ -91,6 +95,9 @@ __all__ = [
     "LoadErrors",
     "Location",
     "MapError",
+    "OpenOrder",
+    "Order",
+    "OrderBoard",
     "Planner",
     "PlannerError",
     "PlannerSpecError",
@@ -106,6 +113,8 @@ __all__ = [
     "ScenarioSpec",
     "Segment",
     "Shape",
+    "Shift",
+    "Stop",
     "Suite",
     "SuiteError",
     "Task",
@@ -130,12 +139,14 @@ __all__ = [
 ]
 
 _HOMES: dict[str, str] = {
+    "Assignment": "fleetsim.dispatch",
     "CollisionAlert": "fleetsim.planning",
     "ConflictModel": "fleetsim.enums",
     "Connection": "fleetsim.layout",
     "Continuation": "fleetsim.layout",
     "DEFAULT_VEHICLE_TYPE": "fleetsim.scenario",
     "Direction": "fleetsim.enums",
+    "Dispatcher": "fleetsim.dispatch",
     "Disturbed": "fleetsim.enums",
     "Divergence": "fleetsim.sim",
     "Expectations": "fleetsim.scenario",
@@ -152,6 +163,9 @@ _HOMES: dict[str, str] = {
     "LoadErrors": "fleetsim.errors",
     "Location": "fleetsim.errors",
     "MapError": "fleetsim.errors",
+    "OpenOrder": "fleetsim.dispatch",
+    "Order": "fleetsim.orders",
+    "OrderBoard": "fleetsim.dispatch",
     "Planner": "fleetsim.planning",
     "PlannerError": "fleetsim.errors",
     "PlannerSpecError": "fleetsim.specs.python",
@@ -167,6 +181,8 @@ _HOMES: dict[str, str] = {
     "ScenarioSpec": "fleetsim.load",
     "Segment": "fleetsim.layout",
     "Shape": "fleetsim.enums",
+    "Shift": "fleetsim.orders",
+    "Stop": "fleetsim.orders",
     "Suite": "fleetsim.load",
     "SuiteError": "fleetsim.errors",
     "Task": "fleetsim.scenario",

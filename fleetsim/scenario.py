@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 from fleetsim.enums import ConflictModel, Progress, Traverse, TurnCapability
 from fleetsim.errors import ScenarioError
+from fleetsim.orders import MeasureBound, Order, OrderStream, Shift, Station
 
 if TYPE_CHECKING:
     from fleetsim.layout.layout import Layout
@@ -125,12 +126,19 @@ class Task:
         goal_segment: The segment to reach.
         goal_progress: ``FORWARD`` (nose first) or ``REVERSE`` (backing) if the vehicle must arrive that
             way (check code ``goal-direction``), ``None`` if either will do.
+        order_id: The transport order whose stop this is (a task a dispatcher's assignment made), or
+            ``None`` for a task of ``tasks.csv``.
+        stop: The index (from 0) of that stop in its order, or ``None``.
+        deadline: Seconds of simulated time by which the order's last stop must be served, or ``None``.
     """
 
     id: int
     vehicle_id: int
     goal_segment: int
     goal_progress: Progress | None = None
+    order_id: str | None = None
+    stop: int | None = None
+    deadline: float | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -238,6 +246,9 @@ class Expectations:
         max_makespan: Seconds by which the last task must be completed, or ``None``.
         contacts: ``"none"`` (a contact fails the run) or ``"any"`` (the run must have at least one).
         clearance: Metres: the run fails when two footprints came closer than this, or ``None``.
+        measures: Bounds on the measures of a run with transport orders (``min_orders_per_hour``,
+            ``max_service_time_p95``, ...), in suite order.
+        overloaded: ``False``: a run whose backlog grows fails; ``True``: it must grow; ``None``: either.
     """
 
     tasks: Literal["all"] | int = "all"
@@ -247,6 +258,8 @@ class Expectations:
     max_makespan: float | None = None
     contacts: Literal["none", "any"] = "none"
     clearance: float | None = None
+    measures: tuple[MeasureBound, ...] = ()
+    overloaded: bool | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -275,8 +288,9 @@ class Scenario:
     """A completely loaded scenario: layout, fleet, tasks, settings and expectations.
 
     One made in code is checked as loading checks files: every vehicle must start on a segment of the
-    layout, and every task must be for one of the vehicles and have its goal on a segment of the layout;
-    otherwise [`ScenarioError`][fleetsim.errors.ScenarioError] names each task or vehicle and the segment.
+    layout, every task must be for one of the vehicles and have its goal on a segment of the layout, and
+    every order's stops and every station must be on segments of the layout; otherwise
+    [`ScenarioError`][fleetsim.errors.ScenarioError] names each task, vehicle, order or station and the segment.
 
     Attributes:
         name: The scenario's name (its suite entry's, or its folder's).
@@ -293,6 +307,12 @@ class Scenario:
         random_disturbances: Randomly drawn stops, if the entry asks for them.
         warnings: Notes from loading that did not stop it (shapes given to non-polylines, say).
         planner_setup: What the suite entry gives the planner: its options, folder and data files.
+        orders: Transport orders (``orders.csv``), in file order; a dispatcher assigns them.
+        order_stream: Orders to generate as the run goes, or ``None``.
+        stations: The map's and the suite's station sets, by name, each segment once, ascending.
+        shift: The run as a shift (its length, warm-up, stalls), or ``None``: a run of fixed tasks.
+        orders_path: The ``orders.csv`` it was loaded from, if any.
+        dispatcher: The dispatcher spec (``module:attr``) its suite entry names, or ``None``.
     """
 
     name: str
@@ -309,14 +329,23 @@ class Scenario:
     random_disturbances: RandomDisturbances | None = None
     warnings: tuple[str, ...] = ()
     planner_setup: PlannerSetup = field(default_factory=PlannerSetup)
+    orders: tuple[Order, ...] = ()
+    order_stream: OrderStream | None = None
+    stations: Mapping[str, tuple[Station, ...]] = field(default_factory=lambda: MappingProxyType({}))
+    shift: Shift | None = None
+    orders_path: Path | None = None
+    dispatcher: str | None = None
 
     def __post_init__(self) -> None:
         # A scenario built in code (not loaded from files, whose rows are checked) is refused here,
         # before any run: a goal on a segment the map lacks would otherwise reach the planner and the checks.
         segments = self.layout.segments
         vehicle_ids = {vehicle.id for vehicle in self.vehicles}
-        if all(vehicle.start_segment in segments for vehicle in self.vehicles) and all(
-            task.goal_segment in segments and task.vehicle_id in vehicle_ids for task in self.tasks
+        if (
+            all(vehicle.start_segment in segments for vehicle in self.vehicles)
+            and all(task.goal_segment in segments and task.vehicle_id in vehicle_ids for task in self.tasks)
+            and all(stop.segment in segments for order in self.orders for stop in order.stops)
+            and all(station.segment in segments for members in self.stations.values() for station in members)
         ):
             return
         problems = _missing_references(self, vehicle_ids)
@@ -335,8 +364,8 @@ _PROBLEMS_SHOWN = 5  # in a ScenarioError's message; its ``problems`` hold them 
 
 
 def _missing_references(scenario: Scenario, vehicle_ids: set[int]) -> list[str]:
-    """Each vehicle starting, and each task ending, on a segment the layout lacks; each task for a
-    vehicle the scenario lacks."""
+    """Each vehicle starting, each task ending, each order stop and each station on a segment the layout
+    lacks; each task for a vehicle the scenario lacks."""
     from fleetsim.layout.segment_ids import not_in_map  # here, so importing this module stays cheap
 
     segments = scenario.layout.segments
@@ -355,4 +384,16 @@ def _missing_references(scenario: Scenario, vehicle_ids: set[int]) -> list[str]:
             problems.append(
                 f"task {task.id} of vehicle {task.vehicle_id} has its goal on {not_in_map(task.goal_segment, segments)}"
             )
+    for order in scenario.orders:
+        problems += [
+            f"order {order.id!r} has its stop {number} on {not_in_map(stop.segment, segments)}"
+            for number, stop in enumerate(order.stops, start=1)
+            if stop.segment not in segments
+        ]
+    for name, members in scenario.stations.items():
+        problems += [
+            f"station set {name!r} has a station on {not_in_map(station.segment, segments)}"
+            for station in members
+            if station.segment not in segments
+        ]
     return problems

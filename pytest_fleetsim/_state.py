@@ -39,9 +39,11 @@ from fleetsim.scenario import Scenario
 from fleetsim.sim.interrupt import StopSignals
 from fleetsim.sim.record import RunOrigin
 from fleetsim.sim.report import (
+    ORDER_COLUMNS,
     SUMMARY_COLUMNS,
     failure_report,
     format_table,
+    order_cells,
     outcome_cell,
     outcome_notes,
     summary_cells,
@@ -95,6 +97,7 @@ class FleetsimState:
     comparison: Comparison | None = None
     stopped_by: int | None = None  # the stop signal that ended a scenario; the session ends after its report
     live: tuple[float | None, int, bool] | None = None  # --fleetsim-live: (speed, port, open a browser)
+    dispatcher: str | None = None  # --dispatcher: for every scenario with orders, whatever its suite names
     _live_session: Any = None  # the page server, made for the first run
 
     # -- set-up -------------------------------------------------------------------------------------
@@ -110,6 +113,14 @@ class FleetsimState:
         except PlannerSpecError as error:
             details = f"\n{error.details.rstrip()}" if error.details else ""
             raise pytest.UsageError(f"--planner: {error}{details}") from None
+        dispatcher = option.fleetsim_dispatcher or config.getini("fleetsim_dispatcher") or None
+        if dispatcher is not None:
+            from fleetsim.specs.dispatcher import DispatcherSpecError, import_dispatcher_factory
+
+            try:
+                import_dispatcher_factory(dispatcher)
+            except DispatcherSpecError as error:
+                raise pytest.UsageError(f"--dispatcher: {error}") from None
         thresholds = []
         for text in option.fleetsim_compare_fail or ():
             try:
@@ -144,6 +155,7 @@ class FleetsimState:
             except ValueError as error:
                 raise pytest.UsageError(f"--fleetsim-{error}") from None
         return cls(
+            dispatcher=dispatcher,
             live=live,
             config=config,
             planner=planner,
@@ -194,6 +206,8 @@ class FleetsimState:
             return
         try:
             scenario = load_scenario(item.spec, item.suite)
+            if self.dispatcher is not None and (scenario.orders or scenario.order_stream is not None):
+                scenario = replace(scenario, dispatcher=self.dispatcher)
             lock = self._lock(item.suite.path)
         except (LoadError, LockFileError) as error:
             self._describe_unrun(item, source.identity, load_error=isinstance(error, LoadError))
@@ -390,6 +404,7 @@ class FleetsimState:
             "planner": identity,
             "metrics": ScenarioMetrics.from_result(item.nodeid, "failed", result).to_dict(),  # outcome: see _metrics
             "cells": cells,
+            "order_cells": order_cells(label or item.spec.name, result),
             "outcome_notes": outcome_notes(item.spec.expect, result),  # by the word the report gives
             "generated": generated,
             "interrupted": result.ended == "interrupted",
@@ -588,6 +603,14 @@ class FleetsimState:
             cells[1] = outcome_cell(outcome.outcome, notes.get(outcome.outcome, ""))
             rows.append(cells)
         lines = format_table(rows) if rows else []
+        shifts: list[list[str]] = []
+        for outcome in ordered:
+            delivered = outcome.payload.get("order_cells")
+            if delivered:
+                label = f"{Path(outcome.suite).name}::{delivered[0]}" if several else delivered[0]
+                shifts.append([label, *delivered[1:]])
+        if shifts:
+            lines += ["", "orders:", *format_table(shifts, ORDER_COLUMNS)]
         lines += self._unrecorded_lines(ordered)
         paced = [o for o in ordered if o.payload["cells"][SUMMARY_COLUMNS.index("hash")] == NOT_GATED]
         if paced:

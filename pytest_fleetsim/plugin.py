@@ -34,6 +34,15 @@ def pytest_addoption(parser: pytest.Parser) -> None:
         "(default: the fleetsim_planner ini option)",
     )
     group.addoption(
+        "--dispatcher",
+        "--fleetsim-dispatcher",
+        dest="fleetsim_dispatcher",
+        metavar="SPEC",
+        help="the dispatcher of the scenarios with transport orders: module:attr naming a class or zero-argument "
+        "factory (default: the fleetsim_dispatcher ini option, else each suite's dispatcher:, else the planner's "
+        "own dispatch method)",
+    )
+    group.addoption(
         "--fleetsim-update-hashes",
         action="store_true",
         dest="fleetsim_update_hashes",
@@ -126,6 +135,9 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     )
     parser.addini("fleetsim_planner", "the planner under test (module:attr) when --planner is not given")
     parser.addini(
+        "fleetsim_dispatcher", "the dispatcher (module:attr) of scenarios with orders, when --dispatcher is not given"
+    )
+    parser.addini(
         "fleetsim_skip_without_planner",
         "skip the scenarios that need a planner when none is given, instead of a usage error",
         type="bool",
@@ -163,6 +175,7 @@ def _asked_for(config: pytest.Config) -> bool:
     return bool(
         option.fleetsim_planner
         or config.getini("fleetsim_planner")
+        or option.fleetsim_dispatcher
         or option.fleetsim_update_hashes
         or option.fleetsim_metrics_json
         or option.fleetsim_compare

@@ -108,9 +108,11 @@ def _check_scenario(name: str, load: Callable[[], Scenario], tally: _Tally) -> N
     else:
         tally.loaded += 1
         layout = scenario.layout
+        orders = f", {len(scenario.orders)} orders" if scenario.orders_path is not None else ""
+        stream = ", an order stream" if scenario.order_stream is not None else ""
         print(
             f"  ok   {name}: {len(layout.segments)} segments, {len(layout.connections)} connections, "
-            f"{len(scenario.vehicles)} vehicles, {len(scenario.tasks)} tasks"
+            f"{len(scenario.vehicles)} vehicles, {len(scenario.tasks)} tasks{orders}{stream}"
         )
         notes = [*scenario.warnings, *_lint_notes(layout, scenario.vehicle_length)]
     tally.warnings += len(notes)
@@ -160,6 +162,10 @@ def layout_document(tiled_map: SiteMap, layout: Layout) -> dict[str, Any]:
             for f in layout.lint(DEFAULT_VEHICLE_TYPE.length)
         ],
         "warnings": list(tiled_map.warnings),
+        "stations": {
+            name: [{"segment": st.segment, "weight": st.weight, "name": st.name} for st in members]
+            for name, members in tiled_map.stations.items()
+        },
     }
 
 
@@ -183,6 +189,7 @@ def _print_layout(tiled_map: SiteMap, layout: Layout) -> None:
             f"{seg.id:>4}  {name:<{width}}  {seg.shape.value:<8}  {seg.direction.value:<9} {seg.length:>7.3f}  "
             f"({x0:.3f}, {y0:.3f}) -> ({x1:.3f}, {y1:.3f}) ({len(seg.waypoints)})"
         )
+    _print_stations(tiled_map)
     print("\nconnections")
     for c in layout.connections:
         print(f"  {c.from_segment} {c.from_traverse.value} -> {c.to_segment} {c.to_traverse.value}: {c.joint.value}")
@@ -194,6 +201,16 @@ def _print_layout(tiled_map: SiteMap, layout: Layout) -> None:
     print("\nlint" + ("" if notes else ": clean"))
     for note in notes:
         print(f"  {note}")
+
+
+def _print_stations(tiled_map: SiteMap) -> None:
+    """The map's station sets, each with its segments (and their weights, where not 1); nothing without."""
+    if not tiled_map.stations:
+        return
+    print("\nstation sets")
+    for name, members in tiled_map.stations.items():
+        listed = [f"{st.segment}" + (f" (weight {st.weight:g})" if st.weight != 1.0 else "") for st in members]
+        print(f"  {name}: {', '.join(listed)}")
 
 
 def inspect(args: argparse.Namespace) -> int:

@@ -15,6 +15,7 @@ from collections.abc import Sequence
 from importlib import import_module
 from typing import Any
 
+from fleetsim.cli.generate import add_generate_arguments
 from fleetsim.cli.orders import add_orders_arguments
 from fleetsim.enums import ConflictModel
 from fleetsim.errors import FleetsimError
@@ -224,6 +225,13 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _add_map_options(convert)
 
+    generate_parser = sub.add_parser(
+        "generate",
+        help="write a ready-to-run scenario folder: a warehouse with stations, vehicles and a shift",
+        command="fleetsim.cli.generate:generate",
+    )
+    add_generate_arguments(generate_parser)
+
     record_parser = sub.add_parser(
         "record",
         help="rebuild a run's MCAP recording from its trace (a run killed outright, say)",
@@ -290,6 +298,13 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="SPEC",
         help="module:attribute naming a planner class or zero-argument factory, "
         "e.g. fleetsim.planners:ReservingPlanner (the current directory is importable)",
+    )
+    run_parser.add_argument(
+        "--dispatcher",
+        metavar="SPEC",
+        help="module:attribute naming a dispatcher class or zero-argument factory, for scenarios with transport "
+        "orders, e.g. fleetsim.dispatchers:NearestVehicleDispatcher (default: the suite's dispatcher:, else the "
+        "planner's own dispatch method)",
     )
     run_parser.add_argument(
         "--json", action="store_true", help="print one result object per scenario per line; the table goes to stderr"

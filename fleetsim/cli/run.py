@@ -41,7 +41,15 @@ from fleetsim.recording.artifacts import artifact_folder, start_run_folder, writ
 from fleetsim.sim.interrupt import StopSignals, signal_name
 from fleetsim.sim.loop import RunProgress, run_scenario
 from fleetsim.sim.record import RunOrigin, run_record
-from fleetsim.sim.report import failure_lines, format_table, outcome_cell, outcome_notes, summary_cells
+from fleetsim.sim.report import (
+    ORDER_COLUMNS,
+    failure_lines,
+    format_table,
+    order_cells,
+    outcome_cell,
+    outcome_notes,
+    summary_cells,
+)
 from fleetsim.sim.result import Failure, RunResult
 from fleetsim.specs.python import PlannerFactory, PlannerSpecError
 
@@ -137,6 +145,18 @@ def run(args: argparse.Namespace) -> int:
             return _run_all(args, stop, live)
 
 
+def _dispatcher_option(spec: str | None) -> str | None:
+    """``--dispatcher``, checked before any run: a spec that gives no dispatcher is a usage error."""
+    if spec is not None:
+        from fleetsim.specs.dispatcher import DispatcherSpecError, import_dispatcher_factory
+
+        try:
+            import_dispatcher_factory(spec)
+        except DispatcherSpecError as error:
+            raise UsageError(str(error)) from None
+    return spec
+
+
 def _say(text: str) -> None:
     """A line for the user at once, on stderr (stdout may carry --json)."""
     print(text, file=sys.stderr, flush=True)
@@ -145,6 +165,7 @@ def _say(text: str) -> None:
 def _run_all(args: argparse.Namespace, stop: StopSignals, live: LiveSession | None = None) -> int:
     timeout = args.planner_timeout or None  # 0 switches the timeout off
     factory = load_planner_factory(args.planner, call_timeout=timeout)
+    dispatcher = _dispatcher_option(args.dispatcher)
     targets = _targets(args.suites)
     record = (Path(args.record), args.record_every) if args.record else None
     counterexamples = record or (DEFAULT_ARTIFACTS, args.record_every)  # always saved
@@ -155,7 +176,9 @@ def _run_all(args: argparse.Namespace, stop: StopSignals, live: LiveSession | No
         if stop.requested:
             break
         with progress.scenario(index, target.label):
-            outcome = _run_target(target, factory, timeout, progress.update, record, counterexamples, stop, live)
+            outcome = _run_target(
+                target, factory, timeout, progress.update, record, counterexamples, stop, live, dispatcher
+            )
         progress.done(outcome)
         outcomes.append(outcome)
         if args.json:
@@ -229,6 +252,7 @@ def _run_target(
     counterexamples: tuple[Path, int] = (DEFAULT_ARTIFACTS, 1),
     stop: StopSignals | None = None,
     live: LiveSession | None = None,
+    dispatcher: str | None = None,
 ) -> _Outcome:
     if target.error is not None:
         return _Outcome(target, _load_failure(target.label, factory.spec, target.error), loaded=False)
@@ -239,6 +263,8 @@ def _run_target(
         if target.spec.hunts:
             return _hunt_target(target, factory, timeout, counterexamples, stop)
         scenario = load_scenario(target.spec, target.suite)
+        if dispatcher is not None:  # the command line's dispatcher, whatever the suite names
+            scenario = replace(scenario, dispatcher=dispatcher)
     except (LoadError, PlannerSpecError) as error:
         return _Outcome(target, _load_failure(target.spec.name, factory.spec, error), loaded=False)
     try:
@@ -408,6 +434,9 @@ def _print_summary(outcomes: list[_Outcome], stream: TextIO) -> None:
     rows = [summary_cells(o.label, outcome_cell(o.word, o.note), o.result if o.loaded else None) for o in outcomes]
     for line in format_table(rows):
         print(line, file=stream)
+    shifts = [cells for o in outcomes if o.loaded and (cells := order_cells(o.label, o.result)) is not None]
+    if shifts:
+        print("\norders:", *format_table(shifts, ORDER_COLUMNS), sep="\n", file=stream)
     words = [o.word for o in outcomes]
     counts = ", ".join(
         f"{words.count(w)} {w}"

@@ -13,7 +13,9 @@ Codes (all warnings):
   to be a joint. Only when a vehicle length is given (a scenario's longest vehicle type; ``fleetsim
   inspect`` uses the default type's); linting a bare layout skips it.
 - ``no-connection``: two ends touch, but the segments' one-way directions both lead into, or both out
-  of, the joint, so no connection exists either way (they still conflict).
+  of, the joint, so no connection exists either way (they still conflict), and one of the two ends
+  connects to no other end there either (a one-way fork or merge, whose branches each connect to the
+  lane they fork from, is not reported).
 - ``zero-length``: a segment shorter than the connection tolerance.
 
 Duplicate segment ids are not linted: they cannot reach a :class:`~fleetsim.layout.layout.Layout`,
@@ -129,8 +131,18 @@ def _ids(t: Touch) -> tuple[int, ...]:
 
 
 def _no_connections(touches: Sequence[Touch]) -> Iterator[LintFinding]:
+    # A one-way fork or merge is no mistake: its branches do not connect to each other, but each connects
+    # to the lane that forks. Only an end that connects to nothing at its joint makes the pair suspect.
+    connected = {
+        (end.segment.id, end.at_last)
+        for t in touches
+        if can_connect(t.a, t.b) or can_connect(t.b, t.a)
+        for end in (t.a, t.b)
+    }
     for t in touches:
         if t.a.segment.id == t.b.segment.id or can_connect(t.a, t.b) or can_connect(t.b, t.a):
+            continue
+        if (t.a.segment.id, t.a.at_last) in connected and (t.b.segment.id, t.b.at_last) in connected:
             continue
         flow = "into" if t.a.segment.allows(t.a.leaving) else "out of"
         msg = (

@@ -62,6 +62,17 @@ class RejectionCode(str, Enum):
             standard that no plan can show (malformed JSON, a schema violation, sequence ids out of step, a
             base after the horizon, an outdated order update). Not a check of plans: the VDA 5050 vehicles
             (`fleetsim.vda5050`) refuse such a message, and the run records it with this code.
+        ASSIGNMENT_UNKNOWN_VEHICLE: ``"assignment-unknown-vehicle"``: a dispatcher's assignment names a
+            vehicle not in the scenario. This and the codes below are the dispatcher's rules
+            (``fleetsim.dispatch.checks``): an answer with any of them is refused whole.
+        ASSIGNMENT_TWICE: ``"assignment-twice"``: two assignments for one vehicle in one answer.
+        ORDER_UNKNOWN: ``"order-unknown"``: an assignment names an order the scenario does not have.
+        ORDER_UNRELEASED: ``"order-unreleased"``: an assignment names an order not yet released.
+        ORDER_COMPLETED: ``"order-completed"``: an assignment names an order already completed.
+        ORDER_TWICE: ``"order-twice"``: an order in two assignments of one answer, or twice in one.
+        ORDER_STARTED: ``"order-started"``: an order whose vehicle has reached its first stop is given to
+            another vehicle (it may be taken back until then, never after).
+        ORDER_VEHICLE_TYPE: ``"order-vehicle-type"``: an order given to a vehicle of a type it excludes.
     """
 
     __hash__ = str.__hash__
@@ -80,6 +91,14 @@ class RejectionCode(str, Enum):
     GOAL_SEGMENT_MISMATCH = "goal-segment-mismatch"
     GOAL_DIRECTION = "goal-direction"
     ORDER_INVALID = "order-invalid"
+    ASSIGNMENT_UNKNOWN_VEHICLE = "assignment-unknown-vehicle"
+    ASSIGNMENT_TWICE = "assignment-twice"
+    ORDER_UNKNOWN = "order-unknown"
+    ORDER_UNRELEASED = "order-unreleased"
+    ORDER_COMPLETED = "order-completed"
+    ORDER_TWICE = "order-twice"
+    ORDER_STARTED = "order-started"
+    ORDER_VEHICLE_TYPE = "order-vehicle-type"
 
     def __str__(self) -> str:
         return self.value

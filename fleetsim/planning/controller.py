@@ -305,19 +305,31 @@ class FleetController:
             vehicle_id, method, task, previous, tuple(accepted), tuple(rejections), errors, tuple(completed)
         )
 
+    def requeue(self, vehicle_id: int, withdraw: Sequence[int], append: Sequence[Task]) -> None:
+        """A dispatcher's assignment: the vehicle's tasks ``withdraw`` leave its queue (and their goal
+        markers its plan), then ``append`` join it."""
+        self.tasks.withdraw(vehicle_id, withdraw)
+        self._unmark(vehicle_id, set(withdraw))
+        self.tasks.append(append)
+        self._stale = True
+
+    def _unmark(self, vehicle_id: int, task_ids: set[int]) -> None:
+        """The vehicle's plan without goal markers for ``task_ids``."""
+        plan = self._plans[vehicle_id]
+        if task_ids and any(leg.goal_for_task in task_ids for leg in plan.legs):
+            legs = tuple(
+                replace(leg, goal_for_task=None) if leg.goal_for_task in task_ids else leg for leg in plan.legs
+            )
+            self._put_plan(FleetPlan(vehicle_id, legs))
+            self._alerts = None
+
     def bookkeeping(self) -> tuple[Task, ...]:
         """Step 1: completed tasks leave their queues and their goal markers leave the plans."""
         dropped = self.tasks.drop_completed()
         if dropped:
             self._stale = True
         for task in dropped:
-            plan = self._plans[task.vehicle_id]
-            if any(leg.goal_for_task == task.id for leg in plan.legs):
-                legs = tuple(
-                    replace(leg, goal_for_task=None) if leg.goal_for_task == task.id else leg for leg in plan.legs
-                )
-                self._put_plan(FleetPlan(task.vehicle_id, legs))
-                self._alerts = None
+            self._unmark(task.vehicle_id, {task.id})
         return dropped
 
     def planning_round(self, planner: Planner, time: float) -> tuple[CallOutcome, ...]:

@@ -104,11 +104,39 @@ class TaskBook:
                 self._routed[leg.goal_for_task] = None
                 self._routed_copy.changed(leg.goal_for_task)
 
-    def complete(self, task_id: int, time: float) -> None:
-        """The vehicle entered (or stands on) the task's goal leg."""
+    def complete(self, task_id: int, time: float) -> bool:
+        """The vehicle entered (or stands on) the task's goal leg: True unless the task was completed
+        already or is not (any longer) queued (a withdrawn task's goal marker may still be driven over)."""
         if task_id in self._tasks and task_id not in self._completed:
             self._completed[task_id] = time
             self._undropped = True
+            return True
+        return False
+
+    def append(self, tasks: Iterable[Task]) -> None:
+        """Queue new tasks (a dispatcher's assignment), each at the tail of its vehicle's queue."""
+        for task in tasks:
+            self._queues[task.vehicle_id].append(task)
+            self._tasks[task.id] = task
+        self._queues_view = None
+        self._heads = None
+
+    def withdraw(self, vehicle_id: int, task_ids: Iterable[int]) -> None:
+        """Take tasks not yet completed out of the vehicle's queue (an order taken back); they are forgotten."""
+        gone = set(task_ids)
+        if not gone:
+            return
+        queue = self._queues[vehicle_id]
+        kept = [task for task in queue if task.id not in gone]
+        queue.clear()
+        queue.extend(kept)
+        for task_id in sorted(gone):
+            self._tasks.pop(task_id, None)
+            if task_id in self._routed:
+                del self._routed[task_id]
+                self._routed_copy.changed(task_id)
+        self._queues_view = None
+        self._heads = None
 
     def drop_completed(self) -> tuple[Task, ...]:
         """Bookkeeping at the start of a step: completed tasks leave their queues (returned)."""

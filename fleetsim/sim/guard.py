@@ -75,6 +75,8 @@ class PlannerGuard:
         self._tick_limit = self._limit  # what the tick compares the call in progress with (a round: more)
         self.calls = 0
         self.wall_time = 0.0
+        self.dispatch_calls = 0  # a dispatcher's calls and the wall seconds spent in them
+        self.dispatch_wall_time = 0.0
         self._armed = False
         self._previous: object = None
         self._call_started: float | None = None
@@ -139,6 +141,32 @@ class PlannerGuard:
         if elapsed > self._limit:
             raise self._overrun(method, vehicle_id, call)  # it caught the timer's exception and returned late
         return response
+
+    def dispatch(self, call: Callable[..., object], board: object, fleet: object, layout: object) -> object:
+        """A dispatcher's ``call(board, fleet, layout)``, timed and guarded as a planner call is (the same
+        per-call timeout; its faults are ``PlannerFault`` naming ``dispatch()``). Not counted among the
+        planner's calls."""
+        start = self._call_started = _clock()
+        try:
+            answer = call(board, fleet, layout)
+        except PlannerInterrupted:
+            self._call_started = None
+            raise
+        except (_Overrun, Exception) as exc:
+            self._call_started = None
+            if isinstance(exc, _Overrun):
+                raise PlannerFault(
+                    f"dispatch() did not return within the per-call timeout of {self.timeout:g} s"
+                ) from None
+            msg = f"dispatch() raised {type(exc).__name__}: {exc}"
+            raise PlannerFault(msg, details=_planner_traceback(exc)) from None
+        elapsed = _clock() - start
+        self._call_started = None
+        self.dispatch_calls += 1
+        self.dispatch_wall_time += elapsed
+        if elapsed > self._limit:
+            raise PlannerFault(f"dispatch() did not return within the per-call timeout of {self.timeout:g} s")
+        return answer
 
     def round(
         self,

@@ -29,12 +29,13 @@ from itertools import chain
 from operator import attrgetter
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any, Literal
+from typing import Any, Literal, cast
 
 import numpy as np
 
 from fleetsim.contact.monitor import Contact, ContactMonitor
-from fleetsim.errors import PlannerError
+from fleetsim.dispatch.protocol import Dispatcher
+from fleetsim.errors import PlannerError, ScenarioError
 from fleetsim.motion.driver import Driver
 from fleetsim.motion.fleet_cruise import FleetCruise, StateColumns
 from fleetsim.motion.track import HeadingTable
@@ -44,9 +45,11 @@ from fleetsim.planning.reservations import CollisionAlert
 from fleetsim.planning.snapshot import VehicleState
 from fleetsim.scenario import Scenario, Task
 from fleetsim.sim.diagnosis import Diagnosis, StuckFacts, diagnose
+from fleetsim.sim.dispatching import Dispatching
 from fleetsim.sim.disturbances import Disturber
 from fleetsim.sim.guard import PlannerFault, PlannerGuard
 from fleetsim.sim.interrupt import PlannerInterrupted, StopSignals, signal_name
+from fleetsim.sim.measures import Stall
 from fleetsim.sim.result import (
     AlertEvent,
     DeadlockReport,
@@ -59,6 +62,7 @@ from fleetsim.sim.result import (
     judge,
 )
 from fleetsim.sim.trace import Trace, TraceFile, plan_record
+from fleetsim.specs.dispatcher import DispatcherSpecError, import_dispatcher_factory
 
 __all__ = ["RunProgress", "run_scenario"]
 
@@ -84,7 +88,14 @@ class _Run:
     # for that to pay; True or False always or never (for tests that compare the two).
     batched: bool | None = None
 
-    def __init__(self, scenario: Scenario, planner: Planner, guard: PlannerGuard, keep_trace: bool) -> None:
+    def __init__(
+        self,
+        scenario: Scenario,
+        planner: Planner,
+        guard: PlannerGuard,
+        keep_trace: bool,
+        dispatcher: Dispatcher | None = None,
+    ) -> None:
         self.scenario = scenario
         self.planner = planner
         self.guard = guard
@@ -97,6 +108,9 @@ class _Run:
             for v in sorted(scenario.vehicles, key=lambda v: v.id)
         }
         self.ids = list(self.drivers)
+        self.index = {vehicle: i for i, vehicle in enumerate(self.ids)}
+        self.stalled: dict[int, float] = {}  # a shift's stalled vehicles: since when they stand
+        self.busy_since: dict[int, float] = {}  # a shift's vehicles with work: since when
         self.driver_list = list(self.drivers.values())
         batched = len(self.driver_list) >= FleetCruise.SMALLEST if self.batched is None else self.batched
         self.cruise = FleetCruise(self.driver_list, batched=batched)
@@ -110,6 +124,12 @@ class _Run:
         self.route_errors: list[dict[str, Any]] = []
         self.active_alerts: tuple[CollisionAlert, ...] = ()  # the last check's, by segment
         self.waiting_time = dict.fromkeys(self.drivers, 0.0)
+        # Only a scenario with transport orders dispatches (fleetsim.sim.dispatching): without, as before.
+        self.dispatching = (
+            Dispatching(scenario, dispatcher, self.controller, self.cruise.released, guard.dispatch)
+            if dispatcher is not None
+            else None
+        )
         self.last_activity = 0.0
         # For explaining a stuck fleet at the end (never hashed): when each vehicle last moved, when the
         # planner last changed its plan, and how many changed plans were accepted in all.
@@ -175,6 +195,33 @@ class _Run:
         self.paused = paused
         return True
 
+    def all_done(self) -> bool:
+        """Every task done and, with orders, every order completed and none to come."""
+        done = self.controller.tasks.all_done()
+        return done if self.dispatching is None else done and self.dispatching.done()
+
+    def has_work(self) -> bool:
+        """Some vehicle has a task or some order is open (a fleet waiting for orders is not stuck)."""
+        if self.dispatching is None:
+            return True
+        return bool(self.controller.tasks.heads()) or self.dispatching.book.open_count() > 0
+
+    def dispatch(self, step: int, now: float, stamp: float, events: list[list[Any]]) -> bool:
+        """Dwells, releases and the dispatcher's call at the start of the step; False when the dispatcher
+        failed (raised, overran its time, answered garbage) and the run must end."""
+        assert self.dispatching is not None
+        try:
+            refused = self.dispatching.begin_step(step, now, stamp, events)
+        except (PlannerFault, PlannerError) as fault:
+            self._planner_failed(fault, stamp, events)
+            return False
+        for rejection in refused:
+            self.rejections.append(RejectionEvent(stamp, rejection))
+            events.append(["reject", rejection.code.value, rejection.vehicle_id, rejection.leg_index])
+        if self.dispatching.dwelling() or any(e[0] in ("release", "assign", "served") for e in events):
+            self.last_activity = now  # a vehicle dwelling at a stop will drive on: the deadlock timer waits
+        return True
+
     def _hold(self, held: set[int]) -> None:
         """Halt the vehicles newly held still (they brake within their fixed legs), release the others."""
         for vehicle in sorted(held - self.held):
@@ -227,6 +274,8 @@ class _Run:
         for task_id in outcome.completed:
             events.append(["complete", task_id])
             self.last_activity = now
+            if self.dispatching is not None:
+                self.dispatching.reached(task_id, stamp, events)
 
     def check_reservations(self, stamp: float, events: list[list[Any]]) -> int:
         """Step 3; alerts are reported when they appear, not again while they persist. The index keeps an
@@ -288,9 +337,10 @@ class _Run:
                     controller.drive_past(new_plan)
                     plan = new_plan
                 for leg in entered:
-                    if leg.goal_for_task is not None and not tasks.is_completed(leg.goal_for_task):
-                        tasks.complete(leg.goal_for_task, end)
+                    if leg.goal_for_task is not None and tasks.complete(leg.goal_for_task, end):
                         events.append(["complete", leg.goal_for_task])
+                        if self.dispatching is not None:
+                            self.dispatching.reached(leg.goal_for_task, end, events)
                 if not (distance > 0.0 or turned or entered):
                     if vehicle_id in busy:
                         waiting[vehicle_id] += dt
@@ -349,6 +399,42 @@ class _Run:
         )
         return diagnose(facts)
 
+    def check_stalls(self, end: float, events: list[list[Any]]) -> list[Stall]:
+        """A shift's vehicles with work that have not moved for ``stall_after`` seconds (not dwelling at a
+        stop), each found once per stall and explained as a stuck fleet is; a vehicle that moves again may
+        stall again later."""
+        assert self.dispatching is not None and self.scenario.shift is not None
+        limit = self.scenario.shift.stall_after
+        heads = self.controller.tasks.heads()
+        moved = self.last_moved
+        found: list[int] = []
+        for vehicle in self.stalled.copy():
+            last = moved[self.index[vehicle]]
+            if not math.isnan(last) and last > self.stalled[vehicle]:
+                del self.stalled[vehicle]  # it moved since: the stall is over
+        busy = self.busy_since
+        for vehicle in [v for v in busy if v not in heads]:
+            del busy[vehicle]
+        for vehicle in heads:
+            work = busy.setdefault(vehicle, end)  # when it got work (to the second it is looked at)
+            if vehicle in self.stalled or self.dispatching.is_dwelling(vehicle):
+                continue
+            last = moved[self.index[vehicle]]
+            since = max(work, 0.0 if math.isnan(last) else float(last))
+            if end - since >= limit - 1e-9:
+                self.stalled[vehicle] = since
+                found.append(vehicle)
+        if not found:
+            return []
+        findings = {finding.vehicle: finding for finding in self.diagnose("deadlock", end).findings}
+        stalls = []
+        for vehicle in found:
+            events.append(["stall", vehicle])
+            orders = self.dispatching.book.sequence(vehicle)
+            reason = findings[vehicle].text() if vehicle in findings else f"vehicle {vehicle} stands"
+            stalls.append(Stall(vehicle, self.stalled[vehicle], end, orders, reason))
+        return stalls
+
     def wait_notes(self, heads: Mapping[int, Task], now: float) -> dict[int, str]:
         """A stepped planner's word on why each vehicle with a pending task waits (``explain_wait``), if it
         has one; a planner that raises is named in the note instead, and the diagnosis goes on."""
@@ -377,6 +463,7 @@ def run_scenario(
     stop: StopSignals | None = None,
     trace_file: Path | None = None,
     watch: Callable[[str], None] | None = None,
+    dispatcher: Dispatcher | None = None,
 ) -> RunResult:
     """Simulate ``scenario`` with ``planner`` (a fresh instance) and judge the run against its ``expect``.
 
@@ -385,13 +472,27 @@ def run_scenario(
     the step (``ended: "interrupted"``). ``trace_file``: where to write the trace while the run goes
     (``TraceFile``); it holds every step written, however the run ends. ``watch``: called with each trace
     line as it is written, in the loop's thread (a live view: it may pace the run, never change it).
+    ``dispatcher``: a fresh dispatcher for a scenario with transport orders; without one, the planner is
+    the dispatcher if it has a ``dispatch`` method. A scenario with orders and neither fails at once.
     """
+    if scenario.orders or scenario.order_stream is not None:
+        try:
+            dispatcher = _dispatcher_for(scenario, planner, dispatcher)
+        except (DispatcherSpecError, ScenarioError) as error:
+            failure = Failure("planner-error", 0.0, str(error))
+            return RunResult.unrun(
+                scenario.name, planner_name or type(planner).__name__, (failure,), ended="planner-error"
+            )
+    else:
+        dispatcher = None
     sink = TraceFile(trace_file) if trace_file is not None else None
     try:
         with PlannerGuard(planner_timeout) as guard, _COLLECTOR.spared(len(scenario.vehicles)):
             if stop is not None:
                 stop.guard = guard
-            return _simulate(scenario, planner, guard, planner_name, keep_trace, on_progress, stop, sink, watch)
+            return _simulate(
+                scenario, planner, guard, planner_name, keep_trace, on_progress, stop, sink, watch, dispatcher
+            )
     finally:
         if stop is not None:
             stop.guard = None
@@ -465,16 +566,18 @@ def _simulate(
     stop: StopSignals | None,
     sink: TraceFile | None,
     watch: Callable[[str], None] | None = None,
+    dispatcher: Dispatcher | None = None,
 ) -> RunResult:
     started = time.perf_counter()
-    run = _Run(scenario, planner, guard, keep_trace)
+    run = _Run(scenario, planner, guard, keep_trace, dispatcher)
     _COLLECTOR.set_aside()
     run.trace.sink = sink
     run.trace.watcher = watch
     settings = scenario.settings
     dt = settings.time_step
     period = max(1, round(settings.planning_period / dt))
-    max_steps = max(1, math.ceil(settings.time_limit / dt - 1e-9))
+    shift = scenario.shift
+    max_steps = max(1, math.ceil((shift.duration if shift is not None else settings.time_limit) / dt - 1e-9))
     header: dict[str, Any] = {
         "time_step_us": round(dt * 1e6),
         "planning_period_steps": period,
@@ -483,11 +586,16 @@ def _simulate(
     }
     if run.disturber is not None:
         header["disturbances"] = run.disturber.header()
+    if run.dispatching is not None:
+        header["orders"] = run.dispatching.header()
     run.trace.begin(header)
     if run.contact is not None:
         run.contact.begin(run.poses[0], run.poses[1], run.poses[2])
     ended: Ending = "time-limit"
     deadlock: DeadlockReport | None = None
+    # A shift looks for stalled vehicles every simulated second.
+    stall_every = max(1, round(1.0 / dt)) if shift is not None and run.dispatching is not None else 0
+    stalls: list[Stall] = []
     step = 0
     for step in range(max_steps):
         now = step * dt
@@ -499,7 +607,9 @@ def _simulate(
         # Every event of the step is stamped with its end, when the step enters the trace and the recording
         # (the planner is asked at ``now``). Times are multiples of dt, never sums of them.
         end = (step + 1) * dt
-        planned_ok = run.begin_step(now, end, events) if run.stepped is not None else True
+        planned_ok = run.dispatch(step, now, end, events) if run.dispatching is not None else True
+        if planned_ok and run.stepped is not None:
+            planned_ok = run.begin_step(now, end, events)
         if planned_ok and step % period == 0:
             planned_ok = run.plan(now, end, events, plans)
         rejected = any(e[0] == "reject" for e in events)
@@ -508,6 +618,11 @@ def _simulate(
         touched = (
             bool(run.check_contacts(now, end, moved, cruised)) if planned_ok and run.contact is not None else False
         )
+        stalled = False
+        if stall_every and planned_ok and step % stall_every == 0:
+            found = run.check_stalls(end, events)
+            stalls += found
+            stalled = bool(found)
         # The trace holds what changed; at step 0 that is everyone (the start), later only who moved.
         if step == 0:
             moved, cruised = [run.controller.state_of(v) for v in run.drivers], None
@@ -515,7 +630,7 @@ def _simulate(
             ended = "planner-error"
         elif run.interrupted_planning:  # the step's planning was cut short: no other ending can be judged
             ended = "interrupted"
-        elif run.controller.tasks.all_done():
+        elif shift is None and run.all_done():  # a shift runs its length: its end is the normal one
             ended = "completed"
         elif rejected and "rejection" in settings.stop_on:
             ended = "rejection"
@@ -523,7 +638,9 @@ def _simulate(
             ended = "collision"
         elif touched and "contact" in settings.stop_on:
             ended = "contact"
-        elif end - run.last_activity >= settings.deadlock_after - 1e-9:
+        elif stalled and shift is not None and shift.on_stall == "end":
+            ended = "stall"
+        elif end - run.last_activity >= settings.deadlock_after - 1e-9 and run.has_work():
             ended = "deadlock"
             deadlock = DeadlockReport(end, run.diagnose("deadlock", end))
         elif stop is not None and stop.requested:
@@ -540,14 +657,21 @@ def _simulate(
         run.trace.record(step, moved, plans, events, cruised)
         break
     run.cruise.release_all()  # the drivers' odometers up to date
+    if ended == "time-limit" and shift is not None:
+        ended = "shift-end"
     steps = step + 1
     sim_time = steps * dt
     completed = run.controller.tasks.completed()
     diagnosis = deadlock.diagnosis if deadlock is not None else None
     if ended in ("time-limit", "interrupted") and not run.controller.tasks.all_done():
         diagnosis = run.diagnose("timeout", sim_time)  # who is still driving, who waits for whom
-    makespan = max(completed.values()) if completed and run.controller.tasks.all_done() else None
+    makespan = max(completed.values()) if completed and run.all_done() else None
+    orders = run.dispatching.book.records if run.dispatching is not None else {}
+    if orders and run.all_done():
+        makespan = max((r.completed for r in orders.values() if r.completed is not None), default=makespan)
+    open_orders = tuple(o for o, r in orders.items() if r.completed is None)
     contact = run.contact.report() if run.contact is not None else None
+    measures = run.dispatching.measures(sim_time, stalls) if run.dispatching is not None else None
     failures = judge(
         scenario.expect,
         ended=ended,
@@ -563,6 +687,10 @@ def _simulate(
         contact=contact,
         diagnosis=diagnosis,
         interrupted_by=signal_name(stop.signum or 0) if ended == "interrupted" and stop is not None else None,
+        open_orders=open_orders,
+        stalls=tuple(stalls),
+        stall_ends=shift is not None and shift.on_stall == "end",
+        measures=measures,
     )
     metrics = Metrics(
         makespan=makespan,
@@ -597,8 +725,29 @@ def _simulate(
         paced=_paced(planner),
         pacing=_pacing(planner),
         contact=contact,
+        orders=tuple(record.to_dict() for record in orders.values()),
+        measures=measures,
+        stalls=tuple(stalls),
         trace=run.trace if keep_trace else None,
     )
+
+
+NO_DISPATCHER = (
+    "scenario {name!r} has transport orders but no dispatcher: name one (--dispatcher module:Class, or the "
+    "suite's 'dispatcher:'), or give the planner a dispatch(board, fleet, layout) method"
+)
+
+
+def _dispatcher_for(scenario: Scenario, planner: Planner, given: Dispatcher | None) -> Dispatcher:
+    """The run's dispatcher: the one given, else a fresh one of the spec the scenario names (its suite's
+    ``dispatcher:``), else the planner itself when it is a dispatcher too (one object, both jobs)."""
+    if given is not None:
+        return given
+    if scenario.dispatcher is not None:
+        return import_dispatcher_factory(scenario.dispatcher)()
+    if callable(getattr(planner, "dispatch", None)):
+        return cast(Dispatcher, planner)
+    raise ScenarioError(NO_DISPATCHER.format(name=scenario.name))
 
 
 def _pacing(planner: Planner) -> Pacing | None:

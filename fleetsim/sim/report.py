@@ -14,6 +14,7 @@ from fleetsim.scenario import Expectations
 from fleetsim.sim.result import MOMENTLESS, Failure, RunResult
 
 __all__ = [
+    "ORDER_COLUMNS",
     "SUMMARY_COLUMNS",
     "broken_expectation",
     "expected_failures",
@@ -22,6 +23,7 @@ __all__ = [
     "failure_text",
     "first_line",
     "format_table",
+    "order_cells",
     "outcome_cell",
     "outcome_notes",
     "route_error_lines",
@@ -57,6 +59,49 @@ SUMMARY_COLUMNS = (
     "hash",
     "realtime",
 )
+
+
+# A second table, for the runs with transport orders: what each delivered (fleetsim.sim.measures).
+ORDER_COLUMNS = (
+    "scenario",
+    "orders",
+    "orders/h",
+    "service median",
+    "p95",
+    "max",
+    "wait p95",
+    "deadlines missed",
+    "stalls",
+    "utilisation",
+    "backlog",
+)
+
+
+def order_cells(label: str, result: RunResult) -> tuple[str, ...] | None:
+    """One row of the orders table, or ``None`` for a run without orders."""
+    m = result.measures
+    if m is None:
+        return None
+    service = m.service_time
+    wait = m.wait_for_pickup
+
+    def seconds(value: float | None) -> str:
+        return "-" if value is None else f"{value:.0f} s"
+
+    backlog = "overloaded" if m.overloaded else "bounded"
+    return (
+        label,
+        f"{m.completed}/{m.released}",
+        f"{m.orders_per_hour:.1f}",
+        seconds(None if service is None else service.median),
+        seconds(None if service is None else service.p95),
+        seconds(None if service is None else service.max),
+        seconds(None if wait is None else wait.p95),
+        str(m.deadline_misses),
+        str(m.stalls),
+        f"{100 * m.utilisation:.0f} %",
+        f"{backlog} ({m.backlog_slope:+.1f}/h)",
+    )
 
 
 def summary_cells(label: str, outcome: str, result: RunResult | None) -> tuple[str, ...]:
@@ -102,7 +147,7 @@ def expected_failures(expect: Expectations, result: RunResult) -> str:
         happened.append(_plural("contact", len(result.contact.contacts)))
     if happened:
         return f"expected {_listed(happened)} happened"
-    if result.tasks_completed < result.tasks_total:
+    if result.tasks_completed < result.tasks_total and result.ended != "shift-end":  # a shift ends mid-work
         return f"{result.tasks_completed} of {result.tasks_total} tasks, as expected"
     return ""
 

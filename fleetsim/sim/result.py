@@ -23,6 +23,7 @@ from fleetsim.planning.reservations import CollisionAlert
 from fleetsim.scenario import Expectations, Task
 from fleetsim.sim.diagnosis import Diagnosis
 from fleetsim.sim.disturbances import DisturbanceEvent
+from fleetsim.sim.measures import OrderMeasures, Stall
 from fleetsim.sim.trace import Trace
 
 __all__ = [
@@ -43,6 +44,8 @@ __all__ = [
 Ending = Literal[
     "completed",
     "time-limit",
+    "shift-end",
+    "stall",
     "deadlock",
     "rejection",
     "collision",
@@ -268,7 +271,8 @@ class RunResult:
         rejections: Every plan rejected, in order ([`RejectionEvent`][fleetsim.sim.result.RejectionEvent]).
         collisions: Every collision alert, in order ([`AlertEvent`][fleetsim.sim.result.AlertEvent]).
         route_errors: Every route error a planner answered, as ``{time, vehicle, message}``.
-        ended: How the run ended: ``completed``, ``time-limit``, ``deadlock``, ``rejection``,
+        ended: How the run ended: ``completed``, ``time-limit``, ``shift-end`` (a shift's normal end),
+            ``deadlock``, ``rejection``,
             ``collision`` (a ``stop_on`` event), ``planner-error`` or ``interrupted``.
         deadlock: The deadlock that ended the run (when, who waits for whom), or ``None``.
         metrics: What the run measured ([`Metrics`][fleetsim.sim.result.Metrics]).
@@ -277,6 +281,14 @@ class RunResult:
         disturbances: The disturbances that happened, in the order they began.
         paced: The multiple of real time the run was paced at when its planner runs on a wall clock (a VDA
             5050 master control), else ``None``. Such a run's hash is not repeatable, so it is not gated.
+        orders: Every order released, in release order, with its times and vehicle (a run with transport
+            orders; empty otherwise): ``id``, ``stops``, ``release``, ``deadline``, ``priority``,
+            ``vehicle``, ``assigned``, ``started``, ``served``, ``completed``, ``reassigned``,
+            ``deadline_missed``.
+        measures: What a run with transport orders delivered: throughput, service times, utilisation,
+            backlog ([`OrderMeasures`][fleetsim.sim.measures.OrderMeasures]); ``None`` without orders.
+        stalls: A shift's vehicles found with work and not moving for its ``stall_after`` seconds, each with
+            its reason and the orders held up ([`Stall`][fleetsim.sim.measures.Stall]), in the order found.
         contact: What the contact check found (contacts, clearance, near misses:
             [`ContactReport`][fleetsim.contact.monitor.ContactReport]), or ``None`` when it was off.
         pacing: How such a run kept its pace and how soon its orders took effect
@@ -308,6 +320,9 @@ class RunResult:
     paced: float | None = None  # paced at this many times real time by a planner on a wall clock
     pacing: Pacing | None = None  # how that pace was kept, and the planner's order latencies
     contact: ContactReport | None = None  # contacts, clearance and near misses (None: the check was off)
+    orders: tuple[dict[str, Any], ...] = ()  # every released order's life (a run with transport orders)
+    measures: OrderMeasures | None = None  # what a run with transport orders delivered
+    stalls: tuple[Stall, ...] = ()  # a shift's stalled vehicles, in the order found
     artifacts: Mapping[str, str] = field(default_factory=lambda: MappingProxyType({}))
     trace: Trace | None = field(default=None, compare=False, repr=False)
 
@@ -367,6 +382,9 @@ class RunResult:
             }
             | ({} if self.paced is None else {"paced": self.paced})
             | ({} if self.pacing is None else {"pacing": self.pacing.to_dict()})
+            | ({"orders": list(self.orders)} if self.orders else {})
+            | ({} if self.measures is None else {"measures": self.measures.to_dict()})
+            | ({"stalls": [s.to_dict() for s in self.stalls]} if self.measures is not None else {})
         )
 
 
@@ -390,6 +408,10 @@ def judge(
     diagnosis: Diagnosis | None = None,
     interrupted_by: str | None = None,
     contact: ContactReport | None = None,
+    open_orders: tuple[str, ...] = (),
+    stalls: tuple[Stall, ...] = (),
+    stall_ends: bool = False,
+    measures: OrderMeasures | None = None,
 ) -> tuple[Failure, ...]:
     """Every way the run falls short of ``expect`` (SPEC §13), in a fixed order.
 
@@ -412,6 +434,9 @@ def judge(
     failures += _judge_rejections(expect, rejections)
     failures += _judge_collisions(expect, collisions)
     failures += _judge_contact(expect, contact, end_time)
+    if stall_ends and stalls:  # the shift ends at its first stall: that is the failure
+        first = stalls[0]
+        failures.append(Failure("stall", first.time, first.message(), first.to_dict()))
     if deadlock is not None and not expect.deadlock:
         stuck = {"waiting": list(deadlock.waiting), "cycle": list(deadlock.cycle), **deadlock.diagnosis.to_dict()}
         failures.append(Failure("deadlock", deadlock.time, deadlock.message, stuck))
@@ -425,6 +450,13 @@ def judge(
             )
         )
     wanted = tasks_total if expect.tasks == "all" else expect.tasks
+    if ended == "shift-end":  # a shift ends with work under way: what it must deliver is in its measures
+        wanted = 0
+    elif open_orders and ended == "time-limit" and planner_error is None:
+        listing = ", ".join(repr(order) for order in open_orders[:5])
+        more = f" and {len(open_orders) - 5} more" if len(open_orders) > 5 else ""
+        msg = f"the time limit was reached with {len(open_orders)} orders open: {listing}{more}"
+        failures.append(Failure("timeout", end_time, msg, {"open_orders": list(open_orders), "expect": "tasks"}))
     if tasks_completed < wanted and planner_error is None and (deadlock is None or not expect.deadlock):
         listing = ", ".join(f"task {t.id} (vehicle {t.vehicle_id} to segment {t.goal_segment})" for t in pending[:5])
         more = f" and {len(pending) - 5} more" if len(pending) > 5 else ""
@@ -436,10 +468,38 @@ def judge(
             msg = f"{msg}; {diagnosis.headline()}"
             details.update(diagnosis.to_dict())
         failures.append(Failure(kind, end_time, msg, details))
+    if measures is not None:
+        failures += _judge_measures(expect, measures, end_time)
     if expect.max_makespan is not None and makespan is not None and makespan > expect.max_makespan:
         msg = f"makespan {makespan:.2f} s exceeds max_makespan {expect.max_makespan:g} s"
         failures.append(Failure("expectation", makespan, msg, {"expect": "max_makespan"}))
     return tuple(failures)
+
+
+def _judge_measures(expect: Expectations, measures: OrderMeasures, end_time: float) -> list[Failure]:
+    """Each bound on a measure of a run with orders that the run missed (``min_orders_per_hour``, ...)."""
+    failures = []
+    for bound in expect.measures:
+        value = measures.value(bound.measure)
+        details = {"expect": bound.key, "value": value, "bound": bound.value}
+        if value is None:
+            msg = f"{bound.measure} has no value in this run (no order it is measured over), {bound.key} {bound.value:g} expected"
+        elif bound.bound == "min" and value < bound.value - 1e-9:
+            msg = f"{bound.measure} {value:.4g} is below {bound.key} {bound.value:g}"
+        elif bound.bound == "max" and value > bound.value + 1e-9:
+            msg = f"{bound.measure} {value:.4g} exceeds {bound.key} {bound.value:g}"
+        else:
+            continue
+        failures.append(Failure("expectation", end_time, msg, details))
+    if expect.overloaded is not None and measures.overloaded != expect.overloaded:
+        grows = f"the backlog grows by {measures.backlog_slope:.1f} orders per hour"
+        msg = (
+            f"the fleet is overloaded: {grows}; the scenario expects it to keep up"
+            if measures.overloaded
+            else f"the fleet keeps up (backlog slope {measures.backlog_slope:.1f} orders per hour); the scenario expects it overloaded"
+        )
+        failures.append(Failure("expectation", end_time, msg, {"expect": "overloaded", "value": measures.overloaded}))
+    return failures
 
 
 def _interrupted(

@@ -157,3 +157,44 @@ def test_shipped_templates_survive_a_tiled_round_trip(tiled: TiledCli, tmp_path:
         assert len(curve.waypoints) >= 9 * turn / 90.0  # ≥ 9 waypoints per 90° (SPEC §3)
         assert s_curve.last[0] - s_curve.first[0] == pytest.approx(-1.0, abs=TOLERANCE_M)
         assert s_curve.last[1] - s_curve.first[1] == pytest.approx(4.0, abs=TOLERANCE_M)
+
+
+def test_station_properties_survive_a_tiled_round_trip_and_template_merging(tiled: TiledCli, tmp_path: Path) -> None:
+    # A template that makes its instances "dock" stations of weight 2; one instance overrides the weight,
+    # one clears the station, one names two sets of its own. Tiled keeps each instance's overrides.
+    template = tmp_path / "dock.tx"
+    template.write_text("""<?xml version="1.0" encoding="UTF-8"?>
+<template>
+ <object type="straight">
+  <properties>
+   <property name="station" value="dock"/>
+   <property name="station_weight" type="float" value="2"/>
+  </properties>
+  <polyline points="0,0 32,0"/>
+ </object>
+</template>
+""")
+    source = tmp_path / "stations.tmx"
+    source.write_text("""<?xml version="1.0" encoding="UTF-8"?>
+<map version="1.8" orientation="orthogonal" width="20" height="10" tilewidth="32" tileheight="32"
+     infinite="0" nextlayerid="2" nextobjectid="5">
+ <objectgroup id="1" name="segments">
+  <object id="1" template="dock.tx" x="0" y="160"/>
+  <object id="2" template="dock.tx" x="32" y="160">
+   <properties><property name="station_weight" type="float" value="0.5"/></properties>
+  </object>
+  <object id="3" template="dock.tx" x="64" y="160">
+   <properties><property name="station" value=""/></properties>
+  </object>
+  <object id="4" template="dock.tx" x="96" y="160">
+   <properties><property name="station" value="pick,park"/></properties>
+  </object>
+ </objectgroup>
+</map>
+""")
+    expected = {"dock": [(1, 2.0), (2, 0.5)], "park": [(4, 2.0)], "pick": [(4, 2.0)]}
+    resaved = tiled.export_map(source, tmp_path / "resaved.json")
+    detached = tiled.export_map(source, tmp_path / "detached.tmx", detach_templates=True)
+    for path in (source, resaved, detached):
+        stations = load_map(path).stations
+        assert {name: [(s.segment, s.weight) for s in members] for name, members in stations.items()} == expected

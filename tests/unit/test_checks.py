@@ -263,7 +263,7 @@ def test_rejection_reads_as_code_vehicle_leg_segment_and_message() -> None:
     assert str(rejection) == f"{where}: segment 99 is not in the map (segments 1–6)"
 
 
-def test_there_are_exactly_the_thirteen_codes_of_the_spec_and_the_vda5050_one() -> None:
+def test_there_are_exactly_the_thirteen_codes_of_the_spec_the_vda5050_one_and_the_dispatchers() -> None:
     assert {code.value for code in RejectionCode} == {
         "unknown-vehicle",
         "duplicate-plan",
@@ -279,6 +279,15 @@ def test_there_are_exactly_the_thirteen_codes_of_the_spec_and_the_vda5050_one() 
         "goal-segment-mismatch",
         "goal-direction",
         "order-invalid",  # made by the VDA 5050 vehicles for a message no plan shows (issue 33)
+        # The rules of a dispatcher's answers (issue 45), each also a test in test_dispatch_rules.py.
+        "assignment-unknown-vehicle",
+        "assignment-twice",
+        "order-unknown",
+        "order-unreleased",
+        "order-completed",
+        "order-twice",
+        "order-started",
+        "order-vehicle-type",
     }
 
 

@@ -102,7 +102,7 @@ def test_the_shipped_suites_pass_with_the_reserving_planner(
         tmp_path / "fleetsim-results" / "caught-bugs" / "generated-layouts" / "counterexample" / "map.json"
     ).is_file()
     # The caught-bugs suite is pinned to BFSPlanner, whatever --planner says.
-    assert f"17 scenario(s) with fleetsim.planners:BFSPlanner, {RESERVING}: 15 passed, 2 xfailed" in out
+    assert f"20 scenario(s) with fleetsim.planners:BFSPlanner, {RESERVING}: 18 passed, 2 xfailed" in out
     assert "FAILED" not in out
 
 
@@ -176,6 +176,7 @@ def test_a_scenario_named_twice_runs_once_in_the_order_given(capsys: pytest.Capt
         "mixed-shapes", "crossing-collides", "corridor-head-on", "generated-layouts", "late-crossing-stop", "late-crossing-hunt",
         *(spec.name for spec in fleetsim.load_suite(SUITES / "disturbances.fleetsim.yaml").scenarios),
         "crossing", "loop-one-way", "corridor-passing-bay", "packing-hall-lif", "clinic-rmf",
+        *(spec.name for spec in fleetsim.load_suite(SUITES / "warehouse.fleetsim.yaml").scenarios),
     ]  # fmt: skip
 
 

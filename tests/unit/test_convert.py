@@ -212,7 +212,10 @@ def test_the_convert_command_says_what_it_wrote(tmp_path: Path, capsys: pytest.C
     assert main(["convert", str(HALL), str(out), "--robot-type", "Acme.Tug"]) == 0
     printed = capsys.readouterr().out.splitlines()
     assert printed[-1] == f"wrote {out} (13 segments from {HALL} (layout 'hall-ground', robot type 'Acme.Tug'))"
-    assert any("warning not-modelled: a station" in line for line in printed)
+    assert any("warning not-modelled: edge property attribute 'maxSpeed'" in line for line in printed)
+    # The LIF stations come along as station properties (a Tiled station has no name of its own).
+    written = {name: [s.segment for s in members] for name, members in load_site_map(out).stations.items()}
+    assert written == {"dock-north": [12, 13], "dock-south": [11], "stations": [11, 12, 13]}
 
 
 def test_the_convert_command_refuses_an_output_it_cannot_write(

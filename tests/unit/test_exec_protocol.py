@@ -82,7 +82,9 @@ def test_init_and_requests_match_their_schemas_and_updates_carry_only_changes() 
     assert update["plans"] == [] and update["tasks"] == [] and update["time"] == 0.1
 
 
-MAP_FILE_KEYS = {"map", "format", "part", "meters_per_pixel", "lint", "warnings"}  # what inspect adds around it
+# What inspect adds around the layout: about the map file, and its station sets (which a scenario's
+# orders draw from, and which reach a dispatcher as its orders' stops, not through the planner's layout).
+MAP_FILE_KEYS = {"map", "format", "part", "meters_per_pixel", "lint", "warnings", "stations"}
 
 
 @pytest.mark.parametrize(

@@ -351,7 +351,7 @@ def test_every_attribute_fleetsim_does_not_model_is_noted_once_per_kind(tmp_path
                     rotationAllowed=False,
                 ),
             ],
-            stations=[{"stationId": "s", "interactionNodeIds": ["C"]}],
+            stations=[{"stationId": "s", "interactionNodeIds": ["C"], "stationName": "S", "bufferSize": 2}],
         )
     )
     document["layouts"][0]["nodes"][1]["vehicleTypeNodeProperties"][0]["allowedDeviationXy"] = 0.1
@@ -365,7 +365,7 @@ def test_every_attribute_fleetsim_does_not_model_is_noted_once_per_kind(tmp_path
         "not-modelled: edge property attribute 'rotationAllowed' (once, first at /layouts/0/edges/1/vehicleTypeEdgeProperties/0/rotationAllowed)",
         "not-modelled: edge property attribute 'loadRestriction' (once, first at /layouts/0/edges/1/vehicleTypeEdgeProperties/0/loadRestriction)",
         "option-ignored: map option 'level' (an RMF option) (once, first at map_options)",
-        "not-modelled: a station (once, first at /layouts/0/stations/0)",
+        "not-modelled: station attribute 'bufferSize' (once, first at /layouts/0/stations/0/bufferSize)",
     ]
 
 

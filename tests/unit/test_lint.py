@@ -119,6 +119,31 @@ def test_touching_one_ways_in_the_same_direction_are_not_reported() -> None:
     assert _codes(segments, "no-connection") == []
 
 
+def test_a_one_way_fork_and_merge_are_not_reported() -> None:
+    # 1 forks into 2 and 3, which merge into 4: the branches never connect to each other, but each end
+    # connects to the lane it forks from or merges into (a lay-by beside an aisle).
+    forward = Direction.FORWARD
+    segments = [
+        _straight(1, (0, 0), (4, 0), direction=forward),
+        _straight(2, (4, 0), (8, 0), direction=forward),
+        _straight(3, (4, 0), (4, 2), (8, 2), (8, 0), direction=forward),
+        _straight(4, (8, 0), (12, 0), direction=forward),
+    ]
+    assert _codes(segments, "no-connection") == []
+
+
+def test_a_joint_that_three_one_ways_all_leave_is_reported_pair_by_pair() -> None:
+    # As above, but 1 is drawn the other way: all three lead out of the joint, so nothing can pass it.
+    forward = Direction.FORWARD
+    segments = [
+        _straight(1, (4, 0), (0, 0), direction=forward),
+        _straight(2, (4, 0), (8, 0), direction=forward),
+        _straight(3, (4, 0), (4, 2), direction=forward),
+    ]
+    findings = _codes(segments, "no-connection")
+    assert [f.segments for f in findings] == [(1, 2), (1, 3), (2, 3)]
+
+
 def test_segment_shorter_than_the_connection_tolerance_is_zero_length() -> None:
     findings = _codes([_straight(1, (0, 0), (0.049, 0))], "zero-length")
     assert [f.message for f in findings] == ["segment 1 is 0.049 m long, shorter than the connection tolerance 0.05 m"]

@@ -18,7 +18,7 @@ levels:
     vertices:
       - [100, 400, 0, dock]
       - [300, 400, 0, ""]
-      - [300, 200, 0, ward, {is_charger: [4, true]}]
+      - [300, 200, 0, ward, {is_charger: [4, true], is_holding_point: [4, true]}]
       - [100, 200, 0, ""]
       - [0, 0, 0, ""]
       - [400, 0, 0, ""]
@@ -98,7 +98,7 @@ def test_everything_not_modelled_is_noted_once_per_kind(tmp_path: Path) -> None:
         "not-modelled: a lift",
         "not-modelled: another level",
         "not-modelled: a door",
-        "not-modelled: vertex parameter 'is_charger'",
+        "not-modelled: vertex parameter 'is_holding_point'",
         "not-modelled: lane parameter 'speed_limit'",
         "not-modelled: a lane of another graph",
         "option-ignored: map option 'robot_type'",

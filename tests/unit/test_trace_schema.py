@@ -22,9 +22,13 @@ from typing import Any
 
 import jsonschema
 import pytest
+from dispatch_support import FirstIdle, Scripted
+from dispatch_support import scenario as order_scenario
 
 from fleetsim import FleetLeg, FleetPlan, Progress, RouteError, Traverse, load_scenario, load_suite, run_scenario
+from fleetsim.dispatch.protocol import Assignment, OrderBoard
 from fleetsim.layout.layout import Layout
+from fleetsim.orders import Order, Shift, Stop
 from fleetsim.planners import BFSPlanner, ReservingPlanner
 from fleetsim.planning.checks import Rejection, RejectionCode
 from fleetsim.planning.plans import Response
@@ -164,6 +168,31 @@ def _lines(run: Scenario, planner: Any, ended: str | None = None) -> list[str]:
     return result.trace.lines
 
 
+class Ignores2(ReservingPlanner):
+    """Never plans for vehicle 2: with work, it stands (a stall in a shift)."""
+
+    def plan_routes(self, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
+        return [] if task.vehicle_id == 2 else super().plan_routes(task, fleet, layout)
+
+
+def _orders(stall: bool) -> list[str]:
+    """A shift of orders: releases, a refused answer, assignments, dwells, completions (and a stall)."""
+    orders = (Order("a", (Stop(7, dwell=2.0), Stop(2)), release=0.0), Order("b", (Stop(2),), release=3.0))
+    refused = [False]
+
+    def script(board: OrderBoard) -> Sequence[Assignment]:
+        if not refused[0]:
+            refused[0] = True
+            return [Assignment(9, ["a"])]  # no vehicle 9: refused whole
+        return FirstIdle().dispatch(board, None, None)
+
+    shift = Shift(duration=90.0, dispatch_period=1.0, stall_after=5.0)
+    run = replace(order_scenario(orders), shift=shift)
+    result = run_scenario(run, Ignores2() if stall else ReservingPlanner(), dispatcher=Scripted(script))
+    assert result.trace is not None and result.ended == "shift-end"
+    return result.trace.lines
+
+
 RUNS: dict[str, Callable[[Path], list[str]]] = {
     **{
         f"{suite}::{name} {planner.__name__}": (
@@ -179,6 +208,8 @@ RUNS: dict[str, Callable[[Path], list[str]]] = {
     "paused and refused": lambda _: _lines(crossing(stop_on=()), Pauses(), "completed"),
     "slowed and stopped on a segment": lambda _: _disturbed(),
     "killed": _killed,
+    "a shift of orders": lambda _: _orders(stall=False),
+    "a shift with a stall": lambda _: _orders(stall=True),
 }
 
 

@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from fleetsim.layout.segment import Segment
+from fleetsim.load.common.stations import NO_STATIONS, StationSets
 
 __all__ = ["MapOptions", "SiteMap"]
 
@@ -36,7 +37,8 @@ class SiteMap:
 
     ``format`` is ``tiled``, ``lif`` or ``rmf``; ``meters_per_pixel`` is known for Tiled and RMF maps
     drawn on an image. ``part`` names what was read of a LIF or RMF file (layout and robot type, level and
-    graph).
+    graph). ``stations`` are the station sets the map names (:mod:`fleetsim.load.common.stations`): set
+    name → its stations, each set's segments ascending, each once.
     """
 
     path: Path
@@ -45,3 +47,4 @@ class SiteMap:
     warnings: tuple[str, ...] = ()
     meters_per_pixel: float | None = None
     part: str = ""
+    stations: StationSets = field(default_factory=lambda: NO_STATIONS)

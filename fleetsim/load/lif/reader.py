@@ -9,7 +9,8 @@ The chosen layout's edges usable by the chosen robot type become segments: the t
 the chord tolerance, or the straight line between the nodes. Two edges joining the same nodes in opposite
 directions along the same path make one two-way segment; every other edge a one-way (``forward``)
 segment. Segment ids are 1, 2, ... in the file order of the (first) edges; each segment keeps the edge
-ids as its names. Everything fleetsim does not model is noted once per kind (:mod:`.import_notes`).
+ids as its names. The layout's stations become station sets (:mod:`fleetsim.load.lif.stations`).
+Everything fleetsim does not model is noted once per kind (:mod:`.import_notes`).
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ from fleetsim.load.common.collect import ErrorCollector
 from fleetsim.load.common.import_notes import ImportNotes
 from fleetsim.load.common.json_at import JsonAt
 from fleetsim.load.common.map_options import MapOptions, SiteMap
+from fleetsim.load.lif.stations import lif_station_sets
 
 __all__ = ["END_TOLERANCE", "is_lif_document", "load_lif"]
 
@@ -144,13 +146,13 @@ def load_lif(path: Path, document: object, options: MapOptions) -> SiteMap:
     for option in ("level", "graph"):
         if getattr(options, option) is not None:
             notes.note("option-ignored", f"map option {option!r} (an RMF option)", "map_options")
-    _note_stations(layout, notes)
     segments = _segments(edges)
     if not segments:
         whose = f" usable by {robot_type!r}" if robot_type else ""
         raise layout.error(f"layout {layout_id!r} has no edges{whose}: there is nothing to drive on")
+    stations = lif_station_sets(layout, set(nodes), segments, notes)
     part = f"layout {layout_id!r}" + (f", robot type {robot_type!r}" if robot_type else "")
-    return SiteMap(path, "lif", segments, notes.warnings(), None, part)
+    return SiteMap(path, "lif", segments, notes.warnings(), None, part, stations)
 
 
 # -- structure and choices ------------------------------------------------------------------------
@@ -385,12 +387,6 @@ def _note_unknown(at: JsonAt, kind: str, notes: ImportNotes) -> None:
     for key in at.keys():  # noqa: SIM118 - JsonAt.keys(), not a dict's
         if key not in _SILENT[kind] and not (key in _HARMLESS and members[key] == _HARMLESS[key]):
             notes.note("not-modelled", f"{kind} attribute {key!r}", f"{at.pointer}/{key}")
-
-
-def _note_stations(layout: JsonAt, notes: ImportNotes) -> None:
-    stations = layout.get("stations")
-    for station in stations.items() if stations is not None else ():
-        notes.note("not-modelled", "a station", station.pointer)
 
 
 # -- segments -------------------------------------------------------------------------------------

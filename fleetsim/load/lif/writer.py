@@ -6,7 +6,12 @@ segment order. Each segment becomes one edge per direction it allows: ``forward`
 two waypoints carries them as a degree-1 NURBS trajectory through its waypoints, which
 :mod:`fleetsim.load.lif.reader` samples back to the same polyline. Edge ids are the segment's names when they are
 unique, else ``E<id>`` (``E<id>-back`` for the second direction). The timestamp is the current time in UTC,
-or ``SOURCE_DATE_EPOCH`` when that is set (for reproducible files).
+or ``SOURCE_DATE_EPOCH`` when that is set (for reproducible files), unless the caller gives one.
+
+Station sets become LIF stations, one per set: its ``stationId`` is the set's name and its interaction
+nodes are the nodes its segments end at (a one-way segment's end node; a two-way segment's last node),
+which is how :mod:`fleetsim.load.lif.stations` reads them back. LIF has no station weights: they are
+not written.
 """
 
 from __future__ import annotations
@@ -14,7 +19,7 @@ from __future__ import annotations
 import json
 import math
 import os
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from datetime import datetime, timezone
 from itertools import pairwise
 from pathlib import Path
@@ -22,10 +27,11 @@ from typing import Any
 
 import numpy as np
 
-from fleetsim.enums import Direction
+from fleetsim.enums import Direction, Traverse
 from fleetsim.layout.geometry import close_point_pairs
 from fleetsim.layout.segment import Point, Segment
 from fleetsim.load.common.text import write_text_atomically
+from fleetsim.orders import Station
 
 __all__ = ["DEFAULT_ROBOT_TYPE", "lif_document", "write_lif"]
 
@@ -40,11 +46,19 @@ def write_lif(
     robot_type: str = DEFAULT_ROBOT_TYPE,
     connection_tolerance: float = 0.05,
     project: str = "fleetsim",
+    stations: Mapping[str, Iterable[Station]] | None = None,
+    timestamp: str | None = None,
 ) -> Path:
     """Write ``segments`` as a LIF 1.0 file with one layout; returns the path."""
     out = Path(path)
     document = lif_document(
-        segments, layout_id=layout_id, robot_type=robot_type, connection_tolerance=connection_tolerance, project=project
+        segments,
+        layout_id=layout_id,
+        robot_type=robot_type,
+        connection_tolerance=connection_tolerance,
+        project=project,
+        stations=stations,
+        timestamp=timestamp,
     )
     write_text_atomically(out, json.dumps(document, indent=1) + "\n")
     return out
@@ -65,8 +79,11 @@ def lif_document(
     robot_type: str = DEFAULT_ROBOT_TYPE,
     connection_tolerance: float = 0.05,
     project: str = "fleetsim",
+    stations: Mapping[str, Iterable[Station]] | None = None,
+    timestamp: str | None = None,
 ) -> dict[str, Any]:
-    """The LIF 1.0 document of ``segments`` (see the module docstring)."""
+    """The LIF 1.0 document of ``segments`` (see the module docstring); ``stations``: station sets by
+    name; ``timestamp``: the ``exportTimestamp`` to write instead of the current time."""
     ordered = sorted(segments, key=lambda segment: segment.id)
     if not ordered:
         raise ValueError("segments must not be empty: a LIF layout needs edges")
@@ -94,11 +111,41 @@ def lif_document(
         "metaInformation": {
             "projectIdentification": project,
             "creator": "fleetsim",
-            "exportTimestamp": _timestamp(),
+            "exportTimestamp": _timestamp() if timestamp is None else timestamp,
             "lifVersion": "1.0.0",
         },
-        "layouts": [{"layoutId": layout_id, "layoutVersion": "1", "nodes": nodes, "edges": edges, "stations": []}],
+        "layouts": [
+            {
+                "layoutId": layout_id,
+                "layoutVersion": "1",
+                "nodes": nodes,
+                "edges": edges,
+                "stations": _stations(ordered, node_of_end, stations or {}),
+            }
+        ],
     }
+
+
+def _stations(
+    segments: list[Segment], node_of_end: list[int], stations: Mapping[str, Iterable[Station]]
+) -> list[dict[str, Any]]:
+    """One LIF station per station set, at the nodes its segments end at."""
+    index = {segment.id: k for k, segment in enumerate(segments)}
+    written = []
+    for name in sorted(stations):
+        nodes: list[str] = []
+        for station in stations[name]:
+            if station.segment not in index:
+                msg = f"station set {name!r} names segment {station.segment}, which is not among the segments"
+                raise ValueError(msg)
+            k = index[station.segment]
+            at_last = segments[k].allows(Traverse.FORWARD)  # where a vehicle driving it comes to its end
+            node = f"N{node_of_end[2 * k + (1 if at_last else 0)] + 1}"
+            if node not in nodes:
+                nodes.append(node)
+        if nodes:
+            written.append({"stationId": name, "interactionNodeIds": nodes, "stationName": name})
+    return written
 
 
 def _nodes(segments: list[Segment], tolerance: float) -> tuple[list[int], list[Point]]:

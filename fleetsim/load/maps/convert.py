@@ -1,4 +1,5 @@
-"""``fleetsim convert``: any loadable map written as a Tiled map or as a LIF 1.0 file."""
+"""``fleetsim convert``: any loadable map written as a Tiled map (with its station sets, as ``station``
+properties) or as a LIF 1.0 file (segments only)."""
 
 from __future__ import annotations
 
@@ -37,5 +38,5 @@ def convert_map(
             connection_tolerance=connection_tolerance,
         )
     else:
-        written = write_map(target, site.segments)
+        written = write_map(target, site.segments, stations=site.stations)
     return site, written

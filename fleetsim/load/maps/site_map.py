@@ -63,4 +63,5 @@ def load_site_map(path: str | os.PathLike[str], options: MapOptions | None = Non
     notes = ImportNotes(map_path)
     for name in options.given():
         notes.note("option-ignored", f"map option {name!r} (for LIF and RMF maps)", "map_options")
-    return SiteMap(tiled.path, "tiled", tiled.segments, (*tiled.warnings, *notes.warnings()), tiled.meters_per_pixel)
+    warnings = (*tiled.warnings, *notes.warnings())
+    return SiteMap(tiled.path, "tiled", tiled.segments, warnings, tiled.meters_per_pixel, stations=tiled.stations)

@@ -4,6 +4,8 @@ A building has levels; a level has vertices (``[x, y, z, name, {params}]``), mea
 and their ``distance`` in metres) and lanes (``[start, end, {params}]``) in numbered navigation graphs
 (``graph_idx``). One level and one graph become the map: each lane a straight segment, two-way when it is
 ``bidirectional``, else one-way from its start vertex to its end vertex. Segment ids follow lane order.
+Station vertices (a dispenser, an ingestor, a parking spot, a charger) give station sets
+(:mod:`fleetsim.load.rmf.stations`).
 
 Coordinates become metres as traffic-editor's map tools do: with ``coordinate_system: reference_image``
 (the default) vertices are pixels of the level's floor plan, scaled by the mean of the level's
@@ -33,6 +35,7 @@ from fleetsim.load.common.collect import ErrorCollector
 from fleetsim.load.common.import_notes import ImportNotes
 from fleetsim.load.common.map_options import MapOptions, SiteMap
 from fleetsim.load.common.yaml_source import Locate, YamlPath, load_yaml_with_marks
+from fleetsim.load.rmf.stations import STATION_PARAMETERS, rmf_station_sets, station_parameter
 
 __all__ = ["load_building"]
 
@@ -98,6 +101,7 @@ class _Building:
         self.path, self.locate = path, locate
         self.notes = ImportNotes(path)
         self.errors = ErrorCollector()
+        self.stations: dict[int, list[str]] = {}  # vertex index → the station sets its parameters name
 
     def error(self, where: YamlPath, problem: str) -> MapError:
         location = self.locate(where)
@@ -164,8 +168,12 @@ def load_building(path: Path, options: MapOptions) -> SiteMap:
     for option in ("layout", "robot_type"):
         if getattr(options, option) is not None:
             building.notes.note("option-ignored", f"map option {option!r} (a LIF option)", "map_options")
+    labels = [v[1] if v else "" for v in vertices]
+    ended = [(segment, *ends) for segment, ends in zip(lanes.segments, lanes.vertex_ends, strict=True)]
+    lines = lambda index: building.line((*where, "vertices", index))  # noqa: E731 - where a station vertex is
+    stations = rmf_station_sets(building.stations, labels, ended, building.notes, lines)
     return SiteMap(
-        path, "rmf", tuple(lanes.segments), building.notes.warnings(), scale, f"level {name!r}, graph {graph}"
+        path, "rmf", tuple(lanes.segments), building.notes.warnings(), scale, f"level {name!r}, graph {graph}", stations
     )
 
 
@@ -255,7 +263,14 @@ def _vertex(building: _Building, vertex: object, at: YamlPath, index: int) -> tu
     label = building.text(vertex[3], (*at, 3), f"vertex {index} name") if len(vertex) > 3 else ""
     params = building.mapping(vertex[4], (*at, 4), f"vertex {index} parameters") if len(vertex) > 4 else {}
     for key in params:
-        building.notes.note("not-modelled", f"vertex parameter {key!r}", building.line((*at, 4, key)))
+        if key not in STATION_PARAMETERS:
+            building.notes.note("not-modelled", f"vertex parameter {key!r}", building.line((*at, 4, key)))
+            continue
+        try:
+            set_name = station_parameter(key, _param(building, params[key], (*at, 4, key)))
+        except ValueError as problem:
+            raise building.error((*at, 4, key), f"vertex {index} {problem}") from None
+        building.stations.setdefault(index, []).extend([set_name] if set_name else [])
     return (x, y), label.strip() or f"v{index}"
 
 
@@ -359,6 +374,7 @@ class _Lanes:
     """The segments made of one graph's lanes so far, the graphs any lane is in, the labels used."""
 
     segments: list[Segment] = field(default_factory=list)
+    vertex_ends: list[tuple[int, int]] = field(default_factory=list)  # each segment's start and end vertex
     graphs: set[int] = field(default_factory=set)
     used: dict[str, int] = field(default_factory=dict)
 
@@ -421,3 +437,4 @@ def _lane(
     direction = Direction.BOTH if two_way else Direction.FORWARD
     ends = (labels[start], labels[end])
     lanes.segments.append(Segment(len(lanes.segments) + 1, Shape.STRAIGHT, direction, (a, b), names, ends=ends))
+    lanes.vertex_ends.append((start, end))

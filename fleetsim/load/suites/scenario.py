@@ -7,7 +7,8 @@ check (every goal reachable, :mod:`.task_reach`) need the layout.
 Errors are collected stage by stage (:class:`~fleetsim.load.common.collect.ErrorCollector`): the map's; then
 every row error of ``vehicles.csv`` and of ``tasks.csv`` together (a task naming a vehicle whose row is
 bad is not also called unknown); then the layout checks (start conflicts, reachability), which only run
-on clean files. When the map cannot be loaded, the CSV files' rows are still checked for all that needs
+on clean files; ``orders.csv``, when there is one, is read with the other CSV files and its orders checked
+for reachability with the tasks (:mod:`.order_checks`). When the map cannot be loaded, the CSV files' rows are still checked for all that needs
 no map (ids, words, vehicle types, which vehicles exist), and their errors reported with the map's.
 Nothing is returned half loaded: either a whole scenario, or its errors — one raised as itself, several
 as one :class:`~fleetsim.errors.LoadErrors`.
@@ -27,8 +28,10 @@ from fleetsim.load.common.collect import ErrorCollector
 from fleetsim.load.common.map_options import MapOptions, SiteMap
 from fleetsim.load.maps.site_map import load_site_map
 from fleetsim.load.suites.disturbances import check_disturbances
+from fleetsim.load.suites.order_checks import apply_order_setup, order_reach_errors
 from fleetsim.load.suites.suite import ScenarioSpec, Suite
 from fleetsim.load.suites.task_reach import check_tasks_reachable
+from fleetsim.load.tables.orders import ORDERS_FILE_NAME, collect_orders
 from fleetsim.load.tables.scenario_files import (
     MAP_FILE_NAMES,
     TASKS_FILE_NAME,
@@ -68,8 +71,10 @@ def load_scenario(spec: ScenarioSpec, suite: Suite) -> Scenario:
         spec.expect,
         Location(spec.suite_path, line=spec.line),
         spec.map_options,
+        spec.order_setup.orders_path,
     )
     scenario = replace(scenario, planner_setup=spec.planner_setup)
+    scenario = apply_order_setup(scenario, spec.order_setup)
     if not spec.disturbances and spec.random_disturbances is None:
         return scenario
     scenario = replace(scenario, disturbances=spec.disturbances, random_disturbances=spec.random_disturbances)
@@ -85,7 +90,8 @@ def load_scenario_dir(
     map_options: MapOptions | None = None,
 ) -> Scenario:
     """Load a scenario folder without a suite: a map file (``map.json``, ``map.tmj``, ``map.tmx``,
-    ``map.lif.json`` or ``map.building.yaml``), ``vehicles.csv`` and ``tasks.csv``.
+    ``map.lif.json`` or ``map.building.yaml``), ``vehicles.csv``, ``tasks.csv`` and, if it has one,
+    ``orders.csv``.
 
     The scenario is named after the folder. Without ``vehicle_types`` every vehicle is the built-in
     default type; expectations are the defaults (all tasks, no collisions, no rejections).
@@ -108,6 +114,7 @@ def load_scenario_dir(
         Expectations(),
         Location(directory),
         map_options if map_options is not None else MapOptions(),
+        directory / ORDERS_FILE_NAME if (directory / ORDERS_FILE_NAME).is_file() else None,
     )
 
 
@@ -133,6 +140,7 @@ def _assemble(
     expect: Expectations,
     origin: Location,
     map_options: MapOptions,
+    orders_path: Path | None = None,
 ) -> Scenario:
     map_path, vehicles_path, tasks_path = paths
     errors = ErrorCollector()
@@ -159,6 +167,7 @@ def _assemble(
     located_tasks = collect_tasks(
         tasks_path, segments, vehicle_rows.ids, errors, map_name=map_path.name, vehicles_name=vehicles_path.name
     )
+    orders = collect_orders(orders_path, segments, tuple(vehicle_types), errors) if orders_path is not None else ()
     errors.raise_if_any()
     assert site is not None and typed  # raise_if_any raised the error that left them unset
     located = vehicle_rows.located
@@ -183,6 +192,10 @@ def _assemble(
         length = longest_vehicle(vehicles, vehicle_types.values())
         error.notes = (*site.warnings, *(f"{f.severity} {f.code}: {f.message}" for f in layout.lint(length)))
         raise
+    if orders_path is not None:
+        for problem in order_reach_errors(layout, vehicles, orders, orders_path):
+            errors.add(problem)
+        errors.raise_if_any()
     _check_expected_collisions(name, expect, layout, map_path, origin)
     return Scenario(
         name=name,
@@ -196,6 +209,9 @@ def _assemble(
         vehicles_path=vehicles_path,
         tasks_path=tasks_path,
         warnings=site.warnings,
+        orders=orders,
+        stations=site.stations,
+        orders_path=orders_path,
     )
 
 

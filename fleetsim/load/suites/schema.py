@@ -287,7 +287,7 @@ def _describe(error: ValidationError) -> tuple[str, Hashable | None]:
     if kind == "pattern":
         return f"{_show(value)} is not {title or f'matching {rule!r}'}", None
     if kind == "not" and "dependentSchemas" in error.relative_schema_path:
-        given = [key for key in ("dir", "map", "vehicles", "tasks") if key in value]
+        given = [key for key in ("dir", "map", "vehicles", "tasks", "orders") if key in value]
         return f"'generate' makes the scenario, so it cannot also name files ({', '.join(map(repr, given))})", None
     if kind == "not":
         return f"{_show(value)} must not be {rule.get('title', 'this value')}", None

@@ -23,6 +23,7 @@ from fleetsim.load.common.map_options import MapOptions
 from fleetsim.load.common.yaml_source import Locate, load_yaml_with_marks
 from fleetsim.load.suites.disturbances import HuntDisturbances, declared_disturbances, hunt_block, random_block
 from fleetsim.load.suites.entry_tables import check_entry_tables
+from fleetsim.load.suites.orders_entry import DEFAULT_ORDER_KEYS, ORDER_KEYS, OrderSetup, order_setup
 from fleetsim.load.suites.planner_setup import PLANNER_KEYS, planner_setup
 from fleetsim.load.suites.schema import SchemaCheck, raise_suite_errors, schema_check, suite_error, suite_schema
 from fleetsim.load.tables.scenario_files import (
@@ -31,6 +32,7 @@ from fleetsim.load.tables.scenario_files import (
     VEHICLES_FILE_NAME,
     map_candidates,
 )
+from fleetsim.orders import MEASURES, MeasureBound
 from fleetsim.scenario import (
     DEFAULT_VEHICLE_TYPE,
     Checks,
@@ -97,6 +99,8 @@ class ScenarioSpec:
         hunt_disturbances: A Hypothesis search for stop schedules that fail the planner, or ``None``.
         planner_setup: What the entry gives its planner: ``planner_options`` (over the defaults'), the
             scenario's folder and the data ``files``.
+        order_setup: Its orders (``orders``, ``order_stream``), ``stations``, ``shift`` and ``dispatcher``,
+            over the defaults' (`fleetsim.load.suites.orders_entry`).
     """
 
     name: str
@@ -116,6 +120,7 @@ class ScenarioSpec:
     random_disturbances: RandomDisturbances | None = None
     hunt_disturbances: HuntDisturbances | None = None
     planner_setup: PlannerSetup = field(default_factory=PlannerSetup)
+    order_setup: OrderSetup = field(default_factory=OrderSetup)
 
     @property
     def hunts(self) -> bool:
@@ -192,8 +197,11 @@ def load_suite(path: Path | str) -> Suite:
         found.add(error)
     suite = _read_suite(path, data, locate, check, found) if isinstance(data, dict) else None
     errors = ErrorCollector()
+    reported: set[str] = set()  # a broken default several entries inherit is one mistake, told once
     for each in sorted(found.errors, key=lambda error: _position(error, path)):
-        errors.add(each)
+        if str(each) not in reported:
+            reported.add(str(each))
+            errors.add(each)
     raise_suite_errors(errors)
     assert suite is not None  # no error, so every part was read
     return suite
@@ -228,8 +236,10 @@ def _read_suite(
     base_options = defaults.get("map_options", {}) if check.clean(("defaults", "map_options")) else None
     planner = {key: defaults[key] for key in PLANNER_KEYS if key in defaults}
     base_planner = planner if all(check.clean(("defaults", key)) for key in PLANNER_KEYS) else None
+    orders = {key: defaults[key] for key in DEFAULT_ORDER_KEYS if key in defaults}
+    base_orders = orders if all(check.clean(("defaults", key)) for key in DEFAULT_ORDER_KEYS) else None
     scenarios = [
-        _scenario_entry(path, index, entry, base, names, locate, base_options, check, errors, base_planner)
+        _scenario_entry(path, index, entry, base, names, locate, base_options, check, errors, base_planner, base_orders)
         for index, entry in enumerate(entries)
     ]
     if errors or vehicle_types is None or any(spec is None for spec in scenarios):
@@ -415,6 +425,12 @@ def _expectations(raw: Mapping[str, Any]) -> Expectations:
         max_makespan=None if max_makespan is None else float(max_makespan),
         contacts=raw.get("contacts", "none"),
         clearance=None if raw.get("clearance") is None else float(raw["clearance"]),
+        measures=tuple(
+            MeasureBound(key[4:], "min" if key.startswith("min_") else "max", float(value))
+            for key, value in raw.items()
+            if key[:4] in ("min_", "max_") and key[4:] in MEASURES
+        ),
+        overloaded=raw.get("overloaded"),
     )
 
 
@@ -468,9 +484,11 @@ def _scenario_entry(
     check: SchemaCheck,
     errors: ErrorCollector,
     base_planner: Mapping[str, Any] | None = MappingProxyType({}),
+    base_orders: Mapping[str, Any] | None = MappingProxyType({}),
 ) -> ScenarioSpec | None:
     """The entry, or ``None`` when a part of it could not be read; each problem goes to ``errors``.
-    ``base_planner``: the defaults' ``planner_options`` and ``files`` (``None``: they are broken).
+    ``base_planner``: the defaults' ``planner_options`` and ``files`` (``None``: they are broken);
+    ``base_orders``: the defaults' order keys (``None``: they are broken).
 
     A part the schema refused is not looked at further (it is reported already); the files are checked
     when the entry is whole (a misspelt ``dir`` leaves it without one, which is the same mistake).
@@ -501,12 +519,21 @@ def _scenario_entry(
         folder = suite_path.parent / entry["dir"] if "dir" in entry else suite_path.parent
         with errors.collecting():
             setup = planner_setup(entry, base_planner, folder, locate, where)
+    orders = None
+    if paths is not None and base_orders is not None:  # the keys the schema passed, so all mistakes show
+        clean = {key: value for key, value in entry.items() if key not in ORDER_KEYS or check.clean((*where, key))}
+        if "generate" in entry:  # its files are the schema's mistake (reported), orders.csv too
+            clean.pop("orders", None)
+        with errors.collecting():
+            orders = _order_setup(suite_path.parent, clean, base_orders, types, locate, where)
+        orders = orders if len(clean) == len(entry) else None
     expect = entry.get("expect", {})
     options = entry.get("map_options", {})
     if (
         not complete
         or paths is None
         or setup is None
+        or orders is None
         or disturbances is None
         or base_options is None
         or not check.clean(where)
@@ -529,8 +556,26 @@ def _scenario_entry(
         generate=generate,
         map_options=MapOptions(**{**base_options, **options}),
         planner_setup=setup,
+        order_setup=orders,
         **disturbances,
     )
+
+
+def _order_setup(
+    root: Path,
+    entry: Mapping[str, Any],
+    defaults: Mapping[str, Any],
+    types: Collection[str] | None,
+    locate: Locate,
+    where: tuple[Any, ...],
+) -> OrderSetup:
+    """The entry's order keys; vehicle types are looked up when the suite's are known."""
+
+    def type_name(name: str, here: tuple[Any, ...]) -> str:
+        return name if types is None else _type_name(name, types, locate, here)
+
+    folder = root / entry["dir"] if "dir" in entry else None
+    return order_setup(entry, defaults, root, folder, locate, where, type_name)
 
 
 def _disturbance_keys(

@@ -20,7 +20,7 @@ import math
 import os
 import xml.etree.ElementTree as ET
 from collections.abc import Iterable, Iterator, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from fleetsim.enums import Direction, Shape
@@ -28,8 +28,10 @@ from fleetsim.errors import Location, MapError
 from fleetsim.layout.segment import Point, Segment
 from fleetsim.load.common.closest import did_you_mean
 from fleetsim.load.common.collect import ErrorCollector
+from fleetsim.load.common.stations import NO_STATIONS, StationSets, station_sets
 from fleetsim.load.common.text import read_text_file
 from fleetsim.load.tiled.header import MapHeader, read_header
+from fleetsim.load.tiled.stations import segment_stations, station_note
 from fleetsim.load.tiled.templates import (
     ObjectFields,
     PropertyValue,
@@ -43,6 +45,7 @@ from fleetsim.load.tiled.templates import (
     read_xml_object,
     xml_properties,
 )
+from fleetsim.orders import Station
 
 __all__ = ["MAP_SUFFIXES", "MAX_OBJECT_ID", "TiledMap", "load_map", "parse_direction", "parse_shape"]
 
@@ -69,7 +72,8 @@ _DIRECTION_ENUM = (Direction.BOTH, Direction.FORWARD, Direction.BACKWARD)
 
 @dataclass(frozen=True, slots=True)
 class TiledMap:
-    """A loaded map: its segments (sorted by id, world metres) and what the loader had to say."""
+    """A loaded map: its segments (sorted by id, world metres), its station sets (the segments' ``station``
+    properties, :mod:`fleetsim.load.tiled.stations`) and what the loader had to say."""
 
     path: Path
     segments: tuple[Segment, ...]
@@ -77,6 +81,7 @@ class TiledMap:
     width_px: float
     height_px: float
     warnings: tuple[str, ...]
+    stations: StationSets = field(default_factory=lambda: NO_STATIONS)
 
 
 @dataclass(frozen=True, slots=True)
@@ -132,7 +137,7 @@ def load_map(path: str | os.PathLike[str]) -> TiledMap:
         header, placed = _read_tmx(text, map_path, errors)
     else:
         header, placed = _read_json(text, map_path, errors)
-    segments, warnings = _segments(placed, header, map_path, errors)
+    segments, warnings, stations = _segments(placed, header, map_path, errors)
     return TiledMap(
         path=map_path,
         segments=segments,
@@ -140,6 +145,7 @@ def load_map(path: str | os.PathLike[str]) -> TiledMap:
         width_px=header.width_px,
         height_px=header.height_px,
         warnings=warnings,
+        stations=stations,
     )
 
 
@@ -333,16 +339,17 @@ def _unknown_class(fields: ObjectFields, placed: _Placed, path: Path) -> MapErro
 
 def _segments(
     placed: Iterable[_Placed], header: MapHeader, path: Path, errors: ErrorCollector
-) -> tuple[tuple[Segment, ...], tuple[str, ...]]:
+) -> tuple[tuple[Segment, ...], tuple[str, ...], StationSets]:
     """Every object's segment, or every object's error: nothing is returned for a map with any error."""
     templates = TemplateCache(path)
     first_with: dict[int, _Placed] = {}
     segments: list[Segment] = []
     warnings: list[str] = []
+    stations: list[tuple[str, Station]] = []
     for item in placed:
         try:  # each object is reported once, by its first problem
             _check_unique_id(item, first_with, path)
-            _take(item, templates, header, path, segments, warnings)
+            _take(item, templates, header, path, (segments, warnings, stations))
         except MapError as error:
             errors.add(error)
     errors.raise_if_any()
@@ -350,25 +357,33 @@ def _segments(
         msg = "the map has no segments (visible polyline objects of class straight, curve, s_curve or path)"
         raise MapError(msg, Location(path))
     segments.sort(key=lambda segment: segment.id)
-    return tuple(segments), tuple(warnings)
+    return tuple(segments), tuple(warnings), station_sets(stations)
 
 
-def _take(
-    item: _Placed, templates: TemplateCache, header: MapHeader, path: Path, segments: list[Segment], warnings: list[str]
-) -> None:
-    """Add ``item``'s segment (or a warning about it); a broken object raises its MapError."""
+_Found = tuple[list[Segment], list[str], list[tuple[str, Station]]]  # segments, warnings, station set members
+
+
+def _take(item: _Placed, templates: TemplateCache, header: MapHeader, path: Path, found: _Found) -> None:
+    """Add ``item``'s segment and stations (or a warning about it); a broken object raises its MapError."""
+    segments, warnings, stations = found
     fields = templates.resolve(item.fields)
     if fields is None or fields.visible is False:
         return  # None: its template is broken, which was reported at its first instance
     shape = parse_shape(fields.shape_class) if fields.shape_class else None
+    where = Location(path, object_id=fields.id)
     if fields.geometry != "polyline":
+        geometry = fields.geometry or "rectangle"
         if shape is not None:
-            geometry = fields.geometry or "rectangle"
-            name = f"{path}: object {fields.id}"
-            warnings.append(f"{name}: class {fields.shape_class!r} on a {geometry}, not a polyline; ignored")
+            warnings.append(f"{where}: class {fields.shape_class!r} on a {geometry}, not a polyline; ignored")
+        note = station_note(geometry, fields.properties, where)
+        warnings += [note] if note is not None else []
         return
     if shape is None:
         if fields.shape_class:
             raise _unknown_class(fields, item, path)
+        note = station_note("polyline without a class", fields.properties, where)
+        warnings += [note] if note is not None else []
         return  # a polyline without a class is a drawing aid, not a segment
-    segments.append(_segment(fields, shape, item, header, path))
+    segment = _segment(fields, shape, item, header, path)
+    segments.append(segment)
+    stations += segment_stations(segment.id, fields.properties, where)

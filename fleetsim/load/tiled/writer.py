@@ -11,7 +11,7 @@ from __future__ import annotations
 import json
 import math
 import os
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from itertools import pairwise
 from pathlib import Path
@@ -20,11 +20,13 @@ from xml.sax.saxutils import quoteattr
 from fleetsim.errors import LayoutError
 from fleetsim.layout.segment import Segment
 from fleetsim.load.tiled.reader import MAP_SUFFIXES
+from fleetsim.orders import Station
 
 __all__ = ["write_map"]
 
 _LAYER_NAME = "segments"
 Number = int | float
+_Marks = Mapping[int, tuple[str, float]]  # segment id → its station property (set names) and weight
 
 
 @dataclass(frozen=True, slots=True)
@@ -48,11 +50,14 @@ def write_map(
     tile_size: int = 32,
     meters_per_pixel: float | None = None,
     margin_tiles: int = 2,
+    stations: Mapping[str, Iterable[Station]] | None = None,
 ) -> Path:
     """Write ``segments`` as a map centred on the world origin; the format follows the suffix.
 
     Without ``meters_per_pixel`` one tile is one metre and no map property is written (the loader's
-    default). ``margin_tiles`` empty tiles are kept around the segments on every side.
+    default). ``margin_tiles`` empty tiles are kept around the segments on every side. ``stations``
+    (station sets by name) become the segments' ``station`` and ``station_weight`` properties; a
+    segment has one weight, so its stations must weigh the same in every set (else a ``ValueError``).
     """
     out = Path(path)
     suffix = out.suffix.lower()
@@ -62,7 +67,11 @@ def write_map(
     ordered = _checked(segments)
     frame = _frame(ordered, tile_size, meters_per_pixel, margin_tiles)
     explicit_scale = meters_per_pixel is not None
-    text = _tmx_text(ordered, frame, explicit_scale) if suffix == ".tmx" else _json_text(ordered, frame, explicit_scale)
+    marks = _station_marks(stations or {}, {segment.id for segment in ordered})
+    if suffix == ".tmx":
+        text = _tmx_text(ordered, frame, explicit_scale, marks)
+    else:
+        text = _json_text(ordered, frame, explicit_scale, marks)
     out.write_text(text, encoding="utf-8")
     return out
 
@@ -80,6 +89,36 @@ def _checked(segments: Iterable[Segment]) -> list[Segment]:
         if not all(math.isfinite(c) for point in segment.waypoints for c in point):
             raise ValueError(f"segment {segment.id} waypoints={segment.waypoints!r} must be finite")
     return ordered
+
+
+def _station_marks(stations: Mapping[str, Iterable[Station]], ids: set[int]) -> _Marks:
+    names: dict[int, list[str]] = {}
+    weights: dict[int, tuple[str, float]] = {}
+    for set_name in sorted(stations):
+        for station in stations[set_name]:
+            if station.segment not in ids:
+                msg = f"station set {set_name!r} names segment {station.segment}, which is not among the segments"
+                raise ValueError(msg)
+            first = weights.setdefault(station.segment, (set_name, station.weight))
+            if first[1] != station.weight:
+                msg = (
+                    f"segment {station.segment} weighs {first[1]!r} in station set {first[0]!r} and "
+                    f"{station.weight!r} in {set_name!r}; a Tiled segment has one station_weight"
+                )
+                raise ValueError(msg)
+            if set_name not in names.setdefault(station.segment, []):
+                names[station.segment].append(set_name)
+    return {segment: (",".join(sets), weights[segment][1]) for segment, sets in names.items()}
+
+
+def _station_properties(segment: Segment, marks: _Marks) -> list[dict[str, object]]:
+    if segment.id not in marks:
+        return []
+    sets, weight = marks[segment.id]
+    found: list[dict[str, object]] = [{"name": "station", "type": "string", "value": sets}]
+    if weight != 1.0:
+        found.append({"name": "station_weight", "type": "float", "value": weight})
+    return found
 
 
 def _frame(segments: list[Segment], tile_size: int, meters_per_pixel: float | None, margin_tiles: int) -> _Frame:
@@ -137,7 +176,7 @@ def _json_open(value: dict[str, object]) -> str:
     return json.dumps(value, separators=(",", ":"))[:-1]
 
 
-def _json_object(segment: Segment, frame: _Frame) -> dict[str, object]:
+def _json_object(segment: Segment, frame: _Frame, marks: _Marks) -> dict[str, object]:
     (x, y), points = _pixel_polyline(segment, frame)
     return {
         "id": segment.id,
@@ -153,6 +192,7 @@ def _json_object(segment: Segment, frame: _Frame) -> dict[str, object]:
         "properties": [
             {"name": "direction", "propertytype": "direction", "type": "string", "value": segment.direction.value},
             *_other_name(segment),
+            *_station_properties(segment, marks),
         ],
     }
 
@@ -164,7 +204,7 @@ def _other_name(segment: Segment) -> list[dict[str, str]]:
     return [{"name": "other_name", "type": "string", "value": segment.names[1]}]
 
 
-def _json_text(segments: list[Segment], frame: _Frame, explicit_scale: bool) -> str:
+def _json_text(segments: list[Segment], frame: _Frame, explicit_scale: bool, marks: _Marks) -> str:
     header: dict[str, object] = {
         "type": "map",
         "compressionlevel": -1,
@@ -183,7 +223,9 @@ def _json_text(segments: list[Segment], frame: _Frame, explicit_scale: bool) -> 
         "x": 0,
         "y": 0,
     }
-    objects = ",\n".join("  " + json.dumps(_json_object(segment, frame), separators=(",", ":")) for segment in segments)
+    objects = ",\n".join(
+        "  " + json.dumps(_json_object(segment, frame, marks), separators=(",", ":")) for segment in segments
+    )
     # One object per line: diffs of saved scenarios stay readable and dumping stays fast.
     return _json_open(header) + ',"layers":[\n ' + _json_open(layer) + ',"objects":[\n' + objects + "\n ]}\n]}\n"
 
@@ -195,7 +237,7 @@ def _tmx_number(value: Number) -> str:
     return repr(value)  # shortest text that parses back to the same float
 
 
-def _tmx_object(segment: Segment, frame: _Frame) -> str:
+def _tmx_object(segment: Segment, frame: _Frame, marks: _Marks) -> str:
     (x, y), points = _pixel_polyline(segment, frame)
     point_text = " ".join(f"{_tmx_number(px)},{_tmx_number(py)}" for px, py in points)
     name = f"name={quoteattr(segment.name)} " if segment.name else ""
@@ -206,13 +248,19 @@ def _tmx_object(segment: Segment, frame: _Frame) -> str:
         f'    <property name="direction" propertytype="direction" '
         f"value={quoteattr(segment.direction.value)}/>\n"
         + "".join(f'    <property name="other_name" value={quoteattr(p["value"])}/>\n' for p in _other_name(segment))
+        + "".join(_tmx_property(p) for p in _station_properties(segment, marks))
         + "   </properties>\n"
         f'   <polyline points="{point_text}"/>\n'
         "  </object>\n"
     )
 
 
-def _tmx_text(segments: list[Segment], frame: _Frame, explicit_scale: bool) -> str:
+def _tmx_property(prop: dict[str, object]) -> str:
+    kind = ' type="float"' if prop["type"] == "float" else ""
+    return f'    <property name="{prop["name"]}"{kind} value={quoteattr(str(prop["value"]))}/>\n'
+
+
+def _tmx_text(segments: list[Segment], frame: _Frame, explicit_scale: bool, marks: _Marks) -> str:
     attributes = _map_attributes(segments, frame)
     attributes["infinite"] = 0
     attribute_text = " ".join(f'{name}="{value}"' for name, value in attributes.items())
@@ -223,6 +271,6 @@ def _tmx_text(segments: list[Segment], frame: _Frame, explicit_scale: bool) -> s
             f'value="{frame.meters_per_pixel!r}"/>\n </properties>\n'
         )
     parts.append(f' <objectgroup id="1" name="{_LAYER_NAME}">\n')
-    parts.extend(_tmx_object(segment, frame) for segment in segments)
+    parts.extend(_tmx_object(segment, frame, marks) for segment in segments)
     parts.append(" </objectgroup>\n</map>\n")
     return "".join(parts)
