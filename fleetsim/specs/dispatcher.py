@@ -14,7 +14,6 @@ from dataclasses import dataclass
 from typing import cast
 
 from fleetsim.dispatch.protocol import Dispatcher
-from fleetsim.errors import FleetsimError
 from fleetsim.specs import python
 
 __all__ = ["DispatcherFactory", "DispatcherSpecError", "import_dispatcher_factory"]
@@ -22,16 +21,8 @@ __all__ = ["DispatcherFactory", "DispatcherSpecError", "import_dispatcher_factor
 EXAMPLE = "fleetsim.dispatchers:NearestVehicleDispatcher"
 
 
-class DispatcherSpecError(FleetsimError, ValueError):
-    """A dispatcher spec cannot give dispatchers: malformed, not importable, not callable, or makes none.
-
-    ``spec`` is the spec as given; ``details`` holds the user's traceback where there is one.
-    """
-
-    def __init__(self, message: str, spec: str, details: str = "") -> None:
-        self.spec = spec
-        self.details = details
-        super().__init__(message)
+class DispatcherSpecError(python.SpecError):
+    """A dispatcher spec cannot give dispatchers: malformed, not importable, not callable, or makes none."""
 
 
 @dataclass(frozen=True, slots=True)

@@ -36,6 +36,7 @@ __all__ = [
     "SCENARIO_DIR",
     "PlannerFactory",
     "PlannerSpecError",
+    "SpecError",
     "command_words",
     "import_planner_factory",
 ]
@@ -47,8 +48,8 @@ SCENARIO_DIR = "scenario_dir"  # the parameter a factory declares to be given th
 _BY_NAME = (inspect.Parameter.POSITIONAL_OR_KEYWORD, inspect.Parameter.KEYWORD_ONLY)
 
 
-class PlannerSpecError(FleetsimError, ValueError):
-    """A planner spec cannot give planners: malformed, not importable, not callable, or makes no planner.
+class SpecError(FleetsimError, ValueError):
+    """A spec (``module:attr`` and the like) that cannot give what it names.
 
     ``spec`` is the spec as given; ``details`` holds the user's traceback where there is one.
     """
@@ -57,6 +58,10 @@ class PlannerSpecError(FleetsimError, ValueError):
         self.spec = spec
         self.details = details
         super().__init__(message)
+
+
+class PlannerSpecError(SpecError):
+    """A planner spec cannot give planners: malformed, not importable, not callable, or makes no planner."""
 
 
 @dataclass(frozen=True, slots=True)
