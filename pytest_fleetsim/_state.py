@@ -63,6 +63,7 @@ OUTCOME_WORDS = ("passed", "failed", "interrupted", "xfailed", "xpassed", "load 
 NOT_RECORDED = "not recorded"  # the hash cell of a run whose hash no lock file holds yet
 _PACING_SHOWN = 10  # paced scenarios whose pace and order latency the summary shows
 NOT_GATED = "not gated"  # the hash cell of a run a wall clock paced (a VDA 5050 master control)
+MEASURES_GATED = "measures"  # the hash cell of a run gated on its measures alone (gate: measures)
 RecordMode = Literal["failed", "all", "none"]
 
 
@@ -227,7 +228,7 @@ class FleetsimState:
                 scenario,
                 make,
                 identity=source.identity,
-                mode="update" if self.update_hashes else "check",
+                mode="ignore" if item.spec.gate == "measures" else "update" if self.update_hashes else "check",
                 recorded=lock.get(source.identity, item.spec.name),
                 record_hint=hint,
                 planner_timeout=self.timeout,
@@ -397,6 +398,8 @@ class FleetsimState:
             cells[SUMMARY_COLUMNS.index("hash")] = NOT_RECORDED
         elif result.paced is not None:
             cells[SUMMARY_COLUMNS.index("hash")] = NOT_GATED
+        elif item.spec.gate == "measures":
+            cells[SUMMARY_COLUMNS.index("hash")] = MEASURES_GATED
         item.fleetsim_payload = {
             "suite": str(item.path),
             "scenario": item.spec.name,
@@ -404,7 +407,7 @@ class FleetsimState:
             "planner": identity,
             "metrics": ScenarioMetrics.from_result(item.nodeid, "failed", result).to_dict(),  # outcome: see _metrics
             "cells": cells,
-            "order_cells": order_cells(label or item.spec.name, result),
+            "order_cells": order_cells(label or item.spec.name, result, item.spec.gate),
             "outcome_notes": outcome_notes(item.spec.expect, result),  # by the word the report gives
             "generated": generated,
             "interrupted": result.ended == "interrupted",

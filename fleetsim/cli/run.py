@@ -427,6 +427,11 @@ def _isatty(stream: TextIO) -> bool:
 # -- the summary ----------------------------------------------------------------------------------
 
 
+def _gate(outcome: _Outcome) -> str:
+    """The suite entry's ``gate`` (``fleetsim run`` compares no hash: it says what pytest would gate on)."""
+    return outcome.target.spec.gate if outcome.target.spec is not None else "-"
+
+
 def _print_summary(outcomes: list[_Outcome], stream: TextIO) -> None:
     if not outcomes:
         print("no scenario ran", file=stream)
@@ -434,7 +439,7 @@ def _print_summary(outcomes: list[_Outcome], stream: TextIO) -> None:
     rows = [summary_cells(o.label, outcome_cell(o.word, o.note), o.result if o.loaded else None) for o in outcomes]
     for line in format_table(rows):
         print(line, file=stream)
-    shifts = [cells for o in outcomes if o.loaded and (cells := order_cells(o.label, o.result)) is not None]
+    shifts = [cells for o in outcomes if o.loaded and (cells := order_cells(o.label, o.result, _gate(o))) is not None]
     if shifts:
         print("\norders:", *format_table(shifts, ORDER_COLUMNS), sep="\n", file=stream)
     words = [o.word for o in outcomes]

@@ -74,11 +74,13 @@ ORDER_COLUMNS = (
     "stalls",
     "utilisation",
     "backlog",
+    "gate",
 )
 
 
-def order_cells(label: str, result: RunResult) -> tuple[str, ...] | None:
-    """One row of the orders table, or ``None`` for a run without orders."""
+def order_cells(label: str, result: RunResult, gate: str = "-") -> tuple[str, ...] | None:
+    """One row of the orders table, or ``None`` for a run without orders; ``gate``: what a change of its
+    behaviour fails on (a suite entry's ``gate``: ``hash``, ``measures`` or ``both``)."""
     m = result.measures
     if m is None:
         return None
@@ -101,6 +103,7 @@ def order_cells(label: str, result: RunResult) -> tuple[str, ...] | None:
         str(m.stalls),
         f"{100 * m.utilisation:.0f} %",
         f"{backlog} ({m.backlog_slope:+.1f}/h)",
+        gate,
     )
 
 

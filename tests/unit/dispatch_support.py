@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable, Sequence
 from functools import cache
+from pathlib import Path
 from typing import Any
 
 from fleetsim import load_scenario, load_suite
@@ -83,3 +84,30 @@ class FirstIdle:
     def dispatch(self, board: OrderBoard, fleet: object, layout: object) -> list[Assignment]:
         idle = list(board.idle)
         return [Assignment(idle.pop(0), [order.id]) for order in board.unassigned() if idle]
+
+
+_REPO = Path(__file__).resolve().parents[2]
+_LOOP = _REPO / "scenario_suites" / "examples" / "loop"
+GATE_ORDERS = "order_id,release,stops,dwell\na,0,7>2,2\nb,5,2>7,2\n"
+
+
+def gate_suite(folder: Path, entry: str) -> Path:
+    """A suite in ``folder`` of one entry on the shipped loop with two orders, ``entry`` its last lines."""
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "orders.csv").write_text(GATE_ORDERS, encoding="utf-8")
+    path = folder / "gate.fleetsim.yaml"
+    path.write_text(
+        f"""fleetsim: 1
+name: gate
+scenarios:
+  - name: loop
+    map: {_LOOP / "map.tmx"}
+    vehicles: {_LOOP / "vehicles.csv"}
+    tasks: {_LOOP / "tasks.csv"}
+    orders: orders.csv
+    shift: {{duration: 90}}
+    dispatcher: fleetsim.dispatchers:NearestVehicleDispatcher
+{entry}""",
+        encoding="utf-8",
+    )
+    return path

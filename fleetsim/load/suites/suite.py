@@ -13,7 +13,7 @@ from collections.abc import Callable, Collection, Iterable, Mapping
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any
+from typing import Any, Literal
 
 from fleetsim.enums import ConflictModel, TurnCapability
 from fleetsim.errors import Location, SuiteError
@@ -44,8 +44,11 @@ from fleetsim.scenario import (
     VehicleType,
 )
 
+Gate = Literal["hash", "measures", "both"]
+
 __all__ = [
     "SUITE_SUFFIX",
+    "Gate",
     "Generation",
     "ScenarioSpec",
     "Suite",
@@ -101,6 +104,8 @@ class ScenarioSpec:
             scenario's folder and the data ``files``.
         order_setup: Its orders (``orders``, ``order_stream``), ``stations``, ``shift`` and ``dispatcher``,
             over the defaults' (`fleetsim.load.suites.orders_entry`).
+        gate: What a change of behaviour fails on: ``hash`` (the recorded trace hash), ``measures`` (the
+            ``expect`` bounds on measures; no hash is recorded or compared) or ``both``.
     """
 
     name: str
@@ -121,6 +126,7 @@ class ScenarioSpec:
     hunt_disturbances: HuntDisturbances | None = None
     planner_setup: PlannerSetup = field(default_factory=PlannerSetup)
     order_setup: OrderSetup = field(default_factory=OrderSetup)
+    gate: Gate = "hash"
 
     @property
     def hunts(self) -> bool:
@@ -238,8 +244,11 @@ def _read_suite(
     base_planner = planner if all(check.clean(("defaults", key)) for key in PLANNER_KEYS) else None
     orders = {key: defaults[key] for key in DEFAULT_ORDER_KEYS if key in defaults}
     base_orders = orders if all(check.clean(("defaults", key)) for key in DEFAULT_ORDER_KEYS) else None
+    base_gate = defaults.get("gate") if check.clean(("defaults", "gate")) else None
     scenarios = [
-        _scenario_entry(path, index, entry, base, names, locate, base_options, check, errors, base_planner, base_orders)
+        _scenario_entry(
+            path, index, entry, base, names, locate, base_options, check, errors, base_planner, base_orders, base_gate
+        )
         for index, entry in enumerate(entries)
     ]
     if errors or vehicle_types is None or any(spec is None for spec in scenarios):
@@ -485,6 +494,7 @@ def _scenario_entry(
     errors: ErrorCollector,
     base_planner: Mapping[str, Any] | None = MappingProxyType({}),
     base_orders: Mapping[str, Any] | None = MappingProxyType({}),
+    base_gate: Gate | None = None,
 ) -> ScenarioSpec | None:
     """The entry, or ``None`` when a part of it could not be read; each problem goes to ``errors``.
     ``base_planner``: the defaults' ``planner_options`` and ``files`` (``None``: they are broken);
@@ -529,6 +539,8 @@ def _scenario_entry(
         orders = orders if len(clean) == len(entry) else None
     expect = entry.get("expect", {})
     options = entry.get("map_options", {})
+    expectations = _expectations(expect) if isinstance(expect, dict) else None
+    gate = _gate(entry.get("gate", base_gate), expectations, locate, where, errors)
     if (
         not complete
         or paths is None
@@ -537,7 +549,8 @@ def _scenario_entry(
         or disturbances is None
         or base_options is None
         or not check.clean(where)
-        or not isinstance(expect, dict)
+        or expectations is None
+        or gate is None
         or not isinstance(options, dict)
     ):
         return None
@@ -549,7 +562,8 @@ def _scenario_entry(
         vehicles_path=paths[1],
         tasks_path=paths[2],
         settings=settings,
-        expect=_expectations(expect),
+        expect=expectations,
+        gate=gate,
         tags=tuple(entry.get("tags", ())),
         xfail=entry.get("xfail"),
         description=entry.get("description", ""),
@@ -559,6 +573,21 @@ def _scenario_entry(
         order_setup=orders,
         **disturbances,
     )
+
+
+def _gate(
+    given: Gate | None, expect: Expectations | None, locate: Locate, where: tuple[Any, ...], errors: ErrorCollector
+) -> Gate | None:
+    """The entry's ``gate``: as given, else ``both`` when its ``expect`` bounds a measure, else ``hash``.
+    A hash gate beside bounds on measures would leave them unjudged: a located error (``None``)."""
+    bounded = expect is not None and (bool(expect.measures) or expect.overloaded is not None)
+    if given is None:
+        return "both" if bounded else "hash"
+    if given == "hash" and bounded:
+        msg = "'hash' leaves the expect block's bounds on measures unjudged; use 'both' (or 'measures')"
+        errors.add(suite_error(msg, (*where, "gate"), locate((*where, "gate"))))
+        return None
+    return given
 
 
 def _order_setup(
