@@ -215,6 +215,10 @@ class _Run:
         except (PlannerFault, PlannerError) as fault:
             self._planner_failed(fault, stamp, events)
             return False
+        except PlannerInterrupted:  # a stop signal in the dispatcher's call: the step ends without its answer
+            self.guard.forget_call()
+            self.interrupted_planning = True
+            return True
         for rejection in refused:
             self.rejections.append(RejectionEvent(stamp, rejection))
             events.append(["reject", rejection.code.value, rejection.vehicle_id, rejection.leg_index])
@@ -610,7 +614,7 @@ def _simulate(
         planned_ok = run.dispatch(step, now, end, events) if run.dispatching is not None else True
         if planned_ok and run.stepped is not None:
             planned_ok = run.begin_step(now, end, events)
-        if planned_ok and step % period == 0:
+        if planned_ok and step % period == 0 and not run.interrupted_planning:
             planned_ok = run.plan(now, end, events, plans)
         rejected = any(e[0] == "reject" for e in events)
         alerted = run.check_reservations(end, events) > 0 if planned_ok and settings.checks.reservations else False

@@ -5,8 +5,11 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import os
+import signal
 import time
 from collections.abc import Sequence
+from pathlib import Path
 
 import pytest
 from dispatch_support import ORDERS, FirstIdle, Scripted, once, scenario
@@ -14,6 +17,7 @@ from dispatch_support import ORDERS, FirstIdle, Scripted, once, scenario
 from fleetsim.dispatch.protocol import Assignment, OrderBoard
 from fleetsim.orders import Order, Shift, Stop
 from fleetsim.planners import ReservingPlanner
+from fleetsim.sim.interrupt import StopSignals
 from fleetsim.sim.loop import run_scenario
 from fleetsim.sim.result_schema import result_problem
 from fleetsim.sim.trace_schema import trace_problem
@@ -161,3 +165,31 @@ def test_the_dispatcher_a_scenario_names_is_made_fresh_for_each_run() -> None:
 def test_a_bad_dispatcher_spec_fails_the_run_with_a_sentence(spec: str, words: str) -> None:
     result = run_scenario(dataclasses.replace(scenario(DWELLING), dispatcher=spec), ReservingPlanner())
     assert result.ended == "planner-error" and words in result.failures[0].message
+
+
+class StopsAt:
+    """FirstIdle, that sends this process SIGTERM when asked at or after ``at`` seconds."""
+
+    def __init__(self, at: float) -> None:
+        self.at = at
+
+    def dispatch(self, board: OrderBoard, fleet: object, layout: object) -> list[Assignment]:
+        if board.time >= self.at:
+            os.kill(os.getpid(), signal.SIGTERM)
+        return FirstIdle().dispatch(board, fleet, layout)
+
+
+def test_an_interrupted_shift_keeps_the_orders_done_so_far_in_its_result_and_trace(tmp_path: Path) -> None:
+    orders = (*DWELLING, Order("late", (Stop(4),), release=70.0))
+    run = dataclasses.replace(scenario(orders), shift=Shift(duration=600.0))
+    trace = tmp_path / "trace.jsonl"
+    with StopSignals() as stop:
+        result = run_scenario(run, ReservingPlanner(), dispatcher=StopsAt(70.0), stop=stop, trace_file=trace)
+    assert result.ended == "interrupted" and 60.0 < result.sim_time < 80.0
+    done = [order["id"] for order in result.orders if order["completed"] is not None]
+    assert done and result.measures is not None and result.measures.completed == len(done)
+    assert [order["id"] for order in result.orders] == ["a", "b", "late"]  # every order released so far
+    written = trace.read_text(encoding="ascii").splitlines()
+    events = [event for line in written[1:] for event in json.loads(line)[3]]
+    assert [event[1] for event in events if event[0] == "order-done"] == done
+    assert ["release", "late"] in events and ["interrupted", "SIGTERM"] in events
