@@ -27,7 +27,7 @@ ORDERS = (
 
 @cache
 def _loop() -> Scenario:
-    suite = load_suite("scenario_suites/examples.fleetsim.yaml")
+    suite = load_suite(Path(__file__).resolve().parents[2] / "scenario_suites" / "examples.fleetsim.yaml")
     spec = next(s for s in suite.scenarios if s.name == "loop-one-way")
     return load_scenario(spec, suite)
 
