@@ -61,6 +61,7 @@ from fleetsim.sim.result import (
     RunResult,
     judge,
 )
+from fleetsim.sim.stalls import StallWatch
 from fleetsim.sim.trace import Trace, TraceFile, plan_record
 from fleetsim.specs.dispatcher import DispatcherSpecError, import_dispatcher_factory
 
@@ -108,9 +109,6 @@ class _Run:
             for v in sorted(scenario.vehicles, key=lambda v: v.id)
         }
         self.ids = list(self.drivers)
-        self.index = {vehicle: i for i, vehicle in enumerate(self.ids)}
-        self.stalled: dict[int, float] = {}  # a shift's stalled vehicles: since when they stand
-        self.busy_since: dict[int, float] = {}  # a shift's vehicles with work: since when
         self.driver_list = list(self.drivers.values())
         batched = len(self.driver_list) >= FleetCruise.SMALLEST if self.batched is None else self.batched
         self.cruise = FleetCruise(self.driver_list, batched=batched)
@@ -124,6 +122,9 @@ class _Run:
         self.route_errors: list[dict[str, Any]] = []
         self.active_alerts: tuple[CollisionAlert, ...] = ()  # the last check's, by segment
         self.waiting_time = dict.fromkeys(self.drivers, 0.0)
+        shift = scenario.shift
+        index = {vehicle: i for i, vehicle in enumerate(self.ids)}
+        self.stall_watch = StallWatch(shift.stall_after, index) if shift is not None else None
         # Only a scenario with transport orders dispatches (fleetsim.sim.dispatching): without, as before.
         self.dispatching = (
             Dispatching(scenario, dispatcher, self.controller, self.cruise.released, guard.dispatch)
@@ -404,39 +405,22 @@ class _Run:
         return diagnose(facts)
 
     def check_stalls(self, end: float, events: list[list[Any]]) -> list[Stall]:
-        """A shift's vehicles with work that have not moved for ``stall_after`` seconds (not dwelling at a
-        stop), each found once per stall and explained as a stuck fleet is; a vehicle that moves again may
-        stall again later."""
-        assert self.dispatching is not None and self.scenario.shift is not None
-        limit = self.scenario.shift.stall_after
-        heads = self.controller.tasks.heads()
-        moved = self.last_moved
-        found: list[int] = []
-        for vehicle in self.stalled.copy():
-            last = moved[self.index[vehicle]]
-            if not math.isnan(last) and last > self.stalled[vehicle]:
-                del self.stalled[vehicle]  # it moved since: the stall is over
-        busy = self.busy_since
-        for vehicle in [v for v in busy if v not in heads]:
-            del busy[vehicle]
-        for vehicle in heads:
-            work = busy.setdefault(vehicle, end)  # when it got work (to the second it is looked at)
-            if vehicle in self.stalled or self.dispatching.is_dwelling(vehicle):
-                continue
-            last = moved[self.index[vehicle]]
-            since = max(work, 0.0 if math.isnan(last) else float(last))
-            if end - since >= limit - 1e-9:
-                self.stalled[vehicle] = since
-                found.append(vehicle)
+        """A shift's vehicles found stalled at ``end`` (fleetsim.sim.stalls), each explained as a stuck
+        fleet is, with the orders held up."""
+        assert self.dispatching is not None and self.stall_watch is not None
+        dispatching = self.dispatching
+        found = self.stall_watch.look(
+            end, self.controller.tasks.heads(), self.last_moved.tolist(), dispatching.is_dwelling
+        )
         if not found:
             return []
         findings = {finding.vehicle: finding for finding in self.diagnose("deadlock", end).findings}
         stalls = []
         for vehicle in found:
             events.append(["stall", vehicle])
-            orders = self.dispatching.book.sequence(vehicle)
             reason = findings[vehicle].text() if vehicle in findings else f"vehicle {vehicle} stands"
-            stalls.append(Stall(vehicle, self.stalled[vehicle], end, orders, reason))
+            since = self.stall_watch.stalled[vehicle]
+            stalls.append(Stall(vehicle, since, end, dispatching.book.sequence(vehicle), reason))
         return stalls
 
     def wait_notes(self, heads: Mapping[int, Task], now: float) -> dict[int, str]:
@@ -482,8 +466,12 @@ def run_scenario(
     if scenario.orders or scenario.order_stream is not None:
         try:
             dispatcher = _dispatcher_for(scenario, planner, dispatcher)
-        except (DispatcherSpecError, ScenarioError) as error:
-            failure = Failure("planner-error", 0.0, str(error))
+        except (DispatcherSpecError, ScenarioError, PlannerError) as error:
+            details = getattr(error, "details", "") if isinstance(error, PlannerError) else ""
+            failure = Failure("planner-error", 0.0, str(error), {"traceback": details} if details else {})
+            close = getattr(planner, "close", None)
+            if callable(close):  # a planner process started to say whether it dispatches
+                close()
             return RunResult.unrun(
                 scenario.name, planner_name or type(planner).__name__, (failure,), ended="planner-error"
             )
@@ -749,6 +737,9 @@ def _dispatcher_for(scenario: Scenario, planner: Planner, given: Dispatcher | No
         return given
     if scenario.dispatcher is not None:
         return import_dispatcher_factory(scenario.dispatcher)()
+    begin_run = getattr(planner, "begin_run", None)
+    if callable(begin_run):  # a planner process starts now: its ready message says whether it dispatches
+        begin_run(scenario)
     if callable(getattr(planner, "dispatch", None)):
         return cast(Dispatcher, planner)
     raise ScenarioError(NO_DISPATCHER.format(name=scenario.name))
