@@ -30,6 +30,8 @@ from fleetsim.recording.colours import (
     svg_colour,
     vehicle_colours,
 )
+from fleetsim.recording.order_svg import ORDERS_LEGEND, STALL_LEGEND, orders_svg, stall_svg
+from fleetsim.recording.orders import OrderState, frame_and_orders_at
 from fleetsim.recording.replay import Frame, Pose, frame_at
 from fleetsim.recording.stuck import contested_segments, stuck_relations
 from fleetsim.recording.svg import _arrow, _document, _Frame, _frame, _point_at, _segment_labels, _segment_svg
@@ -75,6 +77,8 @@ def render_frame_svg(
     stuck: Mapping[str, Any] | None = None,
     rejected: Mapping[str, Any] | None = None,
     contact: Mapping[str, Any] | None = None,
+    orders: OrderState | None = None,
+    stall: Mapping[str, Any] | None = None,
 ) -> str:
     """Draw ``frame`` of a run of ``scenario`` as an SVG document with ``caption`` on top.
 
@@ -83,6 +87,8 @@ def render_frame_svg(
     ``result.json``); who waits for whom is drawn over the fleet. ``rejected``: the details of a
     rejection (its ``plan`` and ``leg_index``); the refused plan is drawn with its offending leg marked.
     ``contact``: a contact at its moment (:func:`contact_moment`): both footprints then, and the place.
+    ``orders``: a run's transport orders at the frame (:mod:`fleetsim.recording.orders`): waiting stations
+    and each vehicle's order. ``stall``: a stall's details (``vehicle``, ``orders``): the vehicle ringed.
     """
     font = 0.4 * pixels_per_metre
     legends = [
@@ -92,6 +98,8 @@ def render_frame_svg(
         *([_CONTACT_LEGEND] if contact else []),
     ]
     legends += [_DISTURBED_LEGEND] if frame.disturbed else []
+    legends += [ORDERS_LEGEND] if orders is not None else []
+    legends += [STALL_LEGEND] if stall else []
     view = _frame(scenario.layout, margin=1.5, pixels_per_metre=pixels_per_metre)
     width = max(view.width, _MIN_WIDTH)
     # About 0.6 em per character of sans-serif: lines as long as the picture is wide.
@@ -126,6 +134,12 @@ def render_frame_svg(
         *_vehicles_svg(scenario, frame, view, colours, font * 0.8),
         *(_waits_svg(scenario, frame, view, stuck) if stuck else []),
         *(_contact_svg(scenario, view, contact) if contact else []),
+        *(orders_svg(scenario, frame, view, orders, colours, font * 0.8) if orders is not None else []),
+        *(
+            stall_svg(scenario, frame, view, int(stall["vehicle"]), [str(o) for o in stall.get("orders", ())], font)
+            if stall
+            else []
+        ),
         *text,
     ]
     return _document(view, f"{scenario.name}: step {frame.step}", body)
@@ -484,12 +498,18 @@ def failure_picture(scenario: Scenario, result: RunResult) -> tuple[int, str] | 
     if found is None:
         return None
     step, failure = found
-    frame = frame_at(scenario, lines, step)
+    frame, orders = frame_and_orders_at(scenario, lines, step)
     caption = failure_caption(failure, result.failures, at=frame.time)
     stuck, rejected = picture_overlays(failure)
     before = frame_at(scenario, lines, step - 1) if failure.kind == "contact" and step > 0 else None
     contact = contact_moment(failure, frame, before)
-    return step, render_frame_svg(scenario, frame, caption=caption, stuck=stuck, rejected=rejected, contact=contact)
+    stall = failure.details if failure.kind == "stall" and "vehicle" in failure.details else None
+    if stall is not None and "held up" not in caption.splitlines()[0]:
+        held = ", ".join(str(o) for o in stall.get("orders", ())) or "none"
+        caption += f"\norders held up: {held}"
+    return step, render_frame_svg(
+        scenario, frame, caption=caption, stuck=stuck, rejected=rejected, contact=contact, orders=orders, stall=stall
+    )
 
 
 def stuck_details(failure: Failure) -> Mapping[str, Any] | None:

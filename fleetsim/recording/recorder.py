@@ -27,8 +27,13 @@ Topics:
   (``stuck_text``).
 - ``/fleetsim/contacts``: a red disc where each contact began (``contact``) and ``contact 1 ⟂ 2`` above it
   (``contact_label``), from the step the contact began in on (the contact check of :mod:`fleetsim.contact`).
-- ``/rosout``: rejections, route errors, alerts and an interruption (warnings), planner errors and
-  contacts (errors), completed tasks.
+- ``/fleetsim/orders``: in a run with transport orders (:mod:`fleetsim.recording.orders`), an amber disc
+  and ``3 waiting: s4 s7 s9`` at each station where orders wait (``waiting``, ``waiting_text``) and each
+  vehicle's order above it, locked to its frame, in its colour (``order_labels``: ``s12 1/2 loaded
+  dwell``; ``STALLED`` in red), replaced whenever they change.
+- ``/rosout``: rejections, route errors, alerts, an interruption and stalls (with the orders held up)
+  (warnings), planner errors and contacts (errors), completed tasks, released, assigned and completed
+  orders and served stops.
 
 The file is written under a temporary name and renamed when complete, so an interrupted recording never
 leaves a half-written file where a reviewer looks.
@@ -50,6 +55,7 @@ from fleetsim.planning.reservations import CollisionAlert
 from fleetsim.recording import messages as m
 from fleetsim.recording.cdr import pack_clock
 from fleetsim.recording.colours import vehicle_colours
+from fleetsim.recording.orders import OrderChanges, OrderTracker
 from fleetsim.recording.replay import Frame, replay
 from fleetsim.recording.scene import Scene, frame_name
 from fleetsim.scenario import Scenario
@@ -96,6 +102,7 @@ TOPICS: dict[str, tuple[str, bool]] = {
     "/fleetsim/stuck": (_ARRAY, False),
     "/fleetsim/disturbed": (_ARRAY, False),
     "/fleetsim/contacts": (_ARRAY, False),
+    "/fleetsim/orders": (_ARRAY, False),
     "/rosout": ("rcl_interfaces/msg/Log", False),
 }
 
@@ -168,8 +175,10 @@ class _Bag:
         self.count += 1
 
 
-def _log_lines(event: Sequence[Any]) -> tuple[int, str] | None:
+def _log_lines(event: Sequence[Any], orders: OrderTracker | None = None) -> tuple[int, str] | None:
     kind = event[0]
+    if kind in ("release", "assign", "served", "order-done", "stall"):
+        return _order_line(event, orders)
     if kind == "complete":
         return _INFO, f"task {event[1]} completed"
     if kind == "reject":
@@ -186,6 +195,23 @@ def _log_lines(event: Sequence[Any]) -> tuple[int, str] | None:
     if kind in ("disturb", "resume"):
         return _INFO, f"vehicle {event[1]} {'disturbed' if kind == 'disturb' else 'resumes'}: {event[2]}"
     return None
+
+
+def _order_line(event: Sequence[Any], orders: OrderTracker | None) -> tuple[int, str]:
+    kind = event[0]
+    if kind == "release":
+        return _INFO, f"order {event[1]} released"
+    if kind == "assign":
+        return _INFO, f"vehicle {event[1]} assigned orders: {', '.join(event[2]) if event[2] else 'none'}"
+    if kind == "served":
+        return _INFO, f"vehicle {event[1]} served stop {event[3] + 1} of order {event[2]}"
+    if kind == "order-done":
+        return _INFO, f"order {event[1]} completed"
+    held = orders.carry_of(int(event[1])).orders if orders is not None else ()
+    return (
+        _WARN,
+        f"vehicle {event[1]} stalled: it has work and has not moved; orders held up: {', '.join(held) or 'none'}",
+    )
 
 
 def _with_last(frames: Iterable[Frame]) -> Iterator[tuple[Frame, bool]]:
@@ -206,8 +232,10 @@ def _write_frames(
     every: int,
     stuck: Mapping[str, Any] | None = None,
     contacts: Sequence[Mapping[str, Any]] = (),
+    orders: OrderTracker | None = None,
 ) -> int:
-    """Write the frames; the number written in full (with ``/tf``).
+    """Write the frames; the number written in full (with ``/tf``). ``orders``: the run's orders, followed
+    frame by frame (a run with transport orders).
 
     Every ``every``-th step, the first and the last are written in full: the clock, every vehicle's
     transform, the sim time. Steps in between write the clock and what changed (plans, alerts, log
@@ -225,8 +253,11 @@ def _write_frames(
         due = shown
         while due < len(pending) and float(pending[due]["time"]) <= frame.time + 1e-9:
             due += 1  # a contact belongs to the step it began in: the one that ends at or after it
-        if tick or frame.plans_changed or frame.events or alerts_changed or due > shown:
-            write_frame(bag, scene, frame, first=first, tick=tick, alerts_changed=alerts_changed)
+        changes = orders.follow(frame) if orders is not None and orders.active else None
+        if tick or frame.plans_changed or frame.events or alerts_changed or due > shown or changes:
+            write_frame(
+                bag, scene, frame, first=first, tick=tick, alerts_changed=alerts_changed, orders=orders, changes=changes
+            )
             shown_alerts = frame.alerts
             full += tick
         if due > shown:
@@ -247,10 +278,21 @@ def _write_frames(
     return full
 
 
-def write_frame(bag: Any, scene: Scene, frame: Frame, *, first: bool, tick: bool, alerts_changed: bool) -> None:
+def write_frame(
+    bag: Any,
+    scene: Scene,
+    frame: Frame,
+    *,
+    first: bool,
+    tick: bool,
+    alerts_changed: bool,
+    orders: OrderTracker | None = None,
+    changes: OrderChanges | None = None,
+) -> None:
     """One frame's messages into ``bag`` (anything with ``write(topic, time_ns, message)`` and
     ``write_bytes(topic, time_ns, data)``: this module's MCAP writer, or a live Foxglove server):
-    ``first`` adds the latched topics, ``tick`` the transforms and sim time."""
+    ``first`` adds the latched topics, ``tick`` the transforms and sim time. ``orders``: the run's orders
+    after this frame, and ``changes`` what it changed of them (a run with transport orders)."""
     time_ns = round(frame.time * 1e9)
     time = m.stamp(time_ns)
     bag.write_bytes("/clock", time_ns, pack_clock(time))
@@ -273,8 +315,14 @@ def write_frame(bag: Any, scene: Scene, frame: Frame, *, first: bool, tick: bool
         bag.write("/fleetsim/sim_time", time_ns, scene.sim_time(time, frame.time))
     if any(event[0] in ("disturb", "resume") for event in frame.events):
         bag.write("/fleetsim/disturbed", time_ns, scene.disturbed(time, frame.disturbed))
+    if (
+        orders is not None
+        and orders.active
+        and (first or (changes is not None and (changes.vehicles or changes.stations)))
+    ):
+        bag.write("/fleetsim/orders", time_ns, scene.orders(time, orders))
     for event in frame.events:
-        line = _log_lines(event)
+        line = _log_lines(event, orders)
         if line is not None:
             bag.write("/rosout", time_ns, m.log(time, line[0], line[1]))
 
@@ -310,7 +358,8 @@ def record_mcap(
     try:
         with partial.open("wb") as stream:
             bag = _Bag(stream)
-            frames = _write_frames(bag, scenario, replay(scenario, trace_lines), every, stuck, contacts)
+            orders = OrderTracker.of_trace(trace_lines)
+            frames = _write_frames(bag, scenario, replay(scenario, trace_lines), every, stuck, contacts, orders)
             bag.writer.finish()  # type: ignore[no-untyped-call]  # mcap's Writer.finish has no annotations
         os.replace(partial, path)
     finally:

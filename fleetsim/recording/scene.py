@@ -1,4 +1,5 @@
-"""What a recording's markers show: the map, labels, plans, alerts, sim time, disturbances, who waits for whom.
+"""What a recording's markers show: the map, labels, plans, alerts, sim time, disturbances, who waits for whom,
+transport orders.
 
 :class:`Scene` makes the marker arrays of one scenario's recording (SPEC §11), computing its geometry once:
 segment points are packed once per segment, each vehicle's plan markers are sent again only when their
@@ -16,6 +17,7 @@ from fleetsim.planning.reservations import CollisionAlert
 from fleetsim.recording import messages as m
 from fleetsim.recording.colours import ALERT, CONTESTED, CYCLE, DISTURBED, MAP_RVIZ, WAITS, vehicle_colours, with_alpha
 from fleetsim.recording.labels import LabelSpace, box_around, nearest_point, spots_beside
+from fleetsim.recording.orders import OrderTracker
 from fleetsim.recording.rviz import framed_view
 from fleetsim.recording.stuck import contested_segments, root_vehicles, stuck_relations
 from fleetsim.scenario import Scenario
@@ -23,6 +25,7 @@ from fleetsim.scenario import Scenario
 __all__ = ["Scene", "alert_label", "frame_name"]
 
 _WHITE = (1.0, 1.0, 1.0, 1.0)
+_AMBER = (1.0, 179 / 255, 0.0, 1.0)  # orders waiting at a station
 _ROOT_RED = with_alpha(CYCLE, 0.45)
 _PURPLE = with_alpha(CONTESTED, 0.8)
 _FIXED_WIDTH, _PLANNED_WIDTH, _MAP_WIDTH, _ALERT_WIDTH, _LEADER_WIDTH = 0.18, 0.06, 0.05, 0.35, 0.04
@@ -211,6 +214,39 @@ class Scene:
                 m.text_marker(
                     time, "map", "contact_label", index, f"contact {a} \u27c2 {b}", (x, y, 1.2), self.letter, CYCLE
                 )
+            )
+        return m.marker_array(markers)
+
+    def orders(self, time: m.Stamp, orders: OrderTracker) -> m.MarkerArray:
+        """The transport orders now: an amber disc and ``3 waiting: s4 s7 s9`` at each station where orders
+        wait (``waiting``, ``waiting_text``), and each vehicle's order above it, locked to its frame
+        (``order_labels``: ``s12 1/2``, ``loaded``, ``dwell``, ``STALLED``), in its colour."""
+        markers = [m.delete_all(time, "")]
+        state = orders.state()
+        layout = self.scenario.layout
+        number = 0
+        for segment, waiting in state.waiting.items():
+            if segment not in layout.segments:
+                continue
+            x, y, _ = layout.segments[segment].pose_at(layout.segments[segment].length / 2, Traverse.FORWARD)
+            shown = " ".join(waiting[:5]) + (" ..." if len(waiting) > 5 else "")
+            markers.append(m.disc(time, "waiting", number, (x, y, 0.03), 0.8, _AMBER))
+            text = f"{len(waiting)} waiting: {shown}"
+            at = (x, y + 1.2 * self.letter, 0.8)
+            markers.append(m.text_marker(time, "map", "waiting_text", number, text, at, self.letter, _AMBER))
+            number += 1
+        types = {v.id: v.type for v in self.scenario.vehicles}
+        for vid, carry in state.carry.items():
+            words = []
+            if carry.orders:
+                words.append(carry.orders[0] + (f" {carry.stop + 1}/{carry.stops}" if carry.stops else ""))
+                words += ["loaded"] if carry.loaded else []
+                words += ["dwell"] if carry.dwell is not None else []
+            words += ["STALLED"] if carry.stalled else []
+            at = (0.0, 0.0, types[vid].height + 1.4)
+            colour = CYCLE if carry.stalled else self.colours[vid]
+            markers.append(
+                m.text_marker(time, frame_name(vid), "order_labels", vid, " ".join(words), at, 0.4, colour, True)
             )
         return m.marker_array(markers)
 

@@ -49,6 +49,7 @@ def write_view_file(folder: Path, scenario: Scenario, result: RunResult, extra: 
         "status": result.status,
         "ended": result.ended,
         "trace_hash": result.trace_hash,
+        "stalls": [stall.to_dict() for stall in result.stalls],
         **extra,
     }
     notes = []

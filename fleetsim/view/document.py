@@ -6,7 +6,7 @@ and the result document. Static parts come first — the map's segments, the veh
 colours, the tasks — then one compact record per step, holding only what changed in it, as the trace
 does:
 
-``[step, poses, plans, alerts, events, disturbed]``
+``[step, poses, plans, alerts, events, disturbed, orders]``
 
 - ``poses``: the trace's own records of the vehicles whose pose changed (every vehicle at step 0), as
   they are: ``[vehicle, segment, traverse "f"|"b", progress "f"|"r", x mm, y mm, heading centidegrees,
@@ -17,6 +17,12 @@ does:
   (``null`` when not).
 - ``events``: the trace's events of the step, as they are.
 - ``disturbed``: ``{vehicle: "stop" | "slow"}`` when it changed, else ``null``.
+- ``orders``: in a run with transport orders, what the step changed of them
+  (:mod:`fleetsim.recording.orders`), else ``null``: ``carry`` ``{vehicle: [orders, loaded 0|1, stop,
+  stops, dwell since s | null, dwell s | null, stalled 0|1] | null}`` (``null``: no order, not stalled),
+  ``waiting`` ``{station segment: [orders waiting there]}``, ``open`` and ``done`` (counts, at step 0
+  and whenever they change) and ``backlog`` (the open orders sampled at the step's start, once a minute,
+  as the run's measures sample them).
 
 A live run sends the same static part first, then the same step records as they happen
 (:mod:`fleetsim.view.live`).
@@ -33,6 +39,7 @@ import orjson
 from fleetsim.enums import Direction, Progress, Traverse
 from fleetsim.planning.plans import FleetLeg, FleetPlan
 from fleetsim.recording.colours import hex_colour, vehicle_colours
+from fleetsim.recording.orders import Carry, OrderChanges, OrderTracker
 from fleetsim.recording.picture import failure_step, stuck_details
 from fleetsim.recording.replay import Frame, replay
 from fleetsim.recording.stuck import contested_segments, root_vehicles, stuck_relations
@@ -77,9 +84,13 @@ def scene_part(scenario: Scenario, about: Mapping[str, Any]) -> dict[str, Any]:
 
 
 class StepRecords:
-    """Frames as the document's step records, each holding what changed since the one before."""
+    """Frames as the document's step records, each holding what changed since the one before.
 
-    def __init__(self) -> None:
+    ``header``: the trace's header line, for the run's orders; :meth:`header` gives it later (a live run's
+    header comes with its first line)."""
+
+    def __init__(self, header: str | None = None) -> None:
+        self._orders = OrderTracker.of_trace([header] if header is not None else [])
         self._alerts: tuple[Any, ...] | None = None
         self._disturbed: Mapping[int, str] | None = None
         self._legs: dict[int, tuple[FleetLeg, list[Any]]] = {}  # id(leg) -> the leg and its record
@@ -97,7 +108,27 @@ class StepRecords:
         if first or frame.disturbed != self._disturbed:
             disturbed = {str(vid): kind for vid, kind in sorted(frame.disturbed.items())}
             self._disturbed = frame.disturbed
-        return [frame.step, poses, plans, alerts, [list(event) for event in frame.events], disturbed]
+        orders = self._orders_record(self._orders.follow(frame))
+        return [frame.step, poses, plans, alerts, [list(event) for event in frame.events], disturbed, orders]
+
+    def header(self, line: str) -> None:
+        """The trace's header line (before the first frame)."""
+        self._orders = OrderTracker.of_trace([line])
+
+    def _orders_record(self, changes: OrderChanges) -> dict[str, Any] | None:
+        if not changes:
+            return None
+        tracker = self._orders
+        record: dict[str, Any] = {}
+        if changes.vehicles:
+            record["carry"] = {str(v): _carry(tracker.carry_of(v)) for v in sorted(changes.vehicles)}
+        if changes.stations:
+            record["waiting"] = {str(s): list(tracker.waiting_at(s)) for s in sorted(changes.stations)}
+        if changes.counts:
+            record["open"], record["done"] = tracker.open, tracker.done
+        if changes.sample is not None:
+            record["backlog"] = changes.sample
+        return record
 
     def _plan(self, plan: FleetPlan) -> list[Any]:
         # A plan that passed a leg keeps the same leg objects: each is encoded once.
@@ -114,9 +145,24 @@ class StepRecords:
         return encoded
 
 
+def _carry(carry: Carry) -> list[Any] | None:
+    if not carry.orders and not carry.stalled:
+        return None
+    since, seconds = carry.dwell if carry.dwell is not None else (None, None)
+    return [
+        list(carry.orders),
+        int(carry.loaded),
+        carry.stop,
+        carry.stops,
+        None if since is None else round(since, 6),
+        seconds,
+        int(carry.stalled),
+    ]
+
+
 def records_of(frames: Iterable[Frame], lines: Sequence[str]) -> Iterator[list[Any]]:
     """The step records of a trace's frames (``lines``: the trace, header first)."""
-    records = StepRecords()
+    records = StepRecords(lines[0] if lines else None)
     for frame in frames:
         yield records.record(frame, lines[frame.step + 1])
 
@@ -157,6 +203,12 @@ def outcome_part(
         else {"step": found[0], "kind": found[1].kind, "time": round(found[1].time, 6), "message": found[1].message},
         "contacts": contacts,
         "stuck": stuck,
+        # A shift's stalls with why each vehicle stands (the trace says who and when; result.json why).
+        "stalls": [
+            {"vehicle": s["vehicle"], "time": s["time"], "orders": s["orders"], "reason": s["reason"]}
+            for s in document.get("stalls") or ()
+            if isinstance(s, Mapping) and {"vehicle", "time", "orders", "reason"} <= set(s)
+        ],
     }
 
 

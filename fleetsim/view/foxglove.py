@@ -19,6 +19,7 @@ from typing import Any
 
 from fleetsim.errors import FleetsimError
 from fleetsim.recording import messages as m
+from fleetsim.recording.orders import OrderTracker
 from fleetsim.recording.recorder import TOPICS, write_frame
 from fleetsim.recording.replay import replay
 from fleetsim.recording.scene import Scene
@@ -109,14 +110,29 @@ class FoxgloveLive:
         return self._lines.put
 
     def _write(self, scenario: Scenario, scene: Scene, lines: queue.SimpleQueue[Any]) -> None:
+        orders = OrderTracker({})
+
         def taken() -> Iterator[str]:
+            nonlocal orders
             while (line := lines.get()) is not _END:
+                if line.startswith("{"):
+                    orders = OrderTracker.of_trace([line])  # the run's orders, if it has any
                 yield line
 
         shown: Any = None
         for frame in replay(scenario, taken()):
             first = shown is None
-            write_frame(self._channels, scene, frame, first=first, tick=True, alerts_changed=frame.alerts != shown)
+            changes = orders.follow(frame)
+            write_frame(
+                self._channels,
+                scene,
+                frame,
+                first=first,
+                tick=True,
+                alerts_changed=frame.alerts != shown,
+                orders=orders,
+                changes=changes,
+            )
             shown = frame.alerts
             self._last = frame
 

@@ -215,12 +215,15 @@ class LiveRun:
     def _convert(self, scenario: Scenario, lines: queue.SimpleQueue[Any]) -> None:
         last = [""]  # the line replay took last: the one of the frame it yields
 
+        records = StepRecords()
+
         def taken() -> Iterator[str]:
             while (line := lines.get()) is not _END:
+                if line.startswith("{"):
+                    records.header(line)  # the run's orders, if it has any
                 last[0] = line
                 yield line
 
-        records = StepRecords()
         for frame in replay(scenario, taken()):
             record = records.record(frame, last[0])
             with self._lock:

@@ -8,6 +8,8 @@
   const FASTEST = 100; // "fastest" plays a recording at 100x, or one step per drawn frame if that is more
   const DEG = Math.PI / 18000;
   const EVENT_ROWS = 5000; // the events list shows this many; the timeline shows them all
+  // an order's routine (a shift has thousands): listed, not stopped at by "next event"
+  const ROUTINE = new Set(["release", "assign", "served", "order-done"]);
 
   // -- the run: steps as they arrive, the fleet at any step --------------------------------------------
   class Run {
@@ -34,6 +36,13 @@
       this.plans = this.ids.map(() => []); // per vehicle: [step, legs] as they changed
       this.alerts = []; // [step, alerts]
       this.disturbed = []; // [step, {vehicle: kind}]
+      // transport orders (a run with them): per vehicle [step, carry], per station [step, waiting orders],
+      // [step, [open, done]], and the backlog [seconds, open orders] once a minute
+      this.hasOrders = false;
+      this.carry = this.ids.map(() => []);
+      this.waiting = new Map();
+      this.counts = [];
+      this.backlog = [];
       this.events = []; // {step, event}
       this.eventSteps = []; // the steps that hold events, ascending, once each
       this.outcome = scene.outcome || null;
@@ -90,12 +99,31 @@
       }
       if (record[3] !== null) this.alerts.push([step, record[3]]);
       if (record[5] !== null) this.disturbed.push([step, record[5]]);
-      if (record[4].length) this.eventSteps.push(step);
+      if (record[4].some((e) => !ROUTINE.has(e[0]))) this.eventSteps.push(step);
+      if (record[6]) this.addOrders(step, record[6]);
       for (const event of record[4]) {
         this.events.push({ step, event });
         if (event[0] === "complete") this.completedAt.set(event[1], step);
       }
       return true;
+    }
+    addOrders(step, orders) {
+      this.hasOrders = true;
+      for (const [vid, carry] of Object.entries(orders.carry || {})) {
+        const i = this.index.get(Number(vid));
+        if (i !== undefined) this.carry[i].push([step, carry]);
+      }
+      for (const [segment, waiting] of Object.entries(orders.waiting || {})) {
+        const sid = Number(segment);
+        if (!this.waiting.has(sid)) this.waiting.set(sid, []);
+        this.waiting.get(sid).push([step, waiting]);
+      }
+      if (orders.open !== undefined) this.counts.push([step, [orders.open, orders.done]]);
+      if (orders.backlog !== undefined) this.backlog.push([step * this.dt, orders.backlog]);
+    }
+    carryOf(i, step) {
+      // [orders, loaded, stop, stops, dwell since, dwell seconds, stalled], or null
+      return this.changedAt(this.carry[i], step);
     }
     seek(step) {
       step = Math.max(0, Math.min(step, this.last));
@@ -173,9 +201,11 @@
       c.width = Math.round(rect.width * dpr);
       c.height = Math.round(rect.height * dpr);
     }
-    const t = timeline.getBoundingClientRect();
-    timeline.width = Math.round(t.width * dpr);
-    timeline.height = Math.round(t.height * dpr);
+    for (const c of [timeline, el("backlog")]) {
+      const t = c.getBoundingClientRect();
+      c.width = Math.round(t.width * dpr);
+      c.height = Math.round(t.height * dpr);
+    }
     view.mapDirty = true;
     dirty = true;
   }
@@ -489,6 +519,113 @@
     }
   }
 
+  // -- transport orders: who waits where, who carries what, dwells, stalls -----------------------------
+  function segmentMiddle(sid) {
+    const s = run.segments.get(sid);
+    if (!s) return null;
+    const p = s.points, m = Math.floor((p.length / 2 - 1) / 2);
+    const n = Math.min(m + 1, p.length / 2 - 1);
+    return [(p[2 * m] + p[2 * n]) / 2, (p[2 * m + 1] + p[2 * n + 1]) / 2];
+  }
+
+  function inkOn(colour) {
+    // black or white, whichever reads on the colour (#rrggbb)
+    const n = parseInt(colour.slice(1, 7), 16);
+    const luma = 0.299 * ((n >> 16) & 255) + 0.587 * ((n >> 8) & 255) + 0.114 * (n & 255);
+    return luma > 150 ? "#1d232b" : "#ffffff";
+  }
+
+  function drawOrders(step) {
+    const c = ctx, p = run.state.pose, time = run.time(step);
+    const shownOrders = { step, waiting: {}, badges: {}, loaded: [], dwelling: [], stalled: [] };
+    // waiting orders: a marker at their first stop's station with how many wait there
+    c.font = "bold 11px system-ui, sans-serif";
+    c.textAlign = "center";
+    c.textBaseline = "middle";
+    for (const [sid, changes] of run.waiting) {
+      const waiting = run.changedAt(changes, step);
+      if (!waiting || !waiting.length) continue;
+      const at = segmentMiddle(sid);
+      if (!at) continue;
+      const x = sx(at[0]), y = sy(at[1]), text = String(waiting.length), r = 8 + 3 * (text.length - 1);
+      c.fillStyle = "#ffb300";
+      c.strokeStyle = "#7a4f00";
+      c.lineWidth = 1.5;
+      c.beginPath();
+      c.moveTo(x, y - r - 2);
+      c.lineTo(x + r + 2, y);
+      c.lineTo(x, y + r + 2);
+      c.lineTo(x - r - 2, y);
+      c.closePath();
+      c.fill();
+      c.stroke();
+      c.fillStyle = "#1d232b";
+      c.fillText(text, x, y + 0.5);
+      shownOrders.waiting[sid] = waiting.length;
+    }
+    // each vehicle's order: a badge in its colour; loaded, a dark load on its body; a ring that fills
+    // as it dwells; stalled, a red dashed outline
+    const texts = el("show-labels").checked && (run.n <= 300 || view.scale > 12);
+    for (let i = 0; i < run.n; i++) {
+      const carry = run.carryOf(i, step);
+      if (!carry) continue;
+      const [orders, loaded, , , since, seconds, stalled] = carry, v = run.vehicles[i], vid = run.ids[i];
+      const x = sx(p[4 * i]), y = sy(p[4 * i + 1]), size = Math.max(1.5, (v.width / 2) * view.scale);
+      if (loaded && view.scale * v.length >= 3) {
+        shownOrders.loaded.push(vid);
+        const k = corners(i, -Math.min(v.width, v.length) * 0.22);
+        c.fillStyle = "#1d232b";
+        c.beginPath();
+        c.moveTo(sx(k[0][0]), sy(k[0][1]));
+        for (let j = 1; j < 4; j++) c.lineTo(sx(k[j][0]), sy(k[j][1]));
+        c.closePath();
+        c.fill();
+      }
+      if (since !== null && seconds) {
+        const done = Math.max(0, Math.min(1, (time - since) / seconds));
+        const r = Math.max(7, (Math.hypot(v.length, v.width) / 2) * view.scale + 4);
+        c.lineWidth = 3;
+        c.strokeStyle = "rgba(29, 35, 43, 0.2)";
+        c.beginPath();
+        c.arc(x, y, r, 0, 2 * Math.PI);
+        c.stroke();
+        c.strokeStyle = v.colour;
+        c.beginPath();
+        c.arc(x, y, r, -Math.PI / 2, -Math.PI / 2 + 2 * Math.PI * done);
+        c.stroke();
+        shownOrders.dwelling.push(vid);
+      }
+      if (stalled) {
+        c.setLineDash([4, 3]);
+        drawOutline(i, 0.5, "#d0021b", 2.5, "STALLED");
+        c.setLineDash([]);
+        shownOrders.stalled.push(vid);
+      }
+      if (orders.length && texts) {
+        const text = orders[0] + (orders.length > 1 ? ` +${orders.length - 1}` : "");
+        c.font = "bold 10px system-ui, sans-serif";
+        const w = c.measureText(text).width + 8, bx = x + size + 4, by = y - size - 16;
+        c.fillStyle = v.colour;
+        c.strokeStyle = "#1d232b";
+        c.lineWidth = 1;
+        c.beginPath();
+        c.rect(bx, by, w, 14);
+        c.fill();
+        c.stroke();
+        c.fillStyle = inkOn(v.colour);
+        c.textAlign = "left";
+        c.fillText(text, bx + 4, by + 7.5);
+        shownOrders.badges[vid] = text;
+      }
+    }
+    c.textBaseline = "alphabetic";
+    hook.drawnOrders = shownOrders;
+  }
+
+  function orderCounts(step) {
+    return run.changedAt(run.counts, step) || [0, 0];
+  }
+
   function lowerEvent(step) {
     let lo = 0, hi = run.events.length;
     while (lo < hi) {
@@ -513,6 +650,7 @@
       drawAlerts(step);
       drawVehicles();
       drawMarks(step);
+      if (run.hasOrders) drawOrders(step);
       if (hover !== null) drawOutline(hover, 0.35, "#1d232b", 1.5, "");
     }
     hook.frames++;
@@ -520,6 +658,7 @@
     if (hook.frameTimes.length > 600) hook.frameTimes.splice(0, 300);
     hook.drawn = { step, time: step >= 0 ? run.time(step) : 0, poses: run ? run.state.pose.slice() : null };
     drawTimeline(step);
+    if (run.hasOrders) drawBacklog(step);
     showTime(step);
     updateEvents(step);
     updateTooltip(step);
@@ -542,6 +681,10 @@
       text += live.ended ? " \u00b7 run ended" : live.paused ? " \u00b7 live, paused" : ` \u00b7 live at ${pace}`;
     }
     put(el("time"), "textContent", text);
+    if (run.hasOrders) {
+      const [open, done] = orderCounts(step);
+      put(el("orders"), "textContent", `orders: ${done} completed \u00b7 ${open} open`);
+    }
     const scrub = el("scrub");
     put(scrub, "max", String(Math.max(0, run.last)));
     put(scrub, "value", String(step));
@@ -647,7 +790,7 @@
   }
 
   // -- the timeline, the events list, the tooltip ---------------------------------------------------
-  const EVENT_COLOURS = { failure: "#d0021b", complete: "#2e9e4f", reject: "#d0021b", "route-error": "#d0021b", "planner-error": "#d0021b", alert: "#ff8c00", disturb: "#e6007e", resume: "#e6007e", interrupted: "#6b7480" };
+  const EVENT_COLOURS = { stall: "#d0021b", release: "#b36b00", "order-done": "#2e9e4f", failure: "#d0021b", complete: "#2e9e4f", reject: "#d0021b", "route-error": "#d0021b", "planner-error": "#d0021b", alert: "#ff8c00", disturb: "#e6007e", resume: "#e6007e", interrupted: "#6b7480" };
 
   // the timeline's ticks are drawn once into a layer of their own, again only when events arrive
   const ticksLayer = document.createElement("canvas"), kctx = ticksLayer.getContext("2d");
@@ -703,11 +846,76 @@
     c.fillRect(x(step) - 1, 0, 2, h);
   }
 
-  function eventText(event) {
+  // the backlog: open orders at each full minute, as a step line under the timeline, the shown time marked
+  const backlogLayer = document.createElement("canvas"), bctx = backlogLayer.getContext("2d");
+  let backlogDrawn = null; // [samples, total, width] the layer was drawn for
+
+  function drawBacklogLayer(total) {
+    const c = bctx, chart = el("backlog"), w = chart.width / view.dpr, h = chart.height / view.dpr;
+    backlogLayer.width = chart.width;
+    backlogLayer.height = chart.height;
+    c.setTransform(view.dpr, 0, 0, view.dpr, 0, 0);
+    c.fillStyle = "#f6f7f9";
+    c.fillRect(0, 0, w, h);
+    const most = Math.max(1, ...run.backlog.map((b) => b[1]));
+    const x = (t) => ((t / run.dt + 0.5) / total) * w, y = (n) => h - 3 - (n / most) * (h - 14);
+    c.strokeStyle = "#b36b00";
+    c.fillStyle = "rgba(255, 179, 0, 0.25)";
+    c.lineWidth = 1.5;
+    c.beginPath();
+    run.backlog.forEach(([t, n], k) => {
+      if (k === 0) c.moveTo(x(t), y(n));
+      else c.lineTo(x(t), y(n));
+    });
+    c.stroke();
+    c.fillStyle = "#6b7480";
+    c.font = "10px system-ui, sans-serif";
+    c.textAlign = "left";
+    c.fillText(`backlog (open orders each minute), most ${most}`, 4, 10);
+    backlogDrawn = [run.backlog.length, total, chart.width];
+  }
+
+  function drawBacklog(step) {
+    const chart = el("backlog");
+    if (chart.hidden) {
+      chart.hidden = false;
+      resize();
+    }
+    const c = chart.getContext("2d"), w = chart.width / view.dpr, h = chart.height / view.dpr;
+    const total = timelineTotal(), d = backlogDrawn;
+    if (!d || d[0] !== run.backlog.length || d[1] !== total || d[2] !== chart.width) drawBacklogLayer(total);
+    c.setTransform(1, 0, 0, 1, 0, 0);
+    c.clearRect(0, 0, chart.width, chart.height);
+    c.drawImage(backlogLayer, 0, 0);
+    c.setTransform(view.dpr, 0, 0, view.dpr, 0, 0);
+    const at = ((step + 0.5) / total) * w;
+    c.fillStyle = "#1d232b";
+    c.fillRect(at - 1, 0, 2, h);
+    // the sample in force: the last taken at or before the shown step's start
+    let sample = null;
+    for (let lo = 0, hi = run.backlog.length - 1; lo <= hi; ) {
+      const mid = (lo + hi) >> 1;
+      if (run.backlog[mid][0] <= step * run.dt + 1e-9) {
+        sample = run.backlog[mid][1];
+        lo = mid + 1;
+      } else hi = mid - 1;
+    }
+    hook.drawnBacklog = { step, samples: run.backlog.length, sample };
+  }
+
+  function heldUp(vid, step) {
+    // the orders a stalled vehicle holds up (the trace), and why it stands (result.json, when there)
+    const i = run.index.get(vid), carry = i === undefined ? null : run.carryOf(i, step);
+    const orders = carry ? carry[0] : [];
+    const found = ((run.outcome && run.outcome.stalls) || []).find((s) => s.vehicle === vid && Math.abs(s.time - run.time(step)) < 1e-6);
+    return (orders.length ? `; orders held up: ${orders.join(", ")}` : "; no order held up") + (found ? ` (${found.reason})` : "");
+  }
+
+  function eventText(event, step) {
     const [kind] = event;
     if (kind === "complete") {
       const task = run.tasks.get(event[1]);
-      return `task ${event[1]} completed` + (task ? ` (vehicle ${task.vehicle}, segment ${task.goal})` : "");
+      return `task ${event[1]} completed` + (task ? ` (vehicle ${task.vehicle}, segment ${task.goal})` : run.hasOrders ? " (an order's stop reached)" : "");
     }
     if (kind === "reject") return `vehicle ${event[2]}: plan rejected (${event[1]}), leg ${event[3]}`;
     if (kind === "route-error") return `vehicle ${event[1]}: route error: ${event[2]}`;
@@ -717,6 +925,11 @@
     if (kind === "resume") return `vehicle ${event[1]} resumes (${event[2]})`;
     if (kind === "interrupted") return `run interrupted by ${event[1]}`;
     if (kind === "failure") return `failure: ${event[1]}: ${event[2]}`;
+    if (kind === "release") return `order ${event[1]} released`;
+    if (kind === "assign") return `vehicle ${event[1]} assigned ${event[2].length ? event[2].join(", ") : "no order"}`;
+    if (kind === "served") return `vehicle ${event[1]} served order ${event[2]}'s stop ${event[3] + 1}`;
+    if (kind === "order-done") return `order ${event[1]} completed`;
+    if (kind === "stall") return `vehicle ${event[1]} stalled` + heldUp(event[1], step);
     return event.join(" ");
   }
 
@@ -740,7 +953,7 @@
     const list = el("events");
     while (eventsShown < run.events.length && list.children.length < EVENT_ROWS) {
       const { step: s, event } = run.events[eventsShown++];
-      addEventRow(s, event[0], eventText(event));
+      addEventRow(s, event[0], eventText(event, s));
     }
     if (eventsShown < run.events.length && !list.dataset.cut) {
       list.dataset.cut = "1";
@@ -782,6 +995,16 @@
     return best;
   }
 
+  function orderText(carry, step) {
+    // "order s12, stop 2 of 2 (loaded), dwelling 12 of 20 s"
+    if (!carry || !carry[0].length) return "no order";
+    const [orders, loaded, stop, stops, since, seconds] = carry;
+    let text = `order ${orders[0]}` + (stops ? `, stop ${stop + 1} of ${stops}` : "") + (loaded ? " (loaded)" : "");
+    if (since !== null && seconds) text += `, dwelling ${Math.min(seconds, Math.max(0, run.time(step) - since)).toFixed(0)} of ${seconds} s`;
+    if (orders.length > 1) text += `; then ${orders.slice(1).join(", ")}`;
+    return text;
+  }
+
   function updateTooltip(step) {
     const tip = el("tooltip");
     if (hover === null || step < 0) {
@@ -804,7 +1027,18 @@
       task.head ? `task ${task.head.id} \u2192 segment ${task.head.goal} (${task.done} of ${task.total} done)` : `tasks: ${task.done} of ${task.total} done`,
       `plan: ${legs.length ? planText + (legs.length > 8 ? `, \u2026 (${legs.length} legs)` : "") : "none"}`,
     ];
+    if (run.hasOrders && task.total === 0) lines.splice(3, 1); // its work is orders (below), not tasks
     if (disturbed) lines.push(`disturbed: ${disturbed}`);
+    const carry = run.hasOrders ? run.carryOf(i, step) : null;
+    if (run.hasOrders) lines.push(orderText(carry, step));
+    if (carry && carry[6]) {
+      let stall = null;
+      for (let e = lowerEvent(step + 1) - 1; e >= 0 && stall === null; e--) {
+        const event = run.events[e].event;
+        if (event[0] === "stall" && event[1] === v.id) stall = run.events[e];
+      }
+      lines.push(`stalled${stall ? ` at ${run.time(stall.step).toFixed(1)} s` : ""}${heldUp(v.id, stall ? stall.step : step)}`);
+    }
     tip.textContent = lines.join("\n");
     tip.hidden = false;
     const x = sx(p[4 * i]) + 14, y = sy(p[4 * i + 1]) + 14;
@@ -880,6 +1114,11 @@
     rowSteps = [];
     currentRows = [];
     el("events").replaceChildren();
+    el("backlog").hidden = true;
+    el("orders").textContent = "";
+    backlogDrawn = null;
+    hook.drawnOrders = null;
+    hook.drawnBacklog = null;
     delete el("events").dataset.cut;
     el("title").textContent = `fleetsim \u00b7 ${scene.scenario}` + (scene.planner ? ` \u00b7 ${scene.planner}` : "");
     document.title = `${scene.scenario} \u00b7 fleetsim view`;
@@ -998,6 +1237,8 @@
       return { step: drawn.step, poses: out };
     };
     hook.seek = (step) => seek(step);
+    // the backlog chart's points: [seconds, open orders] at each full minute so far
+    hook.backlog = () => run.backlog.map((b) => b.slice());
     // where a vehicle is drawn, in CSS pixels from the canvas's top left corner
     hook.screenOf = (id) => {
       const i = run.index.get(id), p = run.state.pose;

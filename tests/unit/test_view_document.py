@@ -40,6 +40,7 @@ def test_step_records_hold_everyone_first_then_only_what_changed() -> None:
     assert first[0] == 0 and [r[0] for r in first[1]] == sorted(v.id for v in scenario.vehicles)
     assert [plan[0] for plan in first[2]] == sorted(v.id for v in scenario.vehicles)
     assert first[3] == [] and first[5] == {}  # no alert, no disturbance yet: said once
+    assert first[6] is None and second[6] is None  # a run without transport orders says nothing of them
     assert second[3] is None and second[5] is None  # unchanged: not said again
     assert [r[0] for r in second[1]] == list(frames[1].moved)
     pose = frames[1].poses[second[1][0][0]]
@@ -74,6 +75,7 @@ def test_the_outcome_names_the_failure_step_and_who_waits_for_whom() -> None:
     assert outcome["stuck"]["roots"] == [1, 2] and outcome["stuck"]["contested"] == [5]
     assert outcome_part({}, [], 0.1, 10) == {
         "status": None, "ended": None, "trace_hash": None, "failure_count": 0, "failure": None, "contacts": [], "stuck": None,
+        "stalls": [],
     }  # fmt: skip
 
 

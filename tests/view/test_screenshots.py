@@ -110,6 +110,32 @@ def test_a_live_run_paused_on_the_page(browser: Any, tmp_path: Path) -> None:
         page.close()
 
 
-@pytest.mark.parametrize("name", ["view-failure.png", "view-stuck.png", "view-live.png"])
+def test_a_shift_with_orders_waiting_carried_and_a_vehicle_hovered(browser: Any, tmp_path: Path) -> None:
+    from orders_support import warehouse_run
+
+    from fleetsim.recording.orders import frame_and_orders_at
+
+    scenario, result = warehouse_run()
+    assert result.trace is not None
+    paths = write_run_artifacts(tmp_path / "run", result, scenario=scenario, more=write_view_file)
+    step = 4200  # 7 minutes in: two orders waiting at a pick station, two vehicles loaded, one dwelling
+    _, orders = frame_and_orders_at(scenario, result.trace.lines, step)
+    assert orders is not None and orders.waiting and any(c.loaded for c in orders.carry.values())
+    page = browser.new_page(viewport=SIZE)
+    page.goto(Path(paths["view"]).as_uri())
+    ready(page)
+    page.evaluate(f"fleetsimView.seek({step})")
+    page.wait_for_function(f"() => fleetsimView.drawnOrders && fleetsimView.drawnOrders.step === {step}")
+    hovered = next(v for v, c in orders.carry.items() if c.loaded)
+    x, y = page.evaluate(f"fleetsimView.screenOf({hovered})")
+    box = page.locator("#canvas").bounding_box()
+    page.mouse.move(box["x"] + x, box["y"] + y)
+    page.locator("#tooltip").wait_for(state="visible")
+    assert f"order {orders.carry[hovered].orders[0]}, stop" in page.inner_text("#tooltip")
+    _keep(page, "view-orders.png", tmp_path)
+    page.close()
+
+
+@pytest.mark.parametrize("name", ["view-failure.png", "view-stuck.png", "view-live.png", "view-orders.png"])
 def test_the_watching_page_shows_each_picture(name: str) -> None:
     assert f"images/{name}" in (REPO / "docs" / "watching.md").read_text(encoding="utf-8")
