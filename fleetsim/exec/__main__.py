@@ -1,5 +1,6 @@
 """``python -m fleetsim.exec [--no-rounds] module:attr``: serve an in-process planner over the JSON-lines
-protocol (``--no-rounds``: one request per call, never a planning round in one message)."""
+protocol (``--no-rounds``: one request per call, never a planning round in one message); a planner with a
+``dispatch`` method is served as the run's dispatcher too (protocol 1.5)."""
 
 from __future__ import annotations
 

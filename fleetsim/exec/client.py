@@ -19,6 +19,12 @@ stderr with its traceback and ends the process with status 1 (the run then fails
 The client answers planning rounds in one message (protocol 1.2, ``fleetsim/exec/rounds.py``) when
 fleetsim speaks 1.2 or later, unless served with ``rounds=False`` (``python -m fleetsim.exec
 --no-rounds``): then it answers one request per call, as a 1.1 client.
+
+A served planner that has a ``dispatch`` method is a dispatcher too (one object, both jobs): to fleetsim
+1.5 or later the client says so in its ready message and answers ``dispatch`` requests
+(``fleetsim/exec/dispatching.py``) by calling it with the same ``OrderBoard`` an in-process run would pass.
+Its answer is checked as in process (a list of ``Assignment`` items): anything else is printed to stderr
+and ends the process with status 1, as a planner's exception does.
 """
 
 from __future__ import annotations
@@ -32,7 +38,10 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import IO, Any
 
+from fleetsim.dispatch.checks import validate_answer
 from fleetsim.enums import ConflictModel, Direction, Shape, TurnCapability
+from fleetsim.errors import PlannerError
+from fleetsim.exec.dispatching import BoardReader, encode_assignments
 from fleetsim.exec.protocol import (
     PROTOCOL_FAMILY,
     LegBook,
@@ -92,7 +101,15 @@ def _layout(data: Mapping[str, Any]) -> Layout:
 
 def _task(data: Mapping[str, Any]) -> Task:
     progress = data["goal_progress"]
-    return Task(data["id"], data["vehicle_id"], data["goal_segment"], decode_progress[progress] if progress else None)
+    return Task(
+        data["id"],
+        data["vehicle_id"],
+        data["goal_segment"],
+        decode_progress[progress] if progress else None,
+        data.get("order_id"),  # 1.5: a stop of a transport order
+        data.get("stop"),
+        data.get("deadline"),
+    )
 
 
 class _Session:
@@ -104,8 +121,10 @@ class _Session:
         if init.get("type") != "init" or family != PROTOCOL_FAMILY:
             msg = f"expected the init message of {PROTOCOL_FAMILY}.x, got type={init.get('type')!r} protocol={init.get('protocol')!r}"
             raise ProtocolError(msg)
-        # Rounds came with 1.2: an earlier fleetsim would refuse a ready answer that asks for them.
+        # Rounds came with 1.2 and dispatch requests with 1.5: an earlier fleetsim would refuse a ready
+        # answer that asks for them.
         self.speaks_rounds = minor.isdigit() and int(minor) >= 2
+        self.speaks_dispatch = minor.isdigit() and int(minor) >= 5
         self.layout = _layout(init["layout"])
         scenario = init["scenario"]
         self.types = {
@@ -125,12 +144,15 @@ class _Session:
         # that keeps state by plan identity (FleetIndex) then recounts nothing.
         self.answered: dict[int, tuple[FleetPlan, dict[str, Any]]] = {}
         self.legs = LegBook()  # the fleet updates' legs, each decoded once
+        self.boards = BoardReader()
 
     def snapshot(self, data: Mapping[str, Any]) -> FleetSnapshot:
         """The fleet after ``data`` (complete the first time, then the entries that changed)."""
         previous, types = self.fleet, self.types
         traverse, progress, disturbed = decode_traverse, decode_progress, decode_disturbed
         state = VehicleState._make  # from a tuple: half the cost of the call with eleven arguments
+        for task in data.get("new_tasks", ()):  # 1.5: tasks made from transport orders as they are assigned
+            self.tasks[task["id"]] = _task(task)
         for v in data["vehicles"]:
             word = v.get("disturbed")
             self.vehicles[v["id"]] = state((
@@ -182,6 +204,19 @@ class _Session:
             {"vehicle_id": item.vehicle_id, "message": item.message} for item in items if isinstance(item, RouteError)
         ]
         return {"id": request["id"], "plans": plans, "route_errors": errors}
+
+    def answer_dispatch(self, planner: Planner, request: Mapping[str, Any]) -> dict[str, Any]:
+        """A dispatch request answered by the planner's ``dispatch`` with the board and fleet it describes."""
+        if "fleet" in request:
+            self.fleet = self.snapshot(request["fleet"])
+        dispatch = getattr(planner, "dispatch", None)
+        if self.fleet is None or not callable(dispatch):
+            msg = f"dispatch request {request.get('id')!r}: " + (
+                "no fleet came before" if self.fleet is None else "the planner has no dispatch method"
+            )
+            raise ProtocolError(msg)
+        answer = validate_answer(dispatch(self.boards.board(request["board"]), self.fleet, self.layout))
+        return encode_assignments(request["id"], answer)
 
     def answer_round(self, planner: Planner, message: Mapping[str, Any]) -> dict[str, Any]:
         """The round's calls answered in order, up to the first answer that changes something, each with its
@@ -236,11 +271,14 @@ def serve(
                 answer: dict[str, Any] = {"type": "ready"}
                 if rounds and session.speaks_rounds:
                     answer["rounds"] = True
+                if session.speaks_dispatch and callable(getattr(made, "dispatch", None)):
+                    answer["dispatches"] = True
             else:
                 assert made is not None  # made with the session
-                ask = session.answer_round if message.get("type") == "round" else session.answer
-                answer = ask(made, message)
-        except (ProtocolError, PlannerSpecError) as error:
+                kind = message.get("type")
+                ask = session.answer_round if kind == "round" else session.answer
+                answer = session.answer_dispatch(made, message) if kind == "dispatch" else ask(made, message)
+        except (ProtocolError, PlannerSpecError, PlannerError) as error:
             print(f"fleetsim.exec: {error}", file=sys.stderr)
             return 1
         except Exception:  # the planner's own error: its traceback goes to fleetsim's report via stderr

@@ -5,8 +5,12 @@
 message and waits for ``ready``; each call then sends one request and reads one answer, which must be
 valid JSON matching ``schemas/planner-response.schema.json``. A process whose ``ready`` says ``"rounds":
 true`` is asked a planning round's calls in one message instead (:meth:`SubprocessPlanner.plan_round`,
-``fleetsim/exec/rounds.py``). Everything the process writes to stderr
-goes to a temporary file whose tail is shown when something goes wrong.
+``fleetsim/exec/rounds.py``). A process whose ``ready`` says ``"dispatches": true`` is a dispatcher too:
+then, and only then, the planner has a ``dispatch(board, fleet, layout)`` method, which sends a
+``dispatch`` request (``fleetsim/exec/dispatching.py``); a run with transport orders and no other
+dispatcher starts the process before its first step to know (:meth:`SubprocessPlanner.begin_run`).
+Everything the process writes to stderr goes to a temporary file whose tail is shown when something goes
+wrong.
 
 Faults — the process cannot start, exits early or crashes, does not answer within the per-call timeout,
 answers with invalid JSON, an answer that violates the schema (the field and value are named), an
@@ -28,12 +32,14 @@ import subprocess
 import tempfile
 import time
 import weakref
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import IO, Any
 
+from fleetsim.dispatch.protocol import Assignment, OrderBoard
 from fleetsim.errors import PlannerProcessError
-from fleetsim.exec.protocol import FleetEncoder, LegBook, decode_response, dumps, encode_init, encode_task, loads
+from fleetsim.exec.dispatching import DISPATCH, BoardEncoder, decode_assignments
+from fleetsim.exec.protocol import FleetEncoder, LegBook, decode_response, dumps, encode_task, init_message, loads
 from fleetsim.exec.rounds import (
     CALL,
     NOTHING_TO_CHANGE,
@@ -49,7 +55,7 @@ from fleetsim.layout.layout import Layout
 from fleetsim.planning.plans import Response, RouteError
 from fleetsim.planning.protocol import RoundCall
 from fleetsim.planning.snapshot import FleetSnapshot
-from fleetsim.scenario import Task
+from fleetsim.scenario import Scenario, Task, VehicleType
 
 __all__ = ["SCHEMAS", "PlannerProcessError", "SubprocessPlanner", "load_schema"]
 
@@ -98,12 +104,15 @@ class SubprocessPlanner:
         self.scenario_dir = None if scenario_dir is None else str(Path(scenario_dir).resolve())
         self.requests = 0
         self.rounds: bool | None = None  # the process answers rounds (None: not started yet)
+        self.dispatches: bool | None = None  # the process dispatches (None: not started yet)
         self._process: subprocess.Popen[bytes] | None = None
         self._stderr: IO[bytes] | None = None
         self._buffer = b""
         self._pipes = (-1, -1)  # the process's stdin and stdout, while it runs
         self._fleet: FleetSnapshot | None = None  # the fleet the process last saw
         self._encoder = FleetEncoder()
+        self._boards = BoardEncoder()
+        self._board_time = 0.0  # the time of the board of the dispatch request being answered
         self._legs = LegBook()  # the answers' legs, each decoded once
         # task id -> the task, its JSON, and its fix_legs and plan_routes calls of a round (formats of the id)
         self._tasks: dict[int, tuple[Task, bytes, bytes, bytes]] = {}
@@ -129,9 +138,7 @@ class SubprocessPlanner:
         by the process's clock: all of them when none changes anything, else up to the first that does.
         A process that does not answer rounds is asked the first call alone."""
         if self._process is None:
-            if self.requests:
-                raise self._fail("was closed")
-            self._start(layout, fleet)
+            self._start_at(layout, fleet)
         if not self.rounds:
             method, _vehicle, task = calls[0]
             try:
@@ -167,6 +174,41 @@ class SubprocessPlanner:
             raise self._fail(f"answered {self._request()} with {error}") from None
         self.requests += len(answers)
         return list(answers)
+
+    # -- the dispatcher (protocol 1.5) ---------------------------------------------------------------
+
+    def begin_run(self, scenario: Scenario) -> None:
+        """Start the process for ``scenario`` now, not at the first call, so that whether it dispatches is
+        known before the run: the loop asks this of the planner of a run with transport orders and no other
+        dispatcher. A process that cannot start raises :class:`PlannerProcessError`."""
+        if self._process is None and not self.requests:
+            self._start(scenario.layout, {vehicle.id: vehicle.type for vehicle in scenario.vehicles}, scenario.tasks)
+
+    @property
+    def dispatch(self) -> Callable[[OrderBoard, FleetSnapshot, Layout], list[Assignment]]:
+        """``dispatch(board, fleet, layout)``, there only when the process said in its ready message that it
+        dispatches (``"dispatches": true``): a process not started yet has said nothing."""
+        if self.dispatches:
+            return self._dispatch
+        said = "has not started" if self.dispatches is None else 'did not answer init with "dispatches": true'
+        msg = f"{self!r} has no dispatch: the process {said}"
+        raise AttributeError(msg)
+
+    def _dispatch(self, board: OrderBoard, fleet: FleetSnapshot, layout: Layout) -> list[Assignment]:
+        """A ``dispatch`` request: the board and the fleet update; the answer's assignments."""
+        if self._process is None:
+            raise self._fail("was closed")  # it said it dispatches: it was started
+        self.requests += 1
+        number = self.requests
+        self._asking, self._round, self._board_time = (number, "dispatch", 0), None, board.time
+        self._send(DISPATCH % (number, self._boards.encode(board), self._update(fleet)))
+        answer = self._decode(self._read_line(self.timeout))
+        problem = violation(load_schema("dispatch-answer"), answer)
+        if problem is not None:
+            raise self._fail(f"answered {self._request()} with an invalid answer: {problem}")
+        if answer["id"] != number:
+            raise self._fail(f"answered {self._request()} with the answer to request {answer['id']!r}")
+        return decode_assignments(answer)
 
     def diagnostics(self) -> str:
         """The tail of what the process wrote to stderr (shown with any planner error)."""
@@ -206,7 +248,15 @@ class SubprocessPlanner:
     def _fail(self, message: str) -> PlannerProcessError:
         return PlannerProcessError(f"planner process {shlex.join(self.command)}: {message}", self.diagnostics())
 
-    def _start(self, layout: Layout, fleet: FleetSnapshot) -> None:
+    def _start_at(self, layout: Layout, fleet: FleetSnapshot) -> None:
+        """Start the process at its first call (on the fleet as it is then), unless it was closed."""
+        if self.requests:
+            raise self._fail("was closed")
+        tasks = [task for queue in fleet.tasks.values() for task in queue]
+        self._start(layout, {vid: state.type for vid, state in fleet.vehicles.items()}, tasks)
+
+    def _start(self, layout: Layout, vehicles: Mapping[int, VehicleType], tasks: Iterable[Task]) -> None:
+        tasks = list(tasks)
         if self._stderr is None:
             self._stderr = tempfile.TemporaryFile()  # noqa: SIM115 -- kept for diagnostics, closed by GC
         try:
@@ -221,21 +271,21 @@ class SubprocessPlanner:
         self._pipes = (process.stdin.fileno(), process.stdout.fileno())  # looked up once, used every call
         self._finalizer = weakref.finalize(self, _kill_group, process)
         self._asking = self._round = None
-        self._send(dumps(encode_init(layout, fleet, self.planner_options, self.scenario_dir)) + b"\n")
+        self._send(dumps(init_message(layout, vehicles, tasks, self.planner_options, self.scenario_dir)) + b"\n")
         answer = self._receive(self.startup_timeout)
         problem = violation(load_schema("ready"), answer)
         if problem is not None:
             raise self._fail(f'answered the init message with {_short(answer)}, not {{"type": "ready"}} ({problem})')
         self.rounds = answer.get("rounds") is True
+        self.dispatches = answer.get("dispatches") is True
         self._fleet = None
-        self._encoder = FleetEncoder()
+        self._encoder = FleetEncoder(tasks)
+        self._boards = BoardEncoder()
         self._legs = LegBook()
 
     def _call(self, method: str, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
         if self._process is None:
-            if self.requests:
-                raise self._fail("was closed")
-            self._start(layout, fleet)
+            self._start_at(layout, fleet)
         self.requests += 1
         number = self.requests
         self._asking, self._round = (number, method, task.vehicle_id), None
@@ -294,6 +344,8 @@ class SubprocessPlanner:
         if self._asking is None:
             return "the init message"
         number, method, vehicle = self._asking
+        if method == "dispatch":
+            return f"request {number} (dispatch() at t={self._board_time:g} s)"
         return f"request {number} ({method} for vehicle {vehicle})"
 
     def _send(self, message: bytes) -> None:

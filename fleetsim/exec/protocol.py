@@ -9,9 +9,11 @@ are in ``schemas/planner-*.schema.json``.
 Versions: ``fleetsim-planner/MAJOR.MINOR`` (``fleetsim-planner/1`` is 1.0). A minor version only adds
 optional fields, so a client checks the major part; 1.1 added ``disturbed``; 1.2 planning rounds in one
 message, which a client opts into (``fleetsim/exec/rounds.py``); 1.3 the segments' ``names``; 1.4 the
-init message's ``planner_options`` and ``scenario_dir``.
+init message's ``planner_options`` and ``scenario_dir``; 1.5 the dispatcher's ``dispatch`` requests, which
+a client opts into (``fleetsim/exec/dispatching.py``), the order, stop and deadline of a task made from a
+transport order, and a fleet update's ``new_tasks``.
 
-1. ``{"type": "init", "protocol": "fleetsim-planner/1.4", "layout": {...}, "scenario": {...}}``
+1. ``{"type": "init", "protocol": "fleetsim-planner/1.5", "layout": {...}, "scenario": {...}}``
    - ``layout``: exactly the layout part of what ``fleetsim inspect --json`` prints for the map (which
      adds the map file, its format and part, ``meters_per_pixel``, ``lint`` and ``warnings``):
      ``segments`` (``id, shape, direction, length, waypoints`` in metres, ``names``: what the site
@@ -22,14 +24,17 @@ init message's ``planner_options`` and ``scenario_dir``.
      joint_angle_tolerance``).
    - ``scenario``: ``vehicle_types`` (``name, length, width, height, max_speed, acceleration,
      turn_capability, turn_rate``), ``vehicles`` (``id, type``) and ``tasks`` (``id, vehicle_id,
-     goal_segment, goal_progress``).
+     goal_segment, goal_progress``; 1.5: a task made from a transport order's stop adds ``order_id``,
+     ``stop``, the stop's index in its order, and ``deadline``, the order's, or null).
    - ``planner_options`` (1.4): the suite entry's options for the planner (a JSON object, ``{}`` when it
      gives none), and ``scenario_dir``: the scenario's folder on this machine (absolute), where the
      entry's data ``files`` are (on a sweep's worker, the folder they were sent to), or ``null`` when the
      scenario has none.
 
    Answer: ``{"type": "ready"}``, or (to a 1.2 init or later) ``{"type": "ready", "rounds": true}`` to be
-   sent each planning round's calls in one ``round`` message instead of one request per call.
+   sent each planning round's calls in one ``round`` message instead of one request per call; and (to a
+   1.5 init or later) ``"dispatches": true`` to be the run's dispatcher when it has transport orders and
+   no other dispatcher is named: it is then sent ``dispatch`` requests (``fleetsim/exec/dispatching.py``).
 2. ``{"type": "plan_routes" | "fix_legs", "id": N, "vehicle": V, "task": TASK, "fleet": FLEET}``, one
    per planner call, ``id`` counting from 1. ``fleet`` is the snapshot: ``time``, ``vehicles`` (each
    ``id, segment, traverse, progress, distance, speed, x, y, heading, type``, and ``disturbed``:
@@ -39,7 +44,9 @@ init message's ``planner_options`` and ``scenario_dir``.
    changed since the last request; a request without ``fleet`` means "the same fleet as before". The
    first ``fleet`` of a run is complete; later ones hold ``time``, ``routed`` and only the vehicles,
    plans and queues that changed, each replacing the entry with the same vehicle id (vehicles never
-   leave a run), so a client keeps the fleet by vehicle id and updates it.
+   leave a run), so a client keeps the fleet by vehicle id and updates it. A fleet whose queues hold
+   tasks the process has not been sent yet (made from transport orders as the dispatcher assigns them)
+   lists them in ``new_tasks`` (1.5; absent when there are none).
 
    ``vehicle`` is the task's vehicle. Answer: ``{"id": N, "plans": [PLAN...], "route_errors":
    [{"vehicle_id": V|null, "message": S}...]}`` (both lists may be empty: nothing to change; plans are
@@ -65,7 +72,7 @@ order): only its durations are decoded.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from collections.abc import Set as AbstractSet
 from typing import Any
 
@@ -94,10 +101,11 @@ __all__ = [
     "encode_layout",
     "encode_plan",
     "encode_task",
+    "init_message",
     "loads",
 ]
 
-PROTOCOL = "fleetsim-planner/1.4"
+PROTOCOL = "fleetsim-planner/1.5"
 PROTOCOL_FAMILY = "fleetsim-planner/1"  # what a client checks: the same major version
 
 # Both sides of every planner call encode and decode a message, so JSON is orjson's (compiled): a call's
@@ -167,7 +175,15 @@ def _vehicle_type(kind: VehicleType) -> dict[str, Any]:
 
 def encode_task(task: Task) -> dict[str, Any]:
     progress = task.goal_progress.value if task.goal_progress is not None else None
-    return {"id": task.id, "vehicle_id": task.vehicle_id, "goal_segment": task.goal_segment, "goal_progress": progress}
+    encoded: dict[str, Any] = {
+        "id": task.id,
+        "vehicle_id": task.vehicle_id,
+        "goal_segment": task.goal_segment,
+        "goal_progress": progress,
+    }
+    if task.order_id is not None:  # 1.5; a task of tasks.csv is written as before
+        encoded.update(order_id=task.order_id, stop=task.stop, deadline=task.deadline)
+    return encoded
 
 
 def encode_init(
@@ -178,16 +194,29 @@ def encode_init(
 ) -> dict[str, Any]:
     """The init message, from what the first planner call knows (the layout and the fleet), and the
     suite entry's ``planner_options`` and the scenario's folder, which the planner process is made with."""
-    types = {state.type.name: state.type for state in fleet.vehicles.values()}
-    tasks = sorted((task for queue in fleet.tasks.values() for task in queue), key=lambda task: task.id)
+    tasks = [task for queue in fleet.tasks.values() for task in queue]
+    types = {vid: state.type for vid, state in fleet.vehicles.items()}
+    return init_message(layout, types, tasks, planner_options, scenario_dir)
+
+
+def init_message(
+    layout: Layout,
+    vehicles: Mapping[int, VehicleType],
+    tasks: Iterable[Task],
+    planner_options: Mapping[str, Any] | None = None,
+    scenario_dir: str | None = None,
+) -> dict[str, Any]:
+    """The init message of a run on ``layout`` whose ``vehicles`` (each's type, by id) have ``tasks`` at
+    its start (a scenario's vehicles and tasks, or the first snapshot's: the same)."""
+    types = {kind.name: kind for kind in vehicles.values()}
     return {
         "type": "init",
         "protocol": PROTOCOL,
         "layout": encode_layout(layout),
         "scenario": {
             "vehicle_types": [_vehicle_type(types[name]) for name in sorted(types)],
-            "vehicles": [{"id": vid, "type": fleet.vehicles[vid].type.name} for vid in sorted(fleet.vehicles)],
-            "tasks": [encode_task(task) for task in tasks],
+            "vehicles": [{"id": vid, "type": vehicles[vid].name} for vid in sorted(vehicles)],
+            "tasks": [encode_task(task) for task in sorted(tasks, key=lambda task: task.id)],
         },
         "planner_options": dict(planner_options or {}),
         "scenario_dir": scenario_dir,
@@ -248,17 +277,36 @@ def _changes(fleet: FleetSnapshot, previous: FleetSnapshot | None) -> tuple[list
     )
 
 
-def encode_fleet(fleet: FleetSnapshot, previous: FleetSnapshot | None = None) -> dict[str, Any]:
+def encode_fleet(
+    fleet: FleetSnapshot, previous: FleetSnapshot | None = None, known: Mapping[int, Task] | None = None
+) -> dict[str, Any]:
     """The snapshot, or with ``previous`` (the fleet the planner last saw) only what differs from it:
-    the vehicles whose state, the plans and the queues that changed (``time`` and ``routed`` always)."""
+    the vehicles whose state, the plans and the queues that changed (``time`` and ``routed`` always).
+    With ``known`` (the tasks the planner has been sent, by id), the changed queues' other tasks are
+    listed in ``new_tasks`` (when there are any)."""
     vehicles, plans, queues = _changes(fleet, previous)
-    return {
+    encoded = {
         "time": fleet.time,
         "vehicles": [_state(fleet.vehicles[vid]) for vid in vehicles],
         "plans": [encode_plan(fleet.plans[vid]) for vid in plans],
         "tasks": [[vid, [task.id for task in fleet.tasks[vid]]] for vid in queues],
         "routed": sorted(fleet.routed),
     }
+    new = [] if known is None else _new_tasks(fleet, queues, known)
+    if new:
+        encoded["new_tasks"] = [encode_task(task) for task in new]
+    return encoded
+
+
+def _new_tasks(fleet: FleetSnapshot, queues: list[int], known: Mapping[int, Task]) -> list[Task]:
+    """The tasks of the ``queues`` (vehicle ids) that are not in ``known`` as they are, by id."""
+    new = {
+        task.id: task
+        for vid in queues
+        for task in fleet.tasks[vid]
+        if (sent := known.get(task.id)) is not task and sent != task
+    }
+    return [new[tid] for tid in sorted(new)]
 
 
 class FleetEncoder:
@@ -266,23 +314,31 @@ class FleetEncoder:
     with each plan encoded on its own and kept, so that an answer handing a plan back unchanged can be
     recognised by its bytes."""
 
-    def __init__(self) -> None:
+    def __init__(self, tasks: Iterable[Task] | None = None) -> None:
         self.plans: dict[int, tuple[FleetPlan, bytes]] = {}  # vehicle -> its plan as last sent, and its JSON
         self._routed: tuple[AbstractSet[int], bytes] = (frozenset(), b"[]")  # the routed set last sent, as JSON
+        # The tasks the process has been sent (the init message's ``tasks``, then ``new_tasks``), by id;
+        # without ``tasks``, the init message was made from the first fleet encoded: its tasks.
+        self.tasks: dict[int, Task] | None = None if tasks is None else {task.id: task for task in tasks}
 
     def encode(self, fleet: FleetSnapshot, previous: FleetSnapshot | None = None) -> bytes:
         vehicles, plans, queues = _changes(fleet, previous)
+        if self.tasks is None:
+            self.tasks = {task.id: task for queue in fleet.tasks.values() for task in queue}
         encoded = []
         for vid in plans:
             plan = fleet.plans[vid]
             self.plans[vid] = (plan, dumps(encode_plan(plan)))
             encoded.append(self.plans[vid][1])
-        return b'{"time":%b,"vehicles":%b,"plans":[%b],"tasks":%b,"routed":%b}' % (
+        new = _new_tasks(fleet, queues, self.tasks) if queues else []
+        self.tasks.update((task.id, task) for task in new)
+        return b'{"time":%b,"vehicles":%b,"plans":[%b],"tasks":%b,"routed":%b%b}' % (
             dumps(fleet.time),
             dumps([_state(fleet.vehicles[vid]) for vid in vehicles]),
             b",".join(encoded),
             dumps([[vid, [task.id for task in fleet.tasks[vid]]] for vid in queues]),
             self._routed_json(fleet.routed),
+            b',"new_tasks":' + dumps([encode_task(task) for task in new]) if new else b"",
         )
 
     def _routed_json(self, routed: AbstractSet[int]) -> bytes:

@@ -158,6 +158,8 @@ class PlannerGuard:
                 raise PlannerFault(
                     f"dispatch() did not return within the per-call timeout of {self.timeout:g} s"
                 ) from None
+            if isinstance(exc, PlannerProcessError):  # it names dispatch() and its request; stderr says more
+                raise PlannerFault(str(exc), details=exc.details) from None
             msg = f"dispatch() raised {type(exc).__name__}: {exc}"
             raise PlannerFault(msg, details=_planner_traceback(exc)) from None
         elapsed = _clock() - start

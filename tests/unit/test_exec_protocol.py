@@ -38,7 +38,7 @@ from fleetsim.sim.guard import PlannerFault, PlannerGuard
 from fleetsim.sim.loop import run_scenario
 
 ROOT = Path(__file__).resolve().parents[2]
-NAMES = ("init", "ready", "request", "response", "round-answer")
+NAMES = ("init", "ready", "request", "response", "round-answer", "dispatch-answer")
 
 
 def schema(name: str) -> dict:
@@ -223,7 +223,7 @@ def test_the_disturbed_field_travels_only_while_set_and_protocol_1_0_clients_are
     controller = FleetController(scenario)
     first = controller.snapshot(0.0)
     init = json.loads(json.dumps(encode_init(scenario.layout, first)))
-    assert init["protocol"] == "fleetsim-planner/1.4"
+    assert init["protocol"] == "fleetsim-planner/1.5"
     assert all("disturbed" not in v for v in encode_fleet(first)["vehicles"])  # as in 1.0 when undisturbed
     session = _Session(init)
     session.snapshot(json.loads(json.dumps(encode_fleet(first))))
