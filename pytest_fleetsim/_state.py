@@ -31,6 +31,7 @@ from fleetsim.gating.baseline import (
     write_metrics,
 )
 from fleetsim.gating.lockfile import HashLock, LockEntry, LockFileError, lock_path_for
+from fleetsim.gating.regression import judge_against
 from fleetsim.gating.verify import in_ci, run_checked
 from fleetsim.load.suites.scenario import load_scenario
 from fleetsim.load.suites.suite import load_suite
@@ -134,7 +135,7 @@ class FleetsimState:
                 "--fleetsim-compare-fail needs --fleetsim-compare PATH (the baseline metrics to compare with)"
             )
         baseline = None
-        if baseline_path is not None and not hasattr(config, "workerinput"):
+        if baseline_path is not None:  # every process: a regression fails its scenario's item where it ran
             try:
                 baseline = read_metrics(baseline_path, planner=spec)
             except FleetsimError as error:
@@ -244,6 +245,8 @@ class FleetsimState:
             self._describe_unrun(item, source.identity, load_error=False)
             raise ScenarioFailed(_story(f"planner-error: {error}", heading, error.details)) from None
         result = checked.result
+        if self.baseline is not None:  # a metric regression fails this scenario's own item, not only the session
+            result = judge_against(self.baseline, item.nodeid, result, self.thresholds)
         if self._live_session is not None:
             self._tell(self._live_session.end(scenario, result))
         if self.record == "all" or (self.record == "failed" and not result.passed):

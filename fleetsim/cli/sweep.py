@@ -1,5 +1,5 @@
 """``fleetsim sweep SPEC.yaml`` runs planners × scenarios on Dask; ``fleetsim sweep report RESULTS``
-compares them.
+compares them (``--compare BASE.jsonl``: with another sweep's runs, a baseline).
 
 Exit status of a sweep: 0 when every run has its row in the results file (runs that fail are results,
 not errors), 1 for a located error in the spec or its suites, 2 for a usage error, 130 after Ctrl-C
@@ -14,7 +14,7 @@ import shutil
 import sys
 from collections.abc import Sequence
 from pathlib import Path
-from typing import TextIO
+from typing import Any, TextIO
 
 from fleetsim.cli.run import UsageError
 from fleetsim.sweep.execute import Progress, run_items
@@ -22,7 +22,7 @@ from fleetsim.sweep.gate import GateError, judge, parse_condition
 from fleetsim.sweep.items import expand
 from fleetsim.sweep.report import build_report, markdown
 from fleetsim.sweep.report_html import html_page
-from fleetsim.sweep.results import ResultsFile, read_results
+from fleetsim.sweep.results import ResultsFile, read_results, relabelled
 from fleetsim.sweep.spec import load_sweep_spec
 
 __all__ = ["sweep"]
@@ -59,7 +59,13 @@ def _report_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--baseline",
         metavar="PLANNER",
-        help="the planner spec the others are compared with (default: the sweep's baseline)",
+        help="the planner spec the others are compared with (default: the sweep's baseline; with --compare, BASE's)",
+    )
+    parser.add_argument(
+        "--compare",
+        metavar="BASE.jsonl",
+        help="compare every planner of RESULTS with the --baseline planner's runs in another sweep's results "
+        "(a baseline sweep, from the main branch say), paired by scenario",
     )
     parser.add_argument("--html", metavar="OUT.html", help="where to write the page (default: RESULTS with .html)")
     parser.add_argument(
@@ -85,6 +91,7 @@ def run_sweep(args: argparse.Namespace) -> int:
         raise UsageError(f"--workers={args.workers} must be >= 1")
     items = expand(spec, output.with_name(output.name + ".runs"))
     header = {"name": spec.name, "spec": str(spec.path), "planners": list(spec.planners), "baseline": spec.baseline}
+    header |= {"dispatcher": spec.dispatcher} if spec.dispatcher is not None else {}  # the rows do not say it
     with ResultsFile(output, header, resume=args.resume) as results:
         before = len(results.done & {item["key"] for item in items})
         print(
@@ -106,14 +113,26 @@ def report(args: argparse.Namespace) -> int:
         raise UsageError(str(error)) from None
     path = Path(args.results)
     header, rows = read_results(path)
-    planners = list(dict.fromkeys(str(r["planner"]) for r in sorted(rows, key=lambda r: str(r["key"]))))
-    baseline = args.baseline or header.get("baseline") or (planners[0] if planners else "")
-    if rows and baseline not in planners:
-        raise UsageError(f"--baseline={baseline!r} ran no run in {path}; its planners: {', '.join(planners)}")
+    planners = _planners(rows)
+    title = str(header.get("name", path.stem))
+    if args.compare is not None:  # another sweep's runs of one planner are the baseline of every planner here
+        base_path = Path(args.compare)
+        base_header, base_rows = read_results(base_path)
+        chosen = args.baseline or base_header.get("baseline") or next(iter(_planners(base_rows)), "")
+        if chosen not in _planners(base_rows):
+            found = ", ".join(_planners(base_rows)) or "none"
+            raise UsageError(f"--baseline={chosen!r} ran no run in {base_path}; its planners: {found}")
+        baseline = f"{chosen} @ {base_path.name}"
+        rows = [*rows, *relabelled(base_rows, chosen, baseline)]
+        candidates, title = planners, f"{title} against {base_path.name}"
+    else:
+        baseline = args.baseline or header.get("baseline") or (planners[0] if planners else "")
+        if rows and baseline not in planners:
+            raise UsageError(f"--baseline={baseline!r} ran no run in {path}; its planners: {', '.join(planners)}")
+        candidates = [p for p in planners if p != baseline]
     html_path = Path(args.html) if args.html else path.with_suffix(".html")
-    candidates = [p for p in planners if p != baseline]
     verdicts = judge(rows, conditions, baseline, candidates)
-    built = build_report(str(header.get("name", path.stem)), rows, baseline, verdicts, html_path.parent)
+    built = build_report(title, rows, baseline, verdicts, html_path.parent)
     html_path.parent.mkdir(parents=True, exist_ok=True)
     html_path.write_text(html_page(built), encoding="utf-8")
     text = markdown(built)
@@ -122,6 +141,11 @@ def report(args: argparse.Namespace) -> int:
     print(text)
     print(f"report: {html_path}", file=sys.stderr)
     return 1 if any(v.holds for v in verdicts) else 0
+
+
+def _planners(rows: Sequence[dict[str, Any]]) -> list[str]:
+    """The planners of a sweep's rows, in key order of their first run."""
+    return list(dict.fromkeys(str(r["planner"]) for r in sorted(rows, key=lambda r: str(r["key"]))))
 
 
 class _Bar:

@@ -6,6 +6,10 @@ compares itself with a saved one and fails when a metric got worse beyond a thre
 (``--fleetsim-compare-fail makespan:5%``), in the spirit of pytest-benchmark's ``--benchmark-compare-fail``.
 The document is deterministic (sorted, no timestamps or host data) so a baseline can be committed and
 its diffs reviewed.
+
+Runs with transport orders add their measures (:data:`fleetsim.gating.measures.GATED_MEASURES`:
+``orders_per_hour:5%`` fails a drop of throughput by more than 5 %). A regression fails the scenario's
+own run (:func:`fleetsim.gating.regression.judge_against`: a ``regression`` failure), not only the session.
 """
 
 from __future__ import annotations
@@ -21,6 +25,7 @@ from types import MappingProxyType
 from typing import Any, Literal, NamedTuple, get_args
 
 from fleetsim.errors import FleetsimError, Location
+from fleetsim.gating.measures import GATED_MEASURES, measure_value
 from fleetsim.load.common.text import json_problem, write_text_atomically
 from fleetsim.sim.result import RunResult
 
@@ -79,6 +84,16 @@ class ScenarioMetrics:
     # no clearance measured.
     contacts: int = 0
     clearance: float | None = None  # metres: the closest two footprints came (None: not within reach, or off)
+    # A run with transport orders: its measures (fleetsim.gating.measures.GATED_MEASURES); None without
+    # orders, or without the figure (no order completed). A baseline written before reads as none.
+    orders_per_hour: float | None = None
+    service_time_median: float | None = None  # seconds
+    service_time_p95: float | None = None  # seconds
+    wait_for_pickup_p95: float | None = None  # seconds
+    deadline_misses: int | None = None
+    utilisation: float | None = None  # share, 0..1
+    empty_travel_share: float | None = None  # share, 0..1
+    stalls: int | None = None
 
     @classmethod
     def from_result(cls, id: str, outcome: Outcome, result: RunResult) -> ScenarioMetrics:
@@ -103,6 +118,7 @@ class ScenarioMetrics:
             trace_hash=result.trace_hash,
             contacts=len(result.contact.contacts) if result.contact is not None else 0,
             clearance=_round(m.clearance),
+            **_measures(None if result.measures is None else result.measures.to_dict()),
         )
 
     def to_dict(self) -> dict[str, Any]:
@@ -133,6 +149,7 @@ class ScenarioMetrics:
             trace_hash=document["trace_hash"] or "",
             contacts=len((document.get("contact") or {}).get("contacts", ())),
             clearance=_round(m.get("clearance")),
+            **_measures(document.get("measures")),
         )
 
     @classmethod
@@ -161,6 +178,15 @@ def _round(value: float | None) -> float | None:
     return None if value is None else round(value, 6)
 
 
+def _measures(shown: Mapping[str, Any] | None) -> dict[str, Any]:
+    """The gated measures of a result document's ``measures`` (None: a run without orders), as read."""
+    values: dict[str, Any] = {}
+    for measure in GATED_MEASURES:
+        value = measure_value(shown, measure.name)
+        values[measure.name] = int(value) if measure.whole and value is not None else value
+    return values
+
+
 def _is_number(value: object) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
 
@@ -169,6 +195,7 @@ def _is_number(value: object) -> bool:
 _FIELD_CHECKS: dict[str, tuple[Callable[[object], bool], str]] = {
     "str": (lambda v: isinstance(v, str), "a string"),
     "int": (lambda v: isinstance(v, int) and not isinstance(v, bool), "an integer"),
+    "int | None": (lambda v: v is None or (isinstance(v, int) and not isinstance(v, bool)), "an integer or null"),
     "float": (_is_number, "a finite number"),
     "float | None": (lambda v: v is None or _is_number(v), "a finite number or null"),
     "Outcome": (lambda v: v in get_args(Outcome), f"one of {', '.join(get_args(Outcome))}"),
@@ -295,6 +322,7 @@ METRICS: Mapping[str, Metric] = MappingProxyType(
         "realtime_factor": Metric(attrgetter("realtime_factor"), "higher"),
         "contacts": Metric(attrgetter("contacts"), "lower"),
         "clearance": Metric(attrgetter("clearance"), "higher", missing="better"),
+        **{measure.name: Metric(attrgetter(measure.name), measure.better) for measure in GATED_MEASURES},
     }
 )
 _KNOWN = ", ".join(sorted(METRICS))
@@ -361,7 +389,11 @@ class Regression:
     threshold: Threshold
 
     def __str__(self) -> str:
-        head = f"{self.id}: {self.metric} {_show(self.baseline)} -> "
+        return f"{self.id}: {self.change()}"
+
+    def change(self) -> str:
+        """``makespan 20.0 -> 21.5 (+7.5%, limit 5%)``: what got worse, without the scenario's id."""
+        head = f"{self.metric} {_show(self.baseline)} -> "
         if self.current is None:
             gone = "not reached" if self.metric == "makespan" else "no value"
             return f"{head}{gone} (limit {self.threshold})"

@@ -43,6 +43,7 @@ _BROKEN = {
     "hash-mismatch": "the recorded trace hash",
     "hash-missing": "the recorded trace hash",
     "nondeterministic": "a deterministic planner",
+    "regression": "the baseline (--fleetsim-compare-fail)",
     "load-error": "loading the scenario",
 }
 

@@ -57,9 +57,9 @@ Ending = Literal[
 ]
 
 
-# Failures without a moment of their own: the run's trace hash against the recorded one, and a scenario
-# that did not load (so never ran).
-MOMENTLESS = frozenset({"hash-mismatch", "hash-missing", "load-error"})
+# Failures without a moment of their own: the run's trace hash against the recorded one, its figures
+# against a baseline's, and a scenario that did not load (so never ran).
+MOMENTLESS = frozenset({"hash-mismatch", "hash-missing", "regression", "load-error"})
 
 
 @dataclass(frozen=True, slots=True)
@@ -70,7 +70,8 @@ class Failure:
         kind: What went wrong: ``rejection``, ``collision``, ``contact``, ``timeout``, ``deadlock``,
             ``planner-error``, ``interrupted``, ``expectation`` (something the scenario's ``expect``
             required did not happen); when hashes are checked, ``hash-mismatch``, ``hash-missing`` or
-            ``nondeterministic``; ``load-error`` for a scenario that did not load.
+            ``nondeterministic``; ``regression`` for a figure worse than a baseline's by more than
+            ``--fleetsim-compare-fail`` allows; ``load-error`` for a scenario that did not load.
         time: Simulated seconds when it happened (the run's end for what is judged at the end).
         message: The failure in words, as the report shows it.
         details: More about it, by kind (a rejection's code, vehicle and leg, say), as in the JSON form.

@@ -92,8 +92,8 @@ Case = tuple[str, str, int | None, Scenario | None, str | None, dict[str, Any]]
 
 def _cases(spec: SweepSpec) -> list[Case]:
     """(id, source kind, seed, scenario or None, load error, origin) for every scenario of every source
-    (and, with the spec's ``disturbances``, every disturbance seed); the origin is the suite entry's
-    facts for the record (a generated source's scenarios have none)."""
+    (with the spec's ``order_seeds``, every order stream seed; with its ``disturbances``, every disturbance
+    seed); the origin is the suite entry's facts for the record (a generated source's scenarios have none)."""
     cases: list[Case] = []
     for source in spec.sources:
         if isinstance(source, SuiteSource):
@@ -120,7 +120,34 @@ def _cases(spec: SweepSpec) -> list[Case]:
                         RunOrigin().keys(),
                     )
                 )
+    if spec.dispatcher is not None:
+        cases = [(*case[:3], _dispatched(case[3], spec.dispatcher), *case[4:]) for case in cases]
+    if spec.order_seeds is not None:
+        cases = _order_seeded(cases, spec.order_seeds)
     return cases if spec.disturbances is None else _disturbed(cases, spec.disturbances)
+
+
+def _dispatched(scenario: Scenario | None, dispatcher: str) -> Scenario | None:
+    """The spec's dispatcher for a scenario with transport orders, whatever its suite names (as
+    ``--dispatcher`` does for ``fleetsim run`` and pytest)."""
+    if scenario is None or not (scenario.orders or scenario.order_stream is not None):
+        return scenario
+    return replace(scenario, dispatcher=dispatcher)
+
+
+def _order_seeded(cases: list[Case], seeds: tuple[int, ...]) -> list[Case]:
+    """Each case with an order stream once per seed (``ID~oSEED``), its stream drawn from that seed; the
+    others (fixed tasks, ``orders.csv``, a scenario that did not load) once, as they are."""
+    out: list[Case] = []
+    for key, kind, seed, scenario, error, origin in cases:
+        stream = None if scenario is None else scenario.order_stream
+        if scenario is None or stream is None:
+            out.append((key, kind, seed, scenario, error, origin))
+            continue
+        for drawn in seeds:
+            seeded = replace(scenario, order_stream=replace(stream, seed=drawn))
+            out.append((f"{key}~o{drawn}", kind, seed, seeded, error, origin))
+    return out
 
 
 def _disturbed(cases: list[Case], drawn: SweepDisturbances) -> list[Case]:

@@ -2,25 +2,30 @@
 
 Workers get no paths into the machine that planned the sweep (they may be elsewhere: SLURM, Kubernetes),
 only the scenario folder's contents (``map.json``, ``vehicles.csv``, ``tasks.csv`` as written by
-:func:`fleetsim.strategies.save_scenario`) with the vehicle types, settings and expectations, and what the
-suite entry gives its planner: its ``planner_options`` and the bytes of its data ``files`` (a folder
-listed there sends every file below it), which a worker puts at the same relative paths in the folder
-its planner gets as ``scenario_dir``. A scenario sent this way runs exactly as the loaded one does (the
-same trace hash).
+:func:`fleetsim.strategies.save_scenario`) with the vehicle types, settings and expectations (bounds on
+measures included), the transport orders, order stream, station sets, shift and dispatcher spec of a
+scenario with orders, and what the suite entry gives its planner: its ``planner_options`` and the bytes of
+its data ``files`` (a folder listed there sends every file below it), which a worker puts at the same
+relative paths in the folder its planner gets as ``scenario_dir``. A scenario sent this way runs exactly as
+the loaded one does (the same trace hash).
 """
 
 from __future__ import annotations
 
 import base64
 import dataclasses
+import enum
 import tempfile
+from collections.abc import Mapping
 from pathlib import Path, PurePosixPath
 from types import MappingProxyType
 from typing import Any
 
-from fleetsim.enums import ConflictModel, TurnCapability
+from fleetsim.enums import ConflictModel, Progress, TurnCapability
 from fleetsim.load.suites.scenario import load_scenario_dir
+from fleetsim.orders import Arrivals, MeasureBound, Order, OrderStream, Shift, Station, Stop, StopDraw
 from fleetsim.scenario import (
+    Checks,
     Disturbance,
     Expectations,
     PlannerSetup,
@@ -35,11 +40,15 @@ __all__ = ["scenario_from_payload", "scenario_payload"]
 
 
 def _plain(value: Any) -> Any:
-    """Enums as their words, tuples as lists: JSON-ready."""
-    if isinstance(value, (TurnCapability, ConflictModel)):
+    """Enums as their words, tuples as lists, dataclasses and mappings as objects: JSON-ready."""
+    if isinstance(value, enum.Enum):
         return value.value
-    if isinstance(value, tuple):
+    if isinstance(value, (tuple, list)):
         return [_plain(item) for item in value]
+    if isinstance(value, Mapping):
+        return {str(key): _plain(item) for key, item in value.items()}
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return {f.name: _plain(getattr(value, f.name)) for f in dataclasses.fields(value)}
     return value
 
 
@@ -62,6 +71,11 @@ def scenario_payload(scenario: Scenario) -> dict[str, Any]:
         if scenario.random_disturbances is None
         else dataclasses.asdict(scenario.random_disturbances),
         "planner_setup": _setup_payload(scenario.planner_setup),
+        "orders": _plain(scenario.orders),
+        "order_stream": _plain(scenario.order_stream),
+        "stations": _plain(scenario.stations),
+        "shift": _plain(scenario.shift),
+        "dispatcher": scenario.dispatcher,
     }
 
 
@@ -92,10 +106,13 @@ def scenario_from_payload(payload: dict[str, Any], scenario_dir: Path | None = N
         for data in payload["vehicle_types"]
     }
     raw = payload["settings"]
-    settings = ScenarioSettings(
-        **{**raw, "stop_on": tuple(raw["stop_on"]), "conflict_model": ConflictModel(raw["conflict_model"])}
-    )
-    expect = Expectations(**{key: _tuple(value) for key, value in payload["expect"].items()})
+    settings = ScenarioSettings(**{
+        **raw, "stop_on": tuple(raw["stop_on"]), "conflict_model": ConflictModel(raw["conflict_model"]),
+        "checks": Checks(**raw["checks"]),
+    })  # fmt: skip
+    sent = payload["expect"]
+    bounds = tuple(MeasureBound(**bound) for bound in sent.get("measures", ()))
+    expect = Expectations(**{key: _tuple(value) for key, value in sent.items() if key != "measures"}, measures=bounds)
     with tempfile.TemporaryDirectory(prefix="fleetsim-sweep-") as folder:
         for name, text in payload["files"].items():
             (Path(folder) / Path(name).name).write_text(text, encoding="utf-8")
@@ -106,6 +123,44 @@ def scenario_from_payload(payload: dict[str, Any], scenario_dir: Path | None = N
         disturbances=tuple(Disturbance(**d) for d in payload.get("disturbances", ())),
         random_disturbances=None if drawn is None else RandomDisturbances(**{**drawn, "stop": tuple(drawn["stop"])}),
         planner_setup=_setup_from(payload.get("planner_setup"), scenario_dir),
+        orders=tuple(_order(order) for order in payload.get("orders", ())),
+        order_stream=_stream(payload.get("order_stream")),
+        stations=MappingProxyType({
+            name: tuple(Station(**station) for station in members) for name, members in payload.get("stations", {}).items()
+        }),
+        shift=None if payload.get("shift") is None else Shift(**payload["shift"]),
+        dispatcher=payload.get("dispatcher"),
+    )  # fmt: skip
+
+
+def _progress(value: str | None) -> Progress | None:
+    return None if value is None else Progress(value)
+
+
+def _names(value: list[str] | None) -> tuple[str, ...] | None:
+    return None if value is None else tuple(value)
+
+
+def _order(sent: dict[str, Any]) -> Order:
+    """An order as :func:`scenario_payload` sent it (its ``orders.csv`` line kept, for messages)."""
+    stops = tuple(Stop(stop["segment"], _progress(stop["progress"]), stop["dwell"]) for stop in sent["stops"])
+    return Order(
+        sent["id"], stops, sent["release"], sent["deadline"], _names(sent["vehicle_types"]), sent["priority"],
+        sent["line"],
+    )  # fmt: skip
+
+
+def _stream(sent: dict[str, Any] | None) -> OrderStream | None:
+    """An order stream as :func:`scenario_payload` sent it."""
+    if sent is None:
+        return None
+    draws = tuple(
+        StopDraw(tuple(d["stations"]), d["weighted"], tuple(d["dwell"]), tuple(d["count"]), _progress(d["progress"]))
+        for d in sent["stops"]
+    )
+    return OrderStream(
+        sent["seed"], Arrivals(**sent["arrivals"]), draws, sent["deadline"], _names(sent["vehicle_types"]),
+        sent["priority"], sent["limit"],
     )  # fmt: skip
 
 

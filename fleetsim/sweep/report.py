@@ -16,9 +16,9 @@ from typing import Any
 
 from fleetsim.exec.spec import EXEC_PREFIX, VDA5050_PREFIX
 from fleetsim.sweep.gate import Verdict
-from fleetsim.sweep.stats import METRICS, Paired, PlannerSummary, paired, summarise, throughput
+from fleetsim.sweep.stats import METRICS, ORDER_METRICS, Paired, PlannerSummary, paired, summarise, throughput
 
-__all__ = ["COMPARED", "Report", "Worst", "build_report", "markdown", "paced_note", "short"]
+__all__ = ["COMPARED", "Report", "Worst", "build_report", "markdown", "orders_table", "paced_note", "short"]
 
 COMPARED = (
     "success",
@@ -58,6 +58,7 @@ class Report:
     worst: Mapping[str, tuple[Worst, ...]]
     verdicts: tuple[Verdict, ...]
     paced: Mapping[str, float]  # planner -> the multiple of real time its runs were paced at (a wall clock's)
+    orders: bool = False  # some run had transport orders: the report adds their measures (ORDER_METRICS)
 
 
 def build_report(
@@ -67,10 +68,12 @@ def build_report(
     ordered = tuple(sorted(rows, key=lambda r: str(r["key"])))
     summaries = tuple(summarise(ordered))
     candidates = tuple(s.planner for s in summaries if s.planner != baseline)
-    comparisons = {c: tuple(paired(ordered, metric, c, baseline) for metric in COMPARED) for c in candidates}
+    orders = any(r.get("measures") is not None for r in ordered)
+    compared = COMPARED + (ORDER_METRICS if orders else ())
+    comparisons = {c: tuple(paired(ordered, metric, c, baseline) for metric in compared) for c in candidates}
     worst = {c: _worst(ordered, c, baseline, where) for c in candidates}
     paced = {str(r["planner"]): float(r["paced"]) for r in ordered if r.get("paced") is not None}
-    return Report(title, baseline, candidates, ordered, summaries, comparisons, worst, tuple(verdicts), paced)
+    return Report(title, baseline, candidates, ordered, summaries, comparisons, worst, tuple(verdicts), paced, orders)
 
 
 def paced_note(report: Report) -> str | None:
@@ -161,6 +164,22 @@ def summary_table(report: Report) -> tuple[list[str], list[list[str]]]:
     return head, body
 
 
+def orders_table(report: Report) -> tuple[list[str], list[list[str]]]:
+    """Per planner, the measures of its runs with transport orders: means, deadline misses and stalls
+    summed; ``–`` where none of its runs has the figure."""
+    head = ["planner", "runs with orders", *(_labelled(m) for m in ORDER_METRICS)]
+    body = []
+    for s in report.summaries:
+        mine = [r for r in report.rows if r["planner"] == s.planner and r.get("measures") is not None]
+        cells = [short(s.planner), str(len(mine))]
+        for metric in ORDER_METRICS:
+            total = s.totals.get(metric)
+            counted = total is not None and s.means[metric] is not None
+            cells.append(f"{total:.0f}" if counted else figure(s.means[metric]))
+        body.append(cells)
+    return head, body
+
+
 def comparison_table(report: Report, candidate: str) -> tuple[list[str], list[list[str]]]:
     head = ["metric", "n", "baseline mean", "mean difference", "95% CI", "relative", "verdict"]
     body = []
@@ -200,6 +219,8 @@ def markdown(report: Report) -> str:
         "",
     ]
     lines += ["## Planners", "", *_markdown_table(*summary_table(report)), ""]
+    if report.orders:
+        lines += ["## Orders", "", *_markdown_table(*orders_table(report)), ""]
     note = paced_note(report)
     lines += [note, ""] if note is not None else []
     for candidate in report.candidates:

@@ -11,7 +11,7 @@ from collections import defaultdict
 from html import escape
 
 from fleetsim.sweep.plots import differences_plot, distribution_plot, fleet_size_plot
-from fleetsim.sweep.report import Report, comparison_table, paced_note, short, summary_table
+from fleetsim.sweep.report import Report, comparison_table, orders_table, paced_note, short, summary_table
 from fleetsim.sweep.stats import METRICS
 
 __all__ = ["html_page"]
@@ -42,7 +42,7 @@ def _table(head: list[str], body: list[list[str]], css_id: str) -> str:
 
 def _distributions(report: Report) -> list[str]:
     plots = []
-    for name in ("throughput", "makespan", "waiting_share"):
+    for name in ("throughput", "makespan", "waiting_share", *(("orders_per_hour",) if report.orders else ())):
         metric = METRICS[name]
         groups = {
             short(s.planner): [
@@ -89,6 +89,7 @@ def html_page(report: Report) -> str:
         lines = "".join(f'<li class="{"fail" if v.holds else "ok"}">{escape(v.line())}</li>' for v in report.verdicts)
         parts.append(f'<h2>Gate</h2><ul id="gate">{lines}</ul>')
     parts += ["<h2>Planners</h2>", _table(*summary_table(report), "planners")]
+    parts += ["<h2>Orders</h2>", _table(*orders_table(report), "orders")] if report.orders else []
     note = paced_note(report)
     parts += [] if note is None else [f'<p id="paced">{escape(note)}</p>']
     parts += ['<h2>Distributions</h2><div class="plots">', *_distributions(report), _fleet_size(report), "</div>"]

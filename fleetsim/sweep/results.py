@@ -28,6 +28,7 @@ __all__ = [
     "ResultsFile",
     "read_results",
     "record_problem",
+    "relabelled",
     "rows_by_key",
 ]
 
@@ -146,3 +147,13 @@ def _cut_partial_line(path: Path) -> None:
 def rows_by_key(rows: Iterable[dict[str, Any]]) -> list[dict[str, Any]]:
     """Rows in key order: reports do not depend on the order runs finished in."""
     return sorted(rows, key=lambda row: str(row["key"]))
+
+
+def relabelled(rows: Iterable[dict[str, Any]], planner: str, label: str) -> list[dict[str, Any]]:
+    """``planner``'s rows as ``label``'s (its keys too): another sweep's runs (a baseline saved from the main
+    branch, say) beside this sweep's, so a report pairs each of its planners with them by scenario id."""
+    return [
+        {**row, "planner": label, "key": f"{label} | {row['id']} | {row['repetition']}"}
+        for row in rows
+        if row["planner"] == planner
+    ]

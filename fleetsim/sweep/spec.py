@@ -11,6 +11,8 @@ A sweep spec is YAML::
     record: failed                                   # failed | all | none: runs that keep their artifacts
     vehicle_types: {...}                             # as in a suite, for generated sources
     defaults: {time_limit: 60}                       # as in a suite, for generated sources
+    dispatcher: mypkg.dispatch:MyDispatcher          # of every scenario with orders, whatever its suite names
+    order_seeds: [1, 2, 3]                           # each scenario with an order stream once per seed
     sources:
       - suite: ../scenario_suites/examples.fleetsim.yaml   # a suite file or folder; FILE::NAME for one
       - name: warehouses                                   # a suite entry with 'generate', plus:
@@ -71,6 +73,8 @@ _KEYS = {
     "defaults",
     "sources",
     "disturbances",
+    "dispatcher",
+    "order_seeds",
 }
 _SOURCE_KEYS = ("count", "seed")  # what a generated source adds to a suite entry
 _DISTURBANCE_KEYS = ("seeds", "stop", "stops_per_vehicle_hour")
@@ -119,6 +123,8 @@ class SweepSpec:
     record: Record
     sources: tuple[SuiteSource | GeneratedSource, ...]
     disturbances: SweepDisturbances | None = None
+    dispatcher: str | None = None  # module:attr, for every scenario with transport orders
+    order_seeds: tuple[int, ...] | None = None  # every scenario with an order stream runs once per seed
 
 
 def _error(problem: str, locate: Locate, where: YamlPath, *, key: bool = False) -> SweepSpecError:
@@ -169,6 +175,8 @@ def load_sweep_spec(path: Path | str) -> SweepSpec:
         record=record,
         sources=_sources(path, data, locate),
         disturbances=_disturbances(data.get("disturbances"), locate),
+        dispatcher=_dispatcher(data.get("dispatcher"), locate),
+        order_seeds=None if "order_seeds" not in data else _seeds(data["order_seeds"], locate, ("order_seeds",)),
     )
 
 
@@ -209,15 +217,34 @@ def _disturbances(raw: Any, locate: Locate) -> SweepDisturbances | None:
     stop = raw.get("stop", [5, 30])
     if not (isinstance(stop, list) and len(stop) == 2 and all(map(_number, stop)) and 0 < stop[0] <= stop[1]):
         raise _error(f"stop={stop!r} must be [MIN, MAX] seconds with 0 < MIN <= MAX", locate, (*where, "stop"))
-    seeds = raw["seeds"]
+    return SweepDisturbances(
+        float(rate), (float(stop[0]), float(stop[1])), _seeds(raw["seeds"], locate, (*where, "seeds"))
+    )
+
+
+def _seeds(seeds: Any, locate: Locate, where: YamlPath) -> tuple[int, ...]:
+    """A non-empty list of whole numbers >= 0, each once."""
+    name = str(where[-1])
     if not isinstance(seeds, list) or not seeds:
-        raise _error(f"seeds={seeds!r} must be a non-empty list of whole numbers >= 0", locate, (*where, "seeds"))
+        raise _error(f"{name}={seeds!r} must be a non-empty list of whole numbers >= 0", locate, where)
     for index, seed in enumerate(seeds):
         if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0 or seeds.index(seed) != index:
-            raise _error(
-                f"seeds[{index}]={seed!r} must be a whole number >= 0, listed once", locate, (*where, "seeds", index)
-            )
-    return SweepDisturbances(float(rate), (float(stop[0]), float(stop[1])), tuple(seeds))
+            raise _error(f"{name}[{index}]={seed!r} must be a whole number >= 0, listed once", locate, (*where, index))
+    return tuple(seeds)
+
+
+def _dispatcher(raw: Any, locate: Locate) -> str | None:
+    """``dispatcher: module:attr``: its form only; workers import it (one that does not import there fails
+    its runs, as a planner does)."""
+    if raw is None:
+        return None
+    if not isinstance(raw, str) or not re.fullmatch(r"[\w.]+:[\w.]+", raw):
+        raise _error(
+            f"dispatcher={raw!r} must be a dispatcher spec, module:attr (e.g. fleetsim.dispatchers:NearestVehicleDispatcher)",
+            locate,
+            ("dispatcher",),
+        )
+    return raw
 
 
 def _planners(raw: Any, locate: Locate) -> tuple[str, ...]:

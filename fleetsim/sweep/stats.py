@@ -1,7 +1,9 @@
 """Statistics of a sweep: per-planner figures and paired comparisons with bootstrap confidence intervals.
 
 Each figure is read from a sweep's records (a run's result plus the sweep's keys): throughput, waiting
-share and planner time per call are worked out from the result's tasks, times and metrics.
+share and planner time per call are worked out from the result's tasks, times and metrics; the measures of
+runs with transport orders (:data:`ORDER_METRICS`: orders per hour, service times, ...) from its
+``measures``, and a run without orders has none of them.
 
 A comparison pairs each candidate run with the baseline planner's run of the same scenario (same id),
 takes the per-scenario differences and resamples them (a paired bootstrap, percentile interval, 95 %,
@@ -19,9 +21,12 @@ from typing import Any
 
 import numpy as np
 
+from fleetsim.gating.measures import GATED_MEASURES, GatedMeasure, measure_value
+
 __all__ = [
     "BOOTSTRAP_SEED",
     "METRICS",
+    "ORDER_METRICS",
     "Paired",
     "PlannerSummary",
     "SweepMetric",
@@ -95,6 +100,20 @@ def _scaled(
     return scaled
 
 
+def _measure(measure: GatedMeasure) -> SweepMetric:
+    """A measure of runs with transport orders, read from a record's ``measures``; shares in percent."""
+
+    def read(record: Mapping[str, Any]) -> float | None:
+        return measure_value(record.get("measures"), measure.name)
+
+    if measure.unit == "share":
+        return SweepMetric(measure.name, measure.label, "%", measure.better, _scaled(read, 100))
+    return SweepMetric(measure.name, measure.label, measure.unit, measure.better, read)
+
+
+# The measures of runs with transport orders, in the order the report shows them.
+ORDER_METRICS = tuple(measure.name for measure in GATED_MEASURES)
+
 METRICS: Mapping[str, SweepMetric] = {
     m.name: m
     for m in (
@@ -110,6 +129,7 @@ METRICS: Mapping[str, SweepMetric] = {
         SweepMetric(
             "planner_time_per_call", "planner time per call", "ms", "lower", _scaled(planner_time_per_call, 1000)
         ),
+        *map(_measure, GATED_MEASURES),
     )
 }
 
@@ -120,7 +140,7 @@ class PlannerSummary:
     runs: int
     errors: int  # runs that never ran: planner not importable, scenario not loading, worker lost
     means: Mapping[str, float | None]  # metric name -> mean over the runs that have the figure
-    totals: Mapping[str, float]  # alerts, contacts, rejections, deadlocks: summed
+    totals: Mapping[str, float]  # alerts, contacts, rejections, deadlocks, deadline misses, stalls: summed
     least_clearance: float | None  # the closest two footprints came in any run (None: never within reach)
 
 
@@ -136,7 +156,7 @@ def summarise(rows: Sequence[Mapping[str, Any]]) -> list[PlannerSummary]:
             means[name] = math.fsum(values) / len(values) if values else None
         totals = {
             name: math.fsum(v for v in map(METRICS[name].read, mine) if v is not None)
-            for name in ("alerts", "contacts", "rejections", "deadlocks")
+            for name in ("alerts", "contacts", "rejections", "deadlocks", "deadline_misses", "stalls")
         }
         clearances = [v for v in map(METRICS["clearance"].read, mine) if v is not None]
         summaries.append(

@@ -11,6 +11,7 @@ import pytest
 
 PLANNERS_DIR = Path(__file__).resolve().parents[1] / "data" / "sweep"
 EXAMPLES = Path(__file__).resolve().parents[2] / "scenario_suites" / "examples"
+WAREHOUSE = EXAMPLES.parent / "warehouse"
 TABLE_PLANNER = "sweep_planners:TablePlanner"  # reads planner_options' table from the scenario's folder
 
 
@@ -61,3 +62,12 @@ def write_suite_sweep(folder: Path, suite: Path, planners: Sequence[str]) -> Pat
         encoding="utf-8",
     )
     return spec
+
+
+def write_pool_project(folder: Path) -> Path:
+    """The shipped warehouse under a closed pool of four orders for five minutes (``pool-shift.yaml`` of the
+    test data) in ``folder``; the suite file's path."""
+    shutil.copytree(WAREHOUSE, folder / "warehouse")
+    suite = folder / "pool.fleetsim.yaml"
+    shutil.copy(PLANNERS_DIR / "pool-shift.yaml", suite)
+    return suite

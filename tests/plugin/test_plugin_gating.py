@@ -662,7 +662,7 @@ def save_baseline(
     return current
 
 
-def test_makespan_regression_beyond_the_limit_fails_the_session(
+def test_makespan_regression_beyond_the_limit_fails_the_scenarios_own_item_and_the_session(
     project: pytest.Pytester, recorded: dict[str, LockEntry]
 ) -> None:
     current = save_baseline(project, recorded, {"crossing": 1.06, "corridor-passing-bay": 1.04})
@@ -671,8 +671,16 @@ def test_makespan_regression_beyond_the_limit_fails_the_session(
         "--planner", RESERVING, "--fleetsim-compare", "base.json", "--fleetsim-compare-fail", "makespan:5%"
     )
 
-    result.assert_outcomes(passed=2)
+    result.assert_outcomes(passed=1, failed=1)  # the regressed scenario's item is red, not only the exit status
     assert result.ret == pytest.ExitCode.TESTS_FAILED
+    result.stdout.fnmatch_lines(
+        [
+            f"regression: makespan * -> {current['crossing']} (+6.0%, limit 5%) against the baseline",
+            "*",
+            "broken: the baseline (--fleetsim-compare-fail)",
+        ]
+    )
+    result.stdout.fnmatch_lines([f"FAILED {SUITE_FILE}::crossing - regression: makespan *"])
     result.stdout.fnmatch_lines(
         [
             "compared with base.json:",

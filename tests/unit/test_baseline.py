@@ -240,8 +240,10 @@ def test_the_catalogue_knows_which_way_is_better() -> None:
         "tasks_completed",
         "realtime_factor",
         "clearance",
+        "orders_per_hour",
+        "utilisation",
     }
-    assert len(METRICS) == 12
+    assert len(METRICS) == 20
     assert METRICS["makespan"].read(ROW) == 22.0
 
 
@@ -278,7 +280,11 @@ def test_a_bad_threshold_names_the_text_the_problem_and_the_known_metrics(text: 
         parse_threshold(text)
     message = str(caught.value)
     assert message.startswith(f"--fleetsim-compare-fail={text!r}: {problem}; ")
-    known = "alerts, clearance, contacts, distance, makespan, planner_calls, planner_wall_time, realtime_factor, rejections, tasks_completed, waiting_time, wall_time"
+    known = (
+        "alerts, clearance, contacts, deadline_misses, distance, empty_travel_share, makespan, orders_per_hour, "
+        "planner_calls, planner_wall_time, realtime_factor, rejections, service_time_median, service_time_p95, "
+        "stalls, tasks_completed, utilisation, wait_for_pickup_p95, waiting_time, wall_time"
+    )
     assert message.endswith(f"; known: {known}")
 
 
