@@ -155,7 +155,8 @@ class MasterControl:
             if message.topic.endswith("/fleetsim/site"):
                 self._read_site(document)
             elif "/transportOrders/" in message.topic:
-                self.tasks[document["taskId"]] = document
+                if "taskId" in document:  # a transport order to claim (docs/vda5050.md) is not its business
+                    self.tasks[document["taskId"]] = document
             else:
                 self.states[document["serialNumber"]] = document
             if self.vehicles:

@@ -82,6 +82,8 @@ class OrderBook:
         self._started: set[str] = set()
         self._completed: set[str] = set()
         self._sequences: dict[int, list[str]] = {vehicle: [] for vehicle in sorted(vehicle_types)}
+        self._holding: set[int] = set()  # the vehicles whose sequence is not empty
+        self.version = 0  # counts the changes of any sequence (so a caller may keep what it derives from them)
         self._tasks: dict[str, list[Task]] = {}  # an assigned order's tasks in force (its remaining stops)
         self._stop_of: dict[int, tuple[str, int]] = {}  # task id -> (order id, stop index), for tasks in force
         self._next_task = first_task_id
@@ -100,6 +102,10 @@ class OrderBook:
 
     def has_orders(self, vehicle_id: int) -> bool:
         return bool(self._sequences[vehicle_id])
+
+    def holding(self) -> frozenset[int]:
+        """The vehicles with orders in force (a sequence that is not empty)."""
+        return frozenset(self._holding)
 
     def stop_of(self, task_id: int) -> tuple[Order, int] | None:
         """The order and stop index a task in force serves, or ``None`` (a ``tasks.csv`` task)."""
@@ -179,6 +185,11 @@ class OrderBook:
             for order_id in new[same:]:
                 appended += self._assign(order_id, vehicle, time)
             self._sequences[vehicle] = list(new)
+            if new:
+                self._holding.add(vehicle)
+            else:
+                self._holding.discard(vehicle)
+            self.version += 1
             changes.append(Requeue(vehicle, tuple(withdrawn[vehicle]), tuple(appended), tuple(new)))
         for order_id, record in self._records.items():
             if order_id in self._open and order_id not in self._holder:
@@ -239,5 +250,8 @@ class OrderBook:
         holder = self._holder.pop(order_id, None)
         if holder is not None:
             self._sequences[holder].remove(order_id)
+            if not self._sequences[holder]:
+                self._holding.discard(holder)
+            self.version += 1
         self._started.discard(order_id)
         return True

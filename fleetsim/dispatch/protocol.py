@@ -14,6 +14,12 @@ refused assignment is refused whole, and the assignments in force stand.
 
 A planner class may be the dispatcher too (one object with ``dispatch`` beside ``plan_routes`` and
 ``fix_legs``), or the suite (``dispatcher:``) and the command line (``--dispatcher``) name one apart.
+
+Two optional hooks, for a dispatcher whose decisions arrive on their own time (the VDA 5050 fleet, whose
+master control claims orders whenever it likes: ``fleetsim.vda5050.transport``): ``wants_call() -> bool``,
+asked at the start of every step, asks for a call this step (``why`` then holds ``"request"``; it is made
+even when no order is open), and ``refused(rejections)`` is told the rules its last answer broke when that
+answer was refused. Both are plain calls in the loop's thread: keep them cheap, and let them not raise.
 """
 
 from __future__ import annotations
@@ -30,8 +36,9 @@ if TYPE_CHECKING:
 
 __all__ = ["Assignment", "Dispatcher", "OpenOrder", "OrderBoard", "Why"]
 
-# Why the dispatcher is asked: orders were released, a vehicle ran out of work, or its period came round.
-Why = Literal["release", "idle", "period"]
+# Why the dispatcher is asked: orders were released, a vehicle ran out of work, its period came round, or
+# it asked to be (its optional ``wants_call()``).
+Why = Literal["release", "idle", "period", "request"]
 
 
 @dataclass(frozen=True, slots=True)

@@ -69,10 +69,18 @@ class Dispatching:
         self.layout = scenario.layout
         self._drivers = drivers
         self._invoke = invoke
+        self._wants_call, self._refused = getattr(dispatcher, "wants_call", None), getattr(dispatcher, "refused", None)
         period = scenario.shift.dispatch_period if scenario.shift is not None else None
         self._period = max(1, round(period / dt)) if period else None
         self._dwelling: dict[int, _Dwell] = {}
         self._idle: frozenset[int] = frozenset()
+        # Who is idle, and who has work and is not dwelling, worked out again only when a task queue, an
+        # order sequence or the dwelling vehicles changed since (most steps none does): what they were
+        # worked out from (the task heads, the book's version, the dwells' count of changes), and them.
+        self._vehicles = frozenset(controller.plans)
+        self._dwell_changes = 0
+        self._worked_from: tuple[object, int, int] | None = None
+        self._worked_out: tuple[frozenset[int], tuple[int, ...]] = (frozenset(), ())
         self.calls = 0
         # For the measures (fleetsim.sim.measures), over the window from the warm-up's end: the odometers
         # when the window opened, and what is summed.
@@ -121,24 +129,30 @@ class Dispatching:
         if step % self._backlog_every == 0:
             self.backlog.append((now, self.book.open_count()))
         idle = self._idle_vehicles()
-        if idle - self._idle:
+        if idle is not self._idle and idle - self._idle:
             why.append("idle")
         self._set_idle(idle, now)
         if self._opened is not None:
             self._count_standing(idle)
         if self._period is not None and step % self._period == 0:
             why.append("period")
-        if not why or self.book.open_count() == 0:
+        if self._wants_call is not None and self._wants_call():
+            why.append("request")
+        if not why or (self.book.open_count() == 0 and "request" not in why):
             return []
         return self._ask(now, why, events)
 
     def _idle_vehicles(self) -> frozenset[int]:
-        heads = self.controller.tasks.heads()
-        return frozenset(
-            vehicle
-            for vehicle in self.controller.plans
-            if vehicle not in heads and not self.book.has_orders(vehicle) and vehicle not in self._dwelling
-        )
+        """The vehicles with no task, no order and no dwell (and, kept beside them, the working ones)."""
+        heads = self.controller.tasks.heads()  # the same object until a queue changes
+        source = (heads, self.book.version, self._dwell_changes)
+        worked_from = self._worked_from
+        if worked_from is not None and worked_from[0] is heads and worked_from[1:] == source[1:]:
+            return self._worked_out[0]
+        idle = self._vehicles.difference(heads.keys(), self.book.holding(), self._dwelling.keys())
+        working = tuple(self._vehicles.difference(idle, self._dwelling.keys()))
+        self._worked_from, self._worked_out = source, (idle, working)
+        return idle
 
     def _ask(self, now: float, why: list[Why], events: list[list[Any]]) -> list[Rejection]:
         board = self.book.board(now, why, sorted(self._idle))
@@ -147,6 +161,8 @@ class Dispatching:
         assignments = validate_answer(answer)
         problems = check_answer(assignments, self.book.context())
         if problems:
+            if self._refused is not None:
+                self._refused(problems)
             return problems
         for change in self.book.apply(assignments, now):
             self.controller.requeue(change.vehicle_id, change.withdraw, change.append)
@@ -155,15 +171,19 @@ class Dispatching:
         return []
 
     def _count_standing(self, idle: frozenset[int]) -> None:
-        """This step's seconds of the vehicles that stand with work: dwelling at a stop, or blocked."""
+        """This step's seconds of the vehicles that stand with work: dwelling at a stop, or blocked (a
+        vehicle's step added one at a time, as the sums have always been made)."""
+        assert idle is self._worked_out[0]  # the working vehicles kept beside it are this step's
+        dt = self._dt
+        for _ in range(len(self._dwelling)):
+            self.dwell_time += dt
         state_of = self.controller.state_of
-        for vehicle in self.controller.plans:
-            if vehicle in self._dwelling:
-                self.dwell_time += self._dt
-            elif vehicle not in idle and state_of(vehicle).speed == 0.0:
-                self.blocked_time += self._dt
+        for _ in range(sum(1 for vehicle in self._worked_out[1] if state_of(vehicle).speed == 0.0)):
+            self.blocked_time += dt
 
     def _set_idle(self, idle: frozenset[int], now: float) -> None:
+        if idle is self._idle:
+            return
         for vehicle in sorted(idle - self._idle):
             self._idle_since[vehicle] = now
         for vehicle in sorted(self._idle - idle):
@@ -199,6 +219,7 @@ class Dispatching:
         braking = driver.halt()
         ends = time + dwell if braking == 0.0 and driver.speed == 0.0 else None
         self._dwelling[vehicle] = _Dwell(order.id, index, dwell, time, ends)
+        self._dwell_changes += 1
 
     def _dwell(self, now: float, events: list[list[Any]]) -> None:
         for vehicle in sorted(self._dwelling):
@@ -207,6 +228,7 @@ class Dispatching:
                 dwell.ends = now + dwell.seconds
             if dwell.ends is not None and now >= dwell.ends - _EPS:
                 del self._dwelling[vehicle]
+                self._dwell_changes += 1
                 self._drivers[vehicle].release()
                 self._serve(vehicle, dwell.order, dwell.stop, now, events)
 

@@ -23,6 +23,10 @@ map, :mod:`.places`) and ``transportOrders/<taskId>`` (retained: each task when 
 next one, and again when it is done); fleetsim reads a third, ``master/connection``, where a master
 control may tell its own presence as a vehicle does (its last will CONNECTIONBROKEN fails the run).
 A run that ends stuck asks :meth:`Vda5050Fleet.explain_wait` which order each waiting vehicle waits for.
+
+In a run with transport orders and no other dispatcher, the fleet is the dispatcher too (``dispatch``,
+with the hooks ``wants_call`` and ``refused``): the master control sees the orders on
+``transportOrders/<orderId>`` and claims them for its vehicles (:mod:`.transport`).
 """
 
 from __future__ import annotations
@@ -36,6 +40,7 @@ from dataclasses import dataclass, field, replace
 from datetime import datetime, timedelta, timezone
 from typing import Any
 
+from fleetsim.dispatch.protocol import Assignment, OrderBoard
 from fleetsim.enums import Disturbed, Progress, TurnCapability
 from fleetsim.errors import MasterControlError
 from fleetsim.layout.layout import Layout
@@ -86,6 +91,7 @@ from fleetsim.vda5050.state_model import (
     Velocity,
     Visualization,
 )
+from fleetsim.vda5050.transport import TransportOrders, goal_places
 
 __all__ = ["Vda5050Fleet", "Vda5050Settings"]
 
@@ -167,6 +173,9 @@ class Vda5050Fleet:
         self._site_link: MqttLink | None = None
         self.master_name = ""  # the serialNumber a master control announced on master/connection
         self.master_left = ""  # how and when it went OFFLINE with no task queued (the run may go on)
+        self.dispatching = False  # the run's dispatcher too: the loop has asked wants_call() or dispatch()
+        self.transport: TransportOrders | None = None  # the orders on the broker, once started (dispatching)
+        self._first_board: OrderBoard | None = None  # a board shown before the start, published at it
 
     @property
     def site(self) -> SiteGraph:
@@ -194,6 +203,8 @@ class Vda5050Fleet:
                 refused.append(replace(found[0], message=found[0].message + more))
             self._announce(vehicle, fleet)
             self._report(vehicle, fleet)
+        if self.transport is not None:
+            self.transport.observe(fleet.tasks)
         return refused
 
     def pacing(self) -> Pacing:
@@ -244,6 +255,27 @@ class Vda5050Fleet:
             parts.append(self.master_left)
         return "; ".join(parts)
 
+    # -- the dispatcher protocol: the master control claims orders (.transport) ----------------------
+
+    def dispatch(self, board: OrderBoard, fleet: FleetSnapshot, layout: Layout) -> Sequence[Assignment]:
+        """The next claim of the master control, as an answer (one a call), once what ``board`` shows has
+        been published; before the vehicles start (the step's dispatch comes first), the board is kept."""
+        self.dispatching = True
+        if self.transport is None:
+            self._first_board = board
+            return []
+        return self.transport.answer(board)
+
+    def wants_call(self) -> bool:
+        """Call me this step: a claim waits, or the orders' states have moved on (.transport)."""
+        self.dispatching = True
+        return self.transport is not None and self.transport.waiting()
+
+    def refused(self, rejections: Sequence[Rejection]) -> None:
+        """The claim just answered was refused: told back on the order's topic."""
+        if self.transport is not None:
+            self.transport.refuse(rejections)
+
     def plan_routes(self, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
         return self._hand(task.vehicle_id)
 
@@ -260,6 +292,8 @@ class Vda5050Fleet:
                 vehicle.link.disconnect()
         if self._site_link is not None and self._site_link.connected:
             self._site_link.disconnect()
+        if self.transport is not None and self.transport.link.connected:
+            self.transport.link.disconnect()
         if self.master is not None:
             self.master.stop()  # with everything it started
             self.master = None
@@ -295,10 +329,19 @@ class Vda5050Fleet:
             self.vehicles[vid] = vehicle
             self._publish(vehicle, "connection", self._connection(vehicle, ConnectionState.ONLINE), qos=1, retain=True)
             self._publish(vehicle, "factsheet", self._factsheet(vehicle, fleet), qos=1, retain=True)
+        if self.dispatching:
+            link = MqttLink(self.address, f"fleetsim-transport-{id(self):x}")
+            link.connect(settings.connect_timeout)
+            self.transport = TransportOrders(link, self._own_topic("transportOrders"), self.graph)
+            self.transport.subscribe()
+            if self._first_board is not None:
+                self.transport.show(self._first_board)
+                self._first_board = None
         print(
             f"fleetsim: {len(self.vehicles)} VDA 5050 {settings.version} vehicles on {self.address.url} "
             f"(topics {settings.interface_name}/v2/{settings.manufacturer}/<serialNumber>/..., "
-            f"{settings.interface_name}/fleetsim/site and .../transportOrders/<taskId>)",
+            f"{settings.interface_name}/fleetsim/site and .../transportOrders/"
+            + ("<orderId> (claims on .../<orderId>/claim))" if self.dispatching else "<taskId>)"),
             file=sys.stderr,
             flush=True,
         )
@@ -330,13 +373,16 @@ class Vda5050Fleet:
         deadline = time.monotonic() + self.settings.start_timeout
         for vehicle in self.vehicles.values():
             self._announce(vehicle, fleet)  # the tasks it is to dispatch
-        while not any(v.link.pending for v in self.vehicles.values()):
+        while not self._master_spoke():
             self._check_master(fleet)
             left = deadline - time.monotonic()
             if left <= 0:
                 assert self.address is not None
+                what = "sent no message to any vehicle"
+                if self.transport is not None:  # with orders to claim, a claim or its presence will do
+                    what += f", claimed no order and announced nothing on {self._own_topic('master/connection')}"
                 msg = (
-                    f"the master control sent no message to any vehicle within {self.settings.start_timeout:g} s; the "
+                    f"the master control {what} within {self.settings.start_timeout:g} s; the "
                     f"vehicles were ONLINE on {self.address.url} (uagv/v2/.../connection) and waited at t = 0"
                 )
                 raise MasterControlError(msg)
@@ -345,6 +391,13 @@ class Vda5050Fleet:
                 self._publish(vehicle, "state", self._state(vehicle, state, 0.0))
             next(iter(self.vehicles.values())).link.wait(min(1.0, left))
         self.started = time.monotonic()
+
+    def _master_spoke(self) -> bool:
+        """A message to a vehicle waits; dispatching, a claim too, or the master control said ONLINE (the
+        first order may come long after t = 0)."""
+        if any(v.link.pending for v in self.vehicles.values()):
+            return True
+        return self.transport is not None and (self.transport.link.pending > 0 or bool(self.master_name))
 
     def _check_master(self, fleet: FleetSnapshot) -> None:
         """A master control that has gone ends the run with a :class:`MasterControlError` naming how:
@@ -569,6 +622,8 @@ class Vda5050Fleet:
         """Publish each task when it becomes the vehicle's next; a task no longer queued is done."""
         assert self._site_link is not None
         queue = fleet.tasks.get(vehicle.vehicle_id, ())
+        if self.transport is not None:  # an order's stops are on its own topic (.transport), not as tasks
+            queue = tuple(task for task in queue if task.order_id is None)
         for task_id in sorted(vehicle.announced - {t.id for t in queue}):
             vehicle.announced.discard(task_id)
             document = {
@@ -589,10 +644,7 @@ class Vda5050Fleet:
             )
 
     def _transport_order(self, task: Task, vehicle: _Vehicle, now: float) -> dict[str, Any]:
-        graph = self.site
-        segment = task.goal_segment
-        edges = sorted({graph.edge_id(segment, t) for t in graph.traverses(segment)})
-        nodes = sorted({graph.node_at(segment, False), graph.node_at(segment, True)})
+        edges, nodes = goal_places(self.site, task.goal_segment)
         return {
             "taskId": str(task.id),
             "serialNumber": vehicle.serial,

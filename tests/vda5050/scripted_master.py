@@ -168,6 +168,10 @@ class ScriptedMaster:
         edges.append(goal_edge)
         if not edges:
             return None
+        return self._order_message(serial, path, edges)
+
+    def _order_message(self, serial: str, path: list[str], edges: list[str]) -> dict[str, Any]:
+        """A new order for ``serial`` driving ``edges`` through ``path``, all released."""
         sequence = 0  # a new order numbers its nodes and edges from 0
         self.orders_of[serial] = self.orders_of.get(serial, 0) + 1
         order_id = f"order-{serial}-{self.orders_of[serial]}"
