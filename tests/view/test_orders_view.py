@@ -90,7 +90,9 @@ def test_a_stall_is_the_next_event_names_the_orders_held_up_and_hover_says_the_o
     assert shown["stalled"] == [2] and shown["badges"] == {"1": "a", "2": "b"}
     row = page.locator('#events li[data-kind="stall"]')
     assert row.count() == 1
-    assert " ".join(row.inner_text().split()).startswith("16.10 s vehicle 2 stalled; orders held up: b (vehicle 2 (task 3")
+    assert " ".join(row.inner_text().split()).startswith(
+        "16.10 s vehicle 2 stalled; orders held up: b (vehicle 2 (task 3"
+    )
     x, y = page.evaluate("fleetsimView.screenOf(2)")
     box = page.locator("#canvas").bounding_box()
     page.mouse.move(box["x"] + x, box["y"] + y)
