@@ -38,7 +38,7 @@ import subprocess
 import sys
 import tempfile
 import time
-from collections.abc import Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from statistics import median
 
@@ -53,7 +53,7 @@ from fleetsim.planners import BFSPlanner, ReservingPlanner
 from fleetsim.planning.plans import Response, RouteError
 from fleetsim.planning.protocol import Planner, RoundCall
 from fleetsim.planning.snapshot import FleetSnapshot
-from fleetsim.scenario import ScenarioSettings, Task
+from fleetsim.scenario import ScenarioSettings, Task, VehicleType
 from fleetsim.sim import loop
 from fleetsim.sim.guard import PlannerGuard
 from fleetsim.sim.loop import run_scenario
@@ -158,9 +158,9 @@ class _Served(SubprocessPlanner):
         self.clock = clock
         self.started = 0.0
 
-    def _start(self, layout: Layout, fleet: FleetSnapshot) -> None:
+    def _start(self, layout: Layout, vehicles: Mapping[int, VehicleType], tasks: Iterable[Task]) -> None:
         begin = time.perf_counter()
-        super()._start(layout, fleet)
+        super()._start(layout, vehicles, tasks)
         self.started = time.perf_counter() - begin
 
     def plan_round(

@@ -138,14 +138,14 @@ def test_a_sweep_payload_carries_the_options_and_the_data_files_bytes(tmp_path: 
     assert (worker / "speeds.bin").read_bytes() == bytes(range(256))
 
 
-def test_the_init_message_of_protocol_1_4_holds_the_options_and_the_folder() -> None:
+def test_the_init_message_holds_the_options_and_the_folder_since_protocol_1_4() -> None:
     loaded = load_suite(ROOT / "scenario_suites" / "examples.fleetsim.yaml")
     scenario = load_scenario(next(s for s in loaded.scenarios if s.name == "crossing"), loaded)
     init = encode_init(scenario.layout, FleetController(scenario).snapshot(0.0), {"table": "t.csv"}, "/data/crossing")
     schema = json.loads((ROOT / "schemas" / "planner-init.schema.json").read_text(encoding="utf-8"))
     jsonschema.validate(init, schema)
     assert (init["protocol"], init["planner_options"], init["scenario_dir"]) == (
-        "fleetsim-planner/1.4",
+        "fleetsim-planner/1.5",
         {"table": "t.csv"},
         "/data/crossing",
     )

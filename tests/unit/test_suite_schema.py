@@ -68,8 +68,8 @@ def test_defaults_and_scenarios_accept_exactly_the_settings_of_scenario_settings
     schema = suite_schema()
     settings = {f.name for f in fields(ScenarioSettings)}
     # ... and the map options and planner options (merged key by key with a scenario's own), files and
-    # the order keys but a scenario's own orders.csv (fleetsim.load.suites.orders_entry).
-    given = {"map_options", "planner_options", "files", *DEFAULT_ORDER_KEYS}
+    # the order keys but a scenario's own orders.csv (fleetsim.load.suites.orders_entry), and the gate.
+    given = {"map_options", "planner_options", "files", "gate", *DEFAULT_ORDER_KEYS}
     assert set(schema["properties"]["defaults"]["properties"]) == settings | given
     assert settings <= set(schema["$defs"]["scenario"]["properties"])
 

@@ -539,7 +539,8 @@ def _scenario_entry(
         orders = orders if len(clean) == len(entry) else None
     expect = entry.get("expect", {})
     options = entry.get("map_options", {})
-    expectations = _expectations(expect) if isinstance(expect, dict) else None
+    # Read only what the schema passed (a value it refused is reported already, and is no number).
+    expectations = _expectations(expect) if isinstance(expect, dict) and check.clean((*where, "expect")) else None
     gate = _gate(entry.get("gate", base_gate), expectations, locate, where, errors)
     if (
         not complete
