@@ -202,10 +202,11 @@ class _Run:
         return done if self.dispatching is None else done and self.dispatching.done()
 
     def has_work(self) -> bool:
-        """Some vehicle has a task or some order is open (a fleet waiting for orders is not stuck)."""
-        if self.dispatching is None:
+        """Some vehicle has a task or some order is open (a fleet waiting for orders, or done with its tasks
+        before its shift ends, is not stuck)."""
+        if self.controller.tasks.heads():
             return True
-        return bool(self.controller.tasks.heads()) or self.dispatching.book.open_count() > 0
+        return self.dispatching is not None and self.dispatching.book.open_count() > 0
 
     def dispatch(self, step: int, now: float, stamp: float, events: list[list[Any]]) -> bool:
         """Dwells, releases and the dispatcher's call at the start of the step; False when the dispatcher

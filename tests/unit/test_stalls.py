@@ -65,3 +65,14 @@ def test_on_stall_end_ends_the_run_at_the_first_stall_and_fails_it() -> None:
     stall = next(f for f in result.failures if f.kind == "stall")
     assert stall.details["vehicle"] == 2 and stall.details["orders"] == ["b"]
     assert result_problem(result.to_dict()) is None
+
+
+def test_a_shift_of_tasks_alone_runs_to_its_end_once_they_are_done() -> None:
+    loop = scenario(())
+    tasks = dataclasses.replace(loop, tasks=_loop_tasks(), orders=(), shift=Shift(duration=200.0))
+    result = run_scenario(tasks, ReservingPlanner())
+    assert result.tasks_completed == result.tasks_total and result.ended == "shift-end" and result.deadlock is None
+
+
+def _loop_tasks() -> tuple[Task, ...]:
+    return (Task(1, 1, 7), Task(2, 2, 2))

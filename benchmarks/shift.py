@@ -1,0 +1,335 @@
+"""What transport orders cost the harness: a shift of orders against the same fleet driving the same trips.
+
+    python benchmarks/shift.py [--case shift|stretch|both] [--hours 8] [--minutes 10] [--repeat 3]
+                               [--profile shift|stretch] [--top 25]
+
+Two cases (issue 45, point 7), each on a site of ``fleetsim generate warehouse`` (``generate_warehouse``)
+run by the reference dispatcher (``NearestVehicleDispatcher``) and planner (``ReservingPlanner``):
+
+* ``shift``: 50 vehicles for ``--hours`` (8) on 24 one-way aisles of 60 m (96 pick, 32 drop stations,
+  150 parking places), a Poisson stream of 72 orders an hour, measured after 30 minutes' warm-up. Each
+  order is pick (dwell 20 s), drop (dwell 15 s), then a parking place (no dwell): the reference
+  dispatcher does not send idle vehicles away, so without the last stop an idle vehicle left on a drop
+  station blocks the next order for that station (a stall the diagnosis names ``blocked-by-idle``). The
+  site's dock (every drop on one ladder) serves about 85 orders an hour with this fleet and planner; at
+  72 the fleet is busy and not overloaded (the script prints the measures to check).
+* ``stretch``: 500 vehicles for ``--minutes`` (10) on the same kind of site ten times the size (80
+  aisles, 320 pick and 100 drop stations, 1,000 parking places) and ten times the demand: the first
+  minutes of a shift, vehicles leaving their parking places for their first orders.
+
+Each case runs twice per repeat, in alternating order (so that neither always runs first, on a warmer
+or a colder machine): with its orders, and as *the same fleet without them*: the same site and
+vehicles, with ``tasks.csv`` trips instead of orders: each vehicle gets as tasks the stops of the orders
+it served or held at the end of the first orders run, order by order as they were assigned to it. The
+motion is the same work (the same trips by the same vehicles), only front-loaded (every trip queued from
+the start, no dwell, no waiting for orders), and the run is as long (a shift without orders runs to its
+end; the standstill after the last trip, no deadlock, is allowed by a ``deadlock_after`` beyond the
+shift). Both runs keep no trace (the hash is computed all the same).
+
+Harness time = the run's wall time − the time inside the planner (``Metrics.planner_wall_time``) − the
+time inside the dispatcher (measured here by a wrapper around its ``dispatch``), per vehicle-step
+(vehicles × steps). Printed per case: the medians of the repeats for both runs and the added cost (the
+median of the repeats' paired ratios − 1); and, measured inside the orders run itself, the dispatch and
+order bookkeeping (``Run.dispatch`` less the dispatcher: dwells, releases, the board, checking and
+applying answers, idle and standing vehicles; ``Dispatching.reached``; the measures) and, apart, the
+shift's stall check (each second; explaining each stall found is a diagnosis of the fleet), each as a
+share of the rest of the harness (wrapping those methods adds about a microsecond per step). The two
+ways differ: the paired figure also holds what differs in the motion (the trips front-loaded, so more
+vehicles drive at once and wait on each other), the inside figure only the bookkeeping. The shift's wall
+time is the orders run's. Every repeat of a run must give the same trace hash (the script fails
+otherwise).
+
+Target (issue 45): dispatch and order bookkeeping add at most 10 % to the harness per vehicle-step
+(judged on the inside figure). The script exits 1 when a target is missed or hashes differ.
+
+``--profile CASE`` runs that case's orders run once more under cProfile and prints the functions with
+the most own time in ``fleetsim/dispatch`` and ``fleetsim/sim/dispatching.py`` (cProfile slows pure-Python
+code about 2x; read shares, not seconds).
+"""
+
+from __future__ import annotations
+
+import argparse
+import cProfile
+import dataclasses
+import pstats
+import statistics
+import tempfile
+import time
+from collections import defaultdict
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from fleetsim import load_scenario, load_suite
+from fleetsim.dispatch.protocol import Assignment, OrderBoard
+from fleetsim.dispatchers import NearestVehicleDispatcher
+from fleetsim.generate import WarehouseOptions, generate_warehouse
+from fleetsim.layout.layout import Layout
+from fleetsim.orders import Arrivals, Shift, StopDraw
+from fleetsim.planners import ReservingPlanner
+from fleetsim.planning.snapshot import FleetSnapshot
+from fleetsim.scenario import Scenario, Task
+from fleetsim.sim import loop
+from fleetsim.sim.dispatching import Dispatching
+from fleetsim.sim.loop import run_scenario
+from fleetsim.sim.result import RunResult
+
+TARGET_ADDED = 0.10
+
+
+@dataclass(frozen=True)
+class Case:
+    name: str
+    site: WarehouseOptions
+    rate: float  # orders an hour
+    warmup: float  # seconds
+
+
+CASES = {
+    "shift": Case(
+        "shift",
+        WarehouseOptions(aisles=24, aisle_length=60, vehicles=50, pick_stations=96, drop_stations=32, parking=150),
+        rate=72.0,
+        warmup=1800.0,
+    ),
+    "stretch": Case(
+        "stretch",
+        WarehouseOptions(aisles=80, aisle_length=60, vehicles=500, pick_stations=320, drop_stations=100, parking=1000),
+        rate=720.0,
+        warmup=0.0,
+    ),
+}
+
+
+class TimedDispatcher:
+    """The reference dispatcher, with the wall seconds spent inside it summed."""
+
+    def __init__(self) -> None:
+        self.inner = NearestVehicleDispatcher()
+        self.seconds = 0.0
+        self.calls = 0
+
+    def dispatch(self, board: OrderBoard, fleet: FleetSnapshot, layout: Layout) -> Sequence[Assignment]:
+        started = time.perf_counter()
+        try:
+            return self.inner.dispatch(board, fleet, layout)
+        finally:
+            self.seconds += time.perf_counter() - started
+            self.calls += 1
+
+
+@contextmanager
+def bookkeeping_clocks(spent: dict[str, float]) -> Iterator[None]:
+    """Adds the wall time of the loop's order methods to ``spent`` while open."""
+    clocked: list[tuple[type, str, Callable[..., Any]]] = []
+    methods = (
+        (loop._Run, "dispatch"),
+        (loop._Run, "check_stalls"),
+        (Dispatching, "reached"),
+        (Dispatching, "measures"),
+    )
+    for owner, method in methods:
+        original = getattr(owner, method)
+        clocked.append((owner, method, original))
+
+        def timed(*args: Any, _original: Callable[..., Any] = original, _label: str = method, **kwargs: Any) -> Any:
+            started = time.perf_counter()
+            try:
+                return _original(*args, **kwargs)
+            finally:
+                spent[_label] += time.perf_counter() - started
+
+        setattr(owner, method, timed)
+    try:
+        yield
+    finally:
+        for owner, method, original in clocked:
+            setattr(owner, method, original)
+
+
+def orders_scenario(case: Case, folder: Path, seconds: float) -> Scenario:
+    """The generated site with its suite's order stream: the case's rate, a parking place as last stop."""
+    generated = generate_warehouse(folder, case.site)
+    suite = load_suite(generated.suite)
+    scenario = load_scenario(suite.scenarios[0], suite)
+    stream = scenario.order_stream
+    assert stream is not None
+    stream = dataclasses.replace(
+        stream, arrivals=Arrivals("poisson", rate=case.rate), stops=(*stream.stops, StopDraw(("park",)))
+    )
+    shift = Shift(duration=seconds, warmup=min(case.warmup, seconds / 2))
+    return dataclasses.replace(scenario, order_stream=stream, shift=shift)
+
+
+def trips_scenario(scenario: Scenario, result: RunResult) -> Scenario:
+    """The same fleet without orders: the stops of the orders each vehicle served or held at the end as its
+    tasks, order by order as they were assigned to it (the reference dispatcher gives an idle vehicle one
+    order at a time, so that is the order it drove them in)."""
+    held: dict[int, list[tuple[float, str, list[int]]]] = defaultdict(list)
+    for order in result.orders:
+        if order["vehicle"] is not None:
+            held[order["vehicle"]].append((order["assigned"], order["id"], order["stops"]))
+    tasks: list[Task] = []
+    for vehicle in sorted(held):
+        for _, _, stops in sorted(held[vehicle]):
+            tasks += [Task(id=len(tasks) + i, vehicle_id=vehicle, goal_segment=s) for i, s in enumerate(stops, 1)]
+    assert scenario.shift is not None
+    settings = dataclasses.replace(scenario.settings, deadlock_after=2 * scenario.shift.duration)
+    return dataclasses.replace(
+        scenario, orders=(), order_stream=None, dispatcher=None, tasks=tuple(tasks), settings=settings
+    )
+
+
+@dataclass
+class Run:
+    result: RunResult
+    dispatcher: float  # seconds inside the dispatcher
+    bookkeeping: float  # seconds of dispatch and order bookkeeping, the dispatcher left out
+    stalls: float  # seconds of the shift's stall check (explaining each stall found included)
+
+    @property
+    def vehicle_steps(self) -> int:
+        return self.result.steps * len(self.result.metrics.distance)
+
+    @property
+    def harness(self) -> float:
+        m = self.result.metrics
+        return m.wall_time - m.planner_wall_time - self.dispatcher
+
+    def per_vehicle_step(self) -> float:
+        return self.harness / self.vehicle_steps * 1e6
+
+
+def run_orders(scenario: Scenario) -> Run:
+    spent: dict[str, float] = defaultdict(float)
+    dispatcher = TimedDispatcher()
+    with bookkeeping_clocks(spent):
+        result = run_scenario(scenario, ReservingPlanner(), keep_trace=False, dispatcher=dispatcher)
+    stalls = spent.pop("check_stalls")
+    return Run(result, dispatcher.seconds, sum(spent.values()) - dispatcher.seconds, stalls)
+
+
+def run_trips(scenario: Scenario) -> Run:
+    return Run(run_scenario(scenario, ReservingPlanner(), keep_trace=False), 0.0, 0.0, 0.0)
+
+
+def show_measures(result: RunResult) -> None:
+    assert result.measures is not None
+    m = result.measures
+    service = m.service_time
+    print(
+        f"  measures (after {m.window[0]:.0f} s warm-up): {m.released} released, {m.completed} completed, "
+        f"{m.orders_per_hour:.1f} orders/h, service median {service.median if service else 0:.0f} s, "
+        f"p95 {service.p95 if service else 0:.0f} s; utilisation {m.utilisation:.0%} (idle {m.idle_share:.0%}, "
+        f"dwelling {m.dwelling_share:.0%}, blocked {m.blocked_share:.0%}); stalls {m.stalls}; "
+        f"backlog slope {m.backlog_slope:+.1f}/h, overloaded: {m.overloaded}"
+    )
+
+
+def measure(case: Case, seconds: float, repeat: int, folder: Path) -> bool:
+    """Run ``case``; print its figures; True when its target is met and its hashes agree."""
+    scenario = orders_scenario(case, folder, seconds)
+    vehicles = len(scenario.vehicles)
+    print(
+        f"\n{case.name}: {vehicles} vehicles, {seconds / 3600:g} h simulated, {len(scenario.layout.segments)} segments, "
+        f"{case.rate:g} orders/h",
+        flush=True,
+    )
+    orders: list[Run] = []
+    trips: list[Run] = []
+    twin: Scenario | None = None
+    for number in range(repeat):
+        for kind in ("orders", "trips") if number % 2 == 0 else ("trips", "orders"):
+            if kind == "orders":
+                orders.append(run_orders(scenario))
+                twin = twin or trips_scenario(scenario, orders[-1].result)  # the first repeat runs orders first
+            else:
+                assert twin is not None
+                trips.append(run_trips(twin))
+            last = orders[-1] if kind == "orders" else trips[-1]
+            r, m = last.result, last.result.metrics
+            print(
+                f"  {kind:<6} wall {m.wall_time:8.1f} s  planner {m.planner_wall_time:7.1f} s  "
+                f"dispatcher {last.dispatcher:6.2f} s  harness {last.per_vehicle_step():6.2f} µs/vs  "
+                f"tasks {r.tasks_completed}/{r.tasks_total}  {r.ended}",
+                flush=True,
+            )
+    ok = True
+    for kind, runs in (("orders", orders), ("trips", trips)):
+        if len({run.result.trace_hash for run in runs}) != 1:
+            print(f"  {kind} runs gave different trace hashes: not deterministic")
+            ok = False
+    show_measures(orders[0].result)
+    with_orders = statistics.median(run.per_vehicle_step() for run in orders)
+    without = statistics.median(run.per_vehicle_step() for run in trips)
+    paired = statistics.median(
+        a.per_vehicle_step() / b.per_vehicle_step() - 1 for a, b in zip(orders, trips, strict=False)
+    )
+    inside = statistics.median(run.bookkeeping / (run.harness - run.bookkeeping - run.stalls) for run in orders)
+    booked = statistics.median(run.bookkeeping / run.vehicle_steps * 1e6 for run in orders)
+    stalls = statistics.median(run.stalls / (run.harness - run.bookkeeping - run.stalls) for run in orders)
+    stalled = statistics.median(run.stalls / run.vehicle_steps * 1e6 for run in orders)
+    wall = statistics.median(run.result.metrics.wall_time for run in orders)
+    realtime = seconds / wall
+    print(
+        f"  harness µs per vehicle-step (medians of {repeat}): with orders {with_orders:.2f}, the same trips "
+        f"without {without:.2f}: {paired:+.1%} (median of paired ratios)\n"
+        f"  inside the orders run: dispatch and order bookkeeping {booked:.2f} µs/vs, {inside:+.1%} of the rest "
+        f"of the harness [target <= {TARGET_ADDED:.0%}]; the stall check {stalled:.2f} µs/vs, {stalls:+.1%}\n"
+        f"  wall time of the {case.name} with orders: {wall:.1f} s ({realtime:.0f}x realtime; median of {repeat})"
+    )
+    return ok and inside <= TARGET_ADDED
+
+
+def profile(case: Case, seconds: float, folder: Path, top: int) -> None:
+    scenario = orders_scenario(case, folder, seconds)
+    profiler = cProfile.Profile()
+    profiler.runcall(
+        run_scenario, scenario, ReservingPlanner(), keep_trace=False, dispatcher=NearestVehicleDispatcher()
+    )
+    stats = pstats.Stats(profiler)
+    entries = stats.stats  # type: ignore[attr-defined]  # {(file, line, name): (cc, nc, tt, ct, callers)}
+    total = sum(tt for _, _, tt, _, _ in entries.values())
+    ours = [
+        (key, value)
+        for key, value in entries.items()
+        if "/fleetsim/dispatch/" in key[0] or key[0].endswith("/fleetsim/sim/dispatching.py")
+    ]
+    own = sum(value[2] for _, value in ours)
+    print(f"\nprofiled {case.name} (under cProfile, {total:.1f} s own time in all): {own / total:.1%} in dispatch")
+    print(f"top {top} functions of fleetsim/dispatch and sim/dispatching.py by own time (calls, own s, share):")
+    for (filename, line, name), (_, calls, tt, _, _) in sorted(ours, key=lambda item: -item[1][2])[:top]:
+        where = filename.rsplit("/fleetsim/", 1)[-1]
+        print(f"  {calls:>9} {tt:8.2f} {tt / total:6.1%}  {name} ({where}:{line})")
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--case", choices=("shift", "stretch", "both"), default="both")
+    parser.add_argument("--hours", type=float, default=8.0, help="the shift's simulated hours")
+    parser.add_argument("--minutes", type=float, default=10.0, help="the stretch's simulated minutes")
+    parser.add_argument("--repeat", type=int, default=3, help="paired runs per case")
+    parser.add_argument("--profile", choices=("shift", "stretch"), help="profile that case's orders run")
+    parser.add_argument("--top", type=int, default=25, help="functions listed with --profile")
+    args = parser.parse_args()
+    if args.repeat < 1:
+        parser.error(f"--repeat={args.repeat} must be at least 1")
+    if not args.hours > 0 or not args.minutes > 0:
+        parser.error(f"--hours={args.hours} and --minutes={args.minutes} must be > 0")
+    seconds = {"shift": args.hours * 3600.0, "stretch": args.minutes * 60.0}
+    ok = True
+    with tempfile.TemporaryDirectory() as tmp:
+        if args.profile is not None:
+            profile(CASES[args.profile], seconds[args.profile], Path(tmp) / "profile", args.top)
+            return 0
+        for name in ("shift", "stretch") if args.case == "both" else (args.case,):
+            ok = measure(CASES[name], seconds[name], args.repeat, Path(tmp) / name) and ok
+    print("\ntarget met" if ok else "\nTARGET MISSED")
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
