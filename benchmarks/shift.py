@@ -125,7 +125,7 @@ class TimedDispatcher:
 def bookkeeping_clocks(spent: dict[str, float]) -> Iterator[None]:
     """Adds the wall time of the loop's order methods to ``spent`` while open."""
     clocked: list[tuple[type, str, Callable[..., Any]]] = []
-    methods = (
+    methods: tuple[tuple[type, str], ...] = (
         (loop._Run, "dispatch"),
         (loop._Run, "check_stalls"),
         (Dispatching, "reached"),

@@ -12,7 +12,9 @@ def test_pytest_gates_a_measures_entry_without_a_hash_and_says_so(
     pytester: pytest.Pytester, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     path = suite(pytester.path, "    gate: measures\n    expect: {min_orders_per_hour: 1}\n")
-    result = pytester.runpytest(str(path), "--planner", "fleetsim.planners:ReservingPlanner", "-p", "no:cacheprovider")
+    result = pytester.runpytest_subprocess(
+        str(path), "--planner", "fleetsim.planners:ReservingPlanner", "-p", "no:cacheprovider"
+    )
     result.assert_outcomes(passed=1)
     assert not (pytester.path / "gate.fleetsim.lock.json").exists()
     table = result.stdout.str()
@@ -20,7 +22,7 @@ def test_pytest_gates_a_measures_entry_without_a_hash_and_says_so(
     assert table.split("orders:")[1].splitlines()[2].rstrip().endswith("measures")
     # Under CI a missing hash fails a hash-gated entry; one gated on measures has none to miss.
     monkeypatch.setenv("CI", "true")
-    hashed = pytester.runpytest(
+    hashed = pytester.runpytest_subprocess(
         str(suite(pytester.path / "hashed", "")),
         "--planner",
         "fleetsim.planners:ReservingPlanner",
@@ -28,9 +30,11 @@ def test_pytest_gates_a_measures_entry_without_a_hash_and_says_so(
         "no:cacheprovider",
     )
     hashed.assert_outcomes(failed=1)
-    ci = pytester.runpytest(str(path), "--planner", "fleetsim.planners:ReservingPlanner", "-p", "no:cacheprovider")
+    ci = pytester.runpytest_subprocess(
+        str(path), "--planner", "fleetsim.planners:ReservingPlanner", "-p", "no:cacheprovider"
+    )
     ci.assert_outcomes(passed=1)
-    failed = pytester.runpytest(
+    failed = pytester.runpytest_subprocess(
         str(suite(pytester.path / "tight", "    gate: measures\n    expect: {min_orders_per_hour: 10000}\n")),
         "--planner",
         "fleetsim.planners:ReservingPlanner",
