@@ -14,9 +14,10 @@ work are busier, not better — so gate it beside throughput and empty travel, n
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Literal
+
+from fleetsim.sim.measures import measure_value
 
 __all__ = ["GATED_MEASURES", "GatedMeasure", "measure_value"]
 
@@ -50,19 +51,3 @@ GATED_MEASURES: tuple[GatedMeasure, ...] = (
     GatedMeasure("empty_travel_share", "empty travel", "share", "lower"),
     GatedMeasure("stalls", "stalls", "", "lower", whole=True),
 )
-
-_TIMES = ("service_time", "wait_for_vehicle", "wait_for_pickup")  # each with its median, p95 and max
-
-
-def measure_value(measures: Mapping[str, Any] | None, name: str) -> float | None:
-    """``name`` (``service_time_p95``: that figure of the service times) from a result document's
-    ``measures``; None for a run without orders (``measures`` None) or without the figure (no order
-    completed, no distance driven)."""
-    if measures is None:
-        return None
-    for prefix in _TIMES:
-        if name.startswith(prefix + "_"):
-            stats = measures.get(prefix)
-            return None if stats is None else float(stats[name[len(prefix) + 1 :]])
-    value = measures.get(name)
-    return None if value is None else float(value)

@@ -34,7 +34,7 @@ from typing import Any
 
 from fleetsim.dispatch.book import OrderRecord
 
-__all__ = ["BACKLOG_EVERY", "OrderMeasures", "Stall", "Stats", "measure_orders"]
+__all__ = ["BACKLOG_EVERY", "OrderMeasures", "Stall", "Stats", "measure_orders", "measure_value"]
 
 BACKLOG_EVERY = 60.0  # seconds between two backlog samples
 _GROWTH_SHARE = 0.05  # of the arrival rate: a backlog slope above it grows
@@ -130,13 +130,7 @@ class OrderMeasures:
         """One of ``fleetsim.orders.MEASURES`` (``service_time_p95``: that figure of the service times) as the
         result shows it (rounded as in ``to_dict``: what is judged is what is read), or ``None`` when the run
         has none (no order completed, say)."""
-        shown = self.to_dict()
-        for prefix in ("service_time", "wait_for_vehicle", "wait_for_pickup"):
-            if measure.startswith(prefix + "_"):
-                stats = shown[prefix]
-                return None if stats is None else float(stats[measure[len(prefix) + 1 :]])
-        value = shown[measure]
-        return None if value is None else float(value)
+        return measure_value(self.to_dict(), measure)
 
     def to_dict(self) -> dict[str, Any]:
         def stats(value: Stats | None) -> dict[str, Any] | None:
@@ -175,6 +169,20 @@ class FleetTimes:
     blocked: float  # seconds standing still with work, not dwelling
     distance: float  # metres driven
     loaded_distance: float  # metres driven holding a started order
+
+
+def measure_value(measures: Mapping[str, Any] | None, name: str) -> float | None:
+    """``name`` (``service_time_p95``: that figure of the service times) from a result document's
+    ``measures``; None for a run without orders (``measures`` None) or without the figure (no order
+    completed, no distance driven)."""
+    if measures is None:
+        return None
+    for prefix in ("service_time", "wait_for_vehicle", "wait_for_pickup"):
+        if name.startswith(prefix + "_"):
+            stats = measures.get(prefix)
+            return None if stats is None else float(stats[name[len(prefix) + 1 :]])
+    value = measures.get(name)
+    return None if value is None else float(value)
 
 
 def measure_orders(
