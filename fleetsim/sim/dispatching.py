@@ -81,7 +81,6 @@ class Dispatching:
         self._dwell_changes = 0
         self._worked_from: tuple[object, int, int] | None = None
         self._worked_out: tuple[frozenset[int], tuple[int, ...]] = (frozenset(), ())
-        self.calls = 0
         # For the measures (fleetsim.sim.measures), over the window from the warm-up's end: the odometers
         # when the window opened, and what is summed.
         self.warmup = scenario.shift.warmup if scenario.shift is not None else 0.0
@@ -156,7 +155,6 @@ class Dispatching:
 
     def _ask(self, now: float, why: list[Why], events: list[list[Any]]) -> list[Rejection]:
         board = self.book.board(now, why, sorted(self._idle))
-        self.calls += 1
         answer = self._invoke(self.dispatcher.dispatch, board, self.controller.snapshot(now), self.layout)
         assignments = validate_answer(answer)
         problems = check_answer(assignments, self.book.context())

@@ -75,8 +75,6 @@ class PlannerGuard:
         self._tick_limit = self._limit  # what the tick compares the call in progress with (a round: more)
         self.calls = 0
         self.wall_time = 0.0
-        self.dispatch_calls = 0  # a dispatcher's calls and the wall seconds spent in them
-        self.dispatch_wall_time = 0.0
         self._armed = False
         self._previous: object = None
         self._call_started: float | None = None
@@ -164,8 +162,6 @@ class PlannerGuard:
             raise PlannerFault(msg, details=_planner_traceback(exc)) from None
         elapsed = _clock() - start
         self._call_started = None
-        self.dispatch_calls += 1
-        self.dispatch_wall_time += elapsed
         if elapsed > self._limit:
             raise PlannerFault(f"dispatch() did not return within the per-call timeout of {self.timeout:g} s")
         return answer
