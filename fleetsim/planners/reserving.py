@@ -44,6 +44,7 @@ from fleetsim.planners.fleet_index import FleetIndex
 from fleetsim.planners.making_way import WayOut, ways_out
 from fleetsim.planners.routing import legs_along, mark_goal_on_fixed, shortest_route, straight_line_estimate
 from fleetsim.planning.plans import FleetLeg, FleetPlan, Response, RouteError
+from fleetsim.planning.quiet import Quiet
 from fleetsim.planning.snapshot import FleetSnapshot
 from fleetsim.scenario import Task
 
@@ -95,6 +96,12 @@ class ReservingPlanner:
         # vehicle -> whom it last stepped aside for, where they stood: it does not step aside for them again
         # while they stand there (it came back and they had not moved: the dance is left to try)
         self._stepped_for: dict[int, tuple[tuple[int, int], ...]] = {}
+        # The quiet hint (fleetsim.planning.quiet): the vehicle of the last call when that call found it
+        # cruising along legs fixed far enough ahead with no vehicle without tasks near its next legs, and
+        # the segments of those legs; the epoch changes when a dance starts (every vehicle is asked then).
+        self._calm: tuple[int, frozenset[int]] | None = None
+        self._calm_after_clearing = False
+        self.quiet_epoch = 0
 
     def _conflicts_of(self, segment: int) -> frozenset[int]:
         assert self._layout is not None
@@ -111,6 +118,7 @@ class ReservingPlanner:
     # -- the protocol --------------------------------------------------------------------------------
 
     def plan_routes(self, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
+        self._calm = None
         index = self._refresh(fleet, layout)
         vehicle_id = task.vehicle_id
         danced = self._dance_step(fleet, index)
@@ -129,6 +137,7 @@ class ReservingPlanner:
         return [*danced, FleetPlan(vehicle_id, (*fixed, *route))]
 
     def fix_legs(self, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
+        self._calm = None
         index = self._refresh(fleet, layout)
         vehicle_id = task.vehicle_id
         danced = self._dance_step(fleet, index)
@@ -140,8 +149,19 @@ class ReservingPlanner:
         fixed_count = len(plan.fixed_legs)
         cleared = self._clear_idle_ahead(vehicle_id, plan, fleet, layout, index)
         response: list[FleetPlan] = [*danced, *cleared]
-        if fixed_count == len(plan.legs):
-            return response  # everything up to the goal is committed already
+        if fixed_count == len(plan.legs) or self._far_enough(plan, fleet):
+            # Everything up to the goal is committed already, or enough to drive on at speed: until its
+            # plan or what stands near its next legs changes, asking again changes nothing.
+            if not response and self._calm_after_clearing:
+                self._calm = (vehicle_id, frozenset(leg.segment for leg in plan.legs[1 : self.ahead_legs]))
+            if fixed_count == len(plan.legs):
+                return response
+            # (_fix would fix nothing; moving, it is not standing, so _unblock would only forget its looks.)
+            if cleared:
+                self._blocked.pop(vehicle_id, None)
+            else:
+                self._next_look.pop(vehicle_id, None)
+            return response
         extended = self._fix(plan, fleet, index)
         if extended is not plan:
             self._blocked.pop(vehicle_id, None)
@@ -152,6 +172,16 @@ class ReservingPlanner:
             self._blocked.pop(vehicle_id, None)
             return response
         return response + self._unblock(task, plan, fleet, layout, index)
+
+    def quiet(self, vehicle_id: int, fleet: FleetSnapshot) -> Quiet | None:
+        """The quiet hint (fleetsim.planning.quiet), given for a vehicle cruising along legs fixed far enough
+        ahead, with no vehicle without tasks near its next legs, and no dance going on: asked again, it
+        would answer the same empty list, and touch nothing of this planner's, until its plan changes or
+        other vehicles' fixed legs or queues near its next legs do."""
+        calm = self._calm
+        if calm is None or calm[0] != vehicle_id or self._dance is not None or vehicle_id in self._aside:
+            return None
+        return Quiet(watch=calm[1])
 
     # -- ranks ---------------------------------------------------------------------------------------
 
@@ -184,7 +214,7 @@ class ReservingPlanner:
         ahead = sum(lengths[leg.segment] for leg in legs[1:first])
         horizon = self._horizon(vehicle_id, fleet)
         if ahead >= horizon:
-            return plan  # it has enough fixed before it to drive on at speed
+            return plan  # it has enough fixed before it to drive on at speed (_far_enough)
         end = first
         while end < len(legs) and not index.others_fixed_near(vehicle_id, legs[end].segment):
             end += 1
@@ -210,6 +240,12 @@ class ReservingPlanner:
             return plan
         committed = tuple(replace(leg, fixed=True) for leg in legs[first:take])
         return FleetPlan(vehicle_id, (*legs[:first], *committed, *legs[take:]))
+
+    def _far_enough(self, plan: FleetPlan, fleet: FleetSnapshot) -> bool:
+        """Its fixed legs ahead reach past its horizon: :meth:`_fix` fixes nothing more."""
+        lengths = self._lengths
+        ahead = sum(lengths[leg.segment] for leg in plan.legs[1 : len(plan.fixed_legs)])
+        return ahead >= self._horizon(plan.vehicle_id, fleet)
 
     def _horizon(self, vehicle_id: int, fleet: FleetSnapshot) -> float:
         """How far ahead a vehicle fixes its way: its braking distance from full speed and a margin."""
@@ -365,6 +401,8 @@ class ReservingPlanner:
         aside = self._aside.get(vehicle_id)
         if aside is not None:
             idle += [(other, set(aside[3])) for other, _ in aside[2] if not fleet.tasks.get(other)]
+        # Nobody to move, and no standing aside: nothing here changes until near vehicles do (the quiet hint).
+        self._calm_after_clearing = not idle and aside is None
         for other, avoid in idle:
             if other in taken:
                 continue
@@ -542,6 +580,7 @@ class ReservingPlanner:
                 onward = route
             plans.append(FleetPlan(member, (current, *legs, *onward)))
         self._dance = Dance(moves, fleet.time, progressed=fleet.time)
+        self.quiet_epoch += 1  # every vehicle is asked while it goes on
         self._group = frozenset(members)
         self._dance_time = fleet.time
         return self._committed(self._assumed(plans, index), fleet)

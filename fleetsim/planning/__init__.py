@@ -3,7 +3,8 @@
 from fleetsim.planning.checks import CheckContext, Rejection, RejectionCode, check_plan, check_plans
 from fleetsim.planning.controller import CallOutcome, FleetController, validate_response
 from fleetsim.planning.plans import FleetLeg, FleetPlan, Response, ResponseItem, RouteError
-from fleetsim.planning.protocol import Planner
+from fleetsim.planning.protocol import Planner, QuietPlanner
+from fleetsim.planning.quiet import Quiet
 from fleetsim.planning.reservations import CollisionAlert, ConflictTable, find_alerts
 from fleetsim.planning.snapshot import FleetSnapshot, VehicleState
 from fleetsim.planning.tasks import TaskBook
@@ -18,6 +19,8 @@ __all__ = [
     "FleetPlan",
     "FleetSnapshot",
     "Planner",
+    "Quiet",
+    "QuietPlanner",
     "Rejection",
     "RejectionCode",
     "Response",

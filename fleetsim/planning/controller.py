@@ -21,6 +21,7 @@ from fleetsim.layout.layout import Layout
 from fleetsim.planning.checks import CheckContext, Rejection, check_plans
 from fleetsim.planning.plans import FleetPlan, RouteError, hands_back
 from fleetsim.planning.protocol import Planner, RoundCall, RoundPlanner
+from fleetsim.planning.quiet import Quiet, Resting
 from fleetsim.planning.reservations import CollisionAlert, ConflictTable, ReservationIndex
 from fleetsim.planning.snapshot import FleetSnapshot, VehicleState, initial_plan, initial_state, read_only
 from fleetsim.planning.tasks import TaskBook
@@ -90,7 +91,14 @@ def validate_response(response: object, method: Method, vehicle_id: int) -> tupl
 class FleetController:
     """The mutable planning state of one run: plans, vehicle states, task queues."""
 
-    def __init__(self, scenario: Scenario, invoke: Invoke = _direct, invoke_round: InvokeRound = _direct_round) -> None:
+    def __init__(
+        self,
+        scenario: Scenario,
+        invoke: Invoke = _direct,
+        invoke_round: InvokeRound = _direct_round,
+        *,
+        quiet: bool = True,
+    ) -> None:
         self.layout: Layout = scenario.layout
         self._invoke = invoke
         self._invoke_round = invoke_round
@@ -117,6 +125,8 @@ class FleetController:
         # The alerts of the last reservation check, valid while no plan has changed since. Plans that
         # only lost legs (driven past) reserve less, so they can end alerts but never start one.
         self._alerts: tuple[CollisionAlert, ...] | None = None
+        # The vehicles a planner's quiet hint lets rest (fleetsim.planning.quiet); None: hints ignored.
+        self.resting: Resting | None = Resting(self.layout.conflicts) if quiet else None
 
     # -- views ---------------------------------------------------------------------------------------
 
@@ -154,6 +164,8 @@ class FleetController:
     # -- changes -------------------------------------------------------------------------------------
 
     def _put_plan(self, plan: FleetPlan) -> None:
+        if self.resting is not None:
+            self.resting.plan_changed(self._plans.get(plan.vehicle_id), plan)
         self._plans[plan.vehicle_id] = plan
         self._plans_copy.changed(plan.vehicle_id)
         self._unfolded.add(plan.vehicle_id)
@@ -219,7 +231,14 @@ class FleetController:
         # what every call needs is looked up once and the calls are made from this one frame.
         is_routed, invoke, layout = self.tasks.is_routed, self._invoke, self.layout
         plan_routes, fix_legs = planner.plan_routes, planner.fix_legs
+        quiet: Callable[[int, FleetSnapshot], Quiet | None] | None = getattr(planner, "quiet", None)
+        resting = self.resting if callable(quiet) else None
+        if resting is not None:
+            resting.wake_due(time)
+            resting.epoch(getattr(planner, "quiet_epoch", None))
         for vehicle_id, task in heads:
+            if resting is not None and vehicle_id in resting.resting:
+                continue  # its planner said asking again would change nothing until now
             method: Method
             if is_routed(task.id):
                 method, call = "fix_legs", fix_legs
@@ -231,10 +250,19 @@ class FleetController:
                 response: object = invoke(method, call, vehicle_id, task, self.snapshot(time), layout)
             except RouteError as error:  # the whole request cannot be routed
                 response = error
+            if resting is not None:  # the planner's own state may have changed: then everyone is asked again
+                resting.epoch(getattr(planner, "quiet_epoch", None))
             if type(response) is list and not response:
+                if resting is not None:
+                    assert quiet is not None
+                    hint = quiet(vehicle_id, self.snapshot(time))
+                    if hint is not None:
+                        resting.rest(vehicle_id, hint)
                 continue  # nothing to change: the most common answer, so tested first
             outcome = self._answered(vehicle_id, method, task, response, time)
             if outcome is not None:
+                if resting is not None and outcome.rejections:
+                    resting.wake_all()  # the planner may have counted a plan that is not in force
                 yield outcome
 
     def _rounds(self, planner: RoundPlanner, time: float, heads: list[tuple[int, Task]]) -> Iterator[CallOutcome]:
@@ -312,6 +340,8 @@ class FleetController:
         self._unmark(vehicle_id, set(withdraw))
         self.tasks.append(append)
         self._stale = True
+        if self.resting is not None:
+            self.resting.queue_changed(sorted({vehicle_id, *(task.vehicle_id for task in append)}), self._plans)
 
     def _unmark(self, vehicle_id: int, task_ids: set[int]) -> None:
         """The vehicle's plan without goal markers for ``task_ids``."""
@@ -328,6 +358,8 @@ class FleetController:
         dropped = self.tasks.drop_completed()
         if dropped:
             self._stale = True
+            if self.resting is not None:
+                self.resting.queue_changed(sorted({task.vehicle_id for task in dropped}), self._plans)
         for task in dropped:
             self._unmark(task.vehicle_id, {task.id})
         return dropped

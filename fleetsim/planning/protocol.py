@@ -15,10 +15,11 @@ if TYPE_CHECKING:
     from fleetsim.layout.layout import Layout
     from fleetsim.planning.checks import Rejection
     from fleetsim.planning.plans import Response, RouteError
+    from fleetsim.planning.quiet import Quiet
     from fleetsim.planning.snapshot import FleetSnapshot
     from fleetsim.scenario import Task
 
-__all__ = ["Planner", "RoundCall", "RoundPlanner", "SteppedPlanner"]
+__all__ = ["Planner", "QuietPlanner", "RoundCall", "RoundPlanner", "SteppedPlanner"]
 
 # A call of a planning round: (method name, vehicle id, task).
 RoundCall = tuple[str, int, "Task"]
@@ -124,4 +125,30 @@ class SteppedPlanner(Planner, Protocol):
         one drive at once, in that step. And ``explain_wait(vehicle_id, now) -> str``, asked when a run ends
         stuck (deadlock or time limit) for each vehicle with a pending task: a sentence the stuck-fleet
         diagnosis adds to that vehicle's finding (empty: nothing to add)."""
+        ...
+
+
+@runtime_checkable
+class QuietPlanner(Planner, Protocol):
+    """A planner that may say when asking about a vehicle again would change nothing (an optional hint: a
+    planner without ``quiet`` is asked about every vehicle with tasks on every planning round, as always).
+
+    Most calls of a run answer an empty list: a vehicle cruising along legs it has fixed far enough ahead
+    has nothing to change. Right after a call for a vehicle answers an empty list, the harness asks
+    ``quiet(vehicle_id, fleet)`` (``fleet``: the snapshot that call saw). A
+    [`Quiet`][fleetsim.planning.quiet.Quiet] answer promises that asking again would answer an empty list
+    and change nothing of the planner's own, until the vehicle's plan or task queue changes, another
+    vehicle's fixed legs change on a segment conflicting with one of ``Quiet.watch`` (or such a vehicle's
+    queue changes), the planning time reaches ``Quiet.until``, a plan of any call is rejected, or the
+    planner's ``quiet_epoch`` attribute (if any; read after every call and at every round) changes. Until
+    then the vehicle is not asked. ``None`` promises nothing.
+
+    The promise must hold exactly: a run must be the same, hash for hash, with the hint honoured or
+    ignored. ``ReservingPlanner`` gives it for cruising vehicles (half its calls on a busy warehouse); a
+    planner in another process is asked about every vehicle, as before.
+    """
+
+    def quiet(self, vehicle_id: int, fleet: FleetSnapshot) -> Quiet | None:
+        """After a call for ``vehicle_id`` answered an empty list: a promise that asking again changes
+        nothing until what it names changes, or ``None``."""
         ...

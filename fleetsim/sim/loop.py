@@ -88,6 +88,8 @@ class _Run:
     # Cruising vehicles stepped together in arrays (FleetCruise): None, when the fleet is large enough
     # for that to pay; True or False always or never (for tests that compare the two).
     batched: bool | None = None
+    # A planner's quiet hint honoured (fleetsim.planning.quiet); False for tests that compare the two.
+    quiet = True
 
     def __init__(
         self,
@@ -101,7 +103,7 @@ class _Run:
         self.planner = planner
         self.guard = guard
         self.settings = scenario.settings
-        self.controller = FleetController(scenario, invoke=guard, invoke_round=guard.round)
+        self.controller = FleetController(scenario, invoke=guard, invoke_round=guard.round, quiet=self.quiet)
         headings = HeadingTable(scenario.layout)
         states = self.controller.states
         self.drivers = {

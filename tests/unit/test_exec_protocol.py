@@ -12,6 +12,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+import fleetsim.sim.loop as loop
 from fleetsim import load_scenario, load_suite
 from fleetsim.enums import Disturbed, Progress
 from fleetsim.exec import SubprocessPlanner
@@ -476,9 +477,12 @@ class _InProcessRounds:
 
 
 @pytest.mark.parametrize("name", ["crossing", "loop-one-way", "mixed-shapes"])
-def test_a_planner_asked_in_rounds_makes_the_same_run_as_one_call_at_a_time(name: str) -> None:
+def test_a_planner_asked_in_rounds_makes_the_same_run_as_one_call_at_a_time(
+    name: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
     suite = load_suite(ROOT / "scenario_suites" / "examples.fleetsim.yaml")
     scenario = load_scenario(next(spec for spec in suite.scenarios if spec.name == name), suite)
+    monkeypatch.setattr(loop._Run, "quiet", False)  # (rounds ask every vehicle: the same calls, one by one)
     direct = run_scenario(scenario, ReservingPlanner())
     rounds = _InProcessRounds(ReservingPlanner())
     asked = run_scenario(scenario, rounds)  # type: ignore[arg-type]

@@ -1,0 +1,134 @@
+"""A planner's optional hint that asking about a vehicle again would change nothing (the protocol's
+:class:`~fleetsim.planning.protocol.QuietPlanner`), and the resting vehicles the controller skips until
+something their planner depends on changes.
+
+Most planner calls answer "nothing to change" (a vehicle cruising along legs it has fixed far enough
+ahead), yet every busy vehicle is asked on every planning round. A planner may say, right after such an
+answer, that the same call would keep answering an empty list, with no effect on the planner either,
+until something named happens: it gives its ``quiet(vehicle_id, fleet)`` method, which the controller
+asks after each call for a vehicle that answered an empty list, and which returns a :class:`Quiet` or
+``None`` (no promise). The vehicle then *rests*: it is not asked again until one of these happens:
+
+- its own plan or task queue changes (any accepted plan for it, a leg driven past, a task completed,
+  assigned or taken back);
+- another vehicle's fixed legs change on a segment that conflicts with one of ``Quiet.watch`` (a leg
+  fixed or driven past there), or such a vehicle's task queue changes;
+- the planning time reaches ``Quiet.until``;
+- any plan of any call is rejected (the planner may have counted it already);
+- the planner's ``quiet_epoch`` attribute changes (read after every call: the planner's own state
+  changed in a way it cannot express by segments, so every resting vehicle is asked again).
+
+The promise must be exact: a run is the same, call for call and hash for hash, with the hint honoured
+or ignored (``FleetController(..., quiet=False)``); the tests compare both. A planner without ``quiet``
+is asked as before.
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass
+
+from fleetsim.planning.plans import FleetPlan
+
+__all__ = ["Quiet", "Resting"]
+
+
+@dataclass(frozen=True, slots=True)
+class Quiet:
+    """A planner's promise about one vehicle: asked again, it would answer an empty list and change
+    nothing of its own, until the vehicle's plan or queue changes, or one of these happens.
+
+    Attributes:
+        watch: Segments: another vehicle's fixed legs changing on a segment that conflicts with one of
+            these (or such a vehicle's task queue changing) ends the rest.
+        until: The planning time from which the vehicle is asked again (``inf``: no time).
+    """
+
+    watch: frozenset[int] = frozenset()
+    until: float = math.inf
+
+
+def _fixed_segments(plan: FleetPlan | None) -> frozenset[int]:
+    return frozenset(leg.segment for leg in plan.fixed_legs) if plan is not None else frozenset()
+
+
+class Resting:
+    """The resting vehicles of one run and what wakes each (the controller keeps it up to date)."""
+
+    def __init__(self, conflicts: Callable[[int], frozenset[int]]) -> None:
+        self._conflicts = conflicts
+        self.resting: dict[int, frozenset[int]] = {}  # vehicle -> its watched segments
+        self._watchers: dict[int, set[int]] = {}  # watched segment -> the resting vehicles watching it
+        self._due: list[tuple[float, int]] = []  # (until, vehicle), a heap; stale entries skipped
+        self._until: dict[int, float] = {}
+        self._epoch: object = None  # the planner's quiet_epoch when last read
+
+    def epoch(self, epoch: object) -> None:
+        """The planner's ``quiet_epoch`` now: when it changed, every resting vehicle wakes."""
+        if epoch != self._epoch:
+            self._epoch = epoch
+            self.wake_all()
+
+    def rest(self, vehicle: int, quiet: Quiet) -> None:
+        self.wake(vehicle)
+        self.resting[vehicle] = quiet.watch
+        for segment in quiet.watch:
+            watchers = self._watchers.get(segment)
+            if watchers is None:
+                self._watchers[segment] = {vehicle}
+            else:
+                watchers.add(vehicle)
+        if quiet.until != math.inf:
+            self._until[vehicle] = quiet.until
+            heapq.heappush(self._due, (quiet.until, vehicle))
+
+    def wake(self, vehicle: int) -> None:
+        watch = self.resting.pop(vehicle, None)
+        if watch is None:
+            return
+        for segment in watch:
+            watchers = self._watchers[segment]
+            watchers.discard(vehicle)
+            if not watchers:
+                del self._watchers[segment]
+        self._until.pop(vehicle, None)
+
+    def wake_all(self) -> None:
+        self.resting.clear()
+        self._watchers.clear()
+        self._due.clear()
+        self._until.clear()
+
+    def wake_due(self, time: float) -> None:
+        """Wake the vehicles whose ``until`` has come (a planning round at ``time`` begins)."""
+        due = self._due
+        while due and due[0][0] <= time:
+            until, vehicle = heapq.heappop(due)
+            if self._until.get(vehicle) == until:
+                self.wake(vehicle)
+
+    def plan_changed(self, before: FleetPlan | None, after: FleetPlan) -> None:
+        """A vehicle's plan changed: it wakes, and so do those watching near the fixed legs it gained or lost."""
+        vehicle = after.vehicle_id
+        self.wake(vehicle)
+        if self._watchers:
+            self._near(vehicle, _fixed_segments(before) ^ _fixed_segments(after))
+
+    def queue_changed(self, vehicles: Iterable[int], plans: Mapping[int, FleetPlan]) -> None:
+        """These vehicles' task queues changed: they wake, and so do those watching near their fixed legs."""
+        for vehicle in vehicles:
+            self.wake(vehicle)
+            if self._watchers:
+                self._near(vehicle, _fixed_segments(plans.get(vehicle)))
+
+    def _near(self, vehicle: int, segments: Iterable[int]) -> None:
+        watchers, conflicts = self._watchers, self._conflicts
+        for segment in segments:
+            for near in conflicts(segment):
+                woken = watchers.get(near)
+                if woken:
+                    for other in sorted(woken):
+                        if other != vehicle:
+                            self.wake(other)

@@ -1,0 +1,233 @@
+"""The planner's quiet hint (fleetsim.planning.quiet): a resting vehicle is not asked until something it
+watches changes, and the reference planner's promise is exact (the same runs with the hint honoured or
+ignored)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+import fleetsim.sim.loop as loop
+from fleetsim.enums import Direction, Progress, Shape, Traverse
+from fleetsim.layout import Layout, Segment, build_layout
+from fleetsim.load.suites.scenario import load_scenario
+from fleetsim.load.suites.suite import load_suite
+from fleetsim.planners import ReservingPlanner
+from fleetsim.planning import FleetController, FleetLeg, FleetPlan, FleetSnapshot, Response
+from fleetsim.planning.quiet import Quiet, Resting
+from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Scenario, Task, Vehicle
+from fleetsim.sim.loop import run_scenario
+
+SUITES = sorted((Path(__file__).resolve().parents[2] / "scenario_suites").glob("*.fleetsim.yaml"))
+
+
+def _straight(sid: int, start: tuple[float, float], end: tuple[float, float]) -> Segment:
+    return Segment(sid, Shape.STRAIGHT, Direction.BOTH, (start, end))
+
+
+# Lane 1 → 2 → 3, a lane 11 → 12 → 13 crossing segment 2 (so 12 and 2 conflict), and a far segment 21.
+LAYOUT = build_layout(
+    [
+        *(_straight(sid, (4.0 * k, 0.0), (4.0 * k + 4.0, 0.0)) for k, sid in enumerate((1, 2, 3))),
+        _straight(11, (6.0, -8.0), (6.0, -4.0)),
+        _straight(12, (6.0, -4.0), (6.0, 4.0)),
+        _straight(13, (6.0, 4.0), (6.0, 8.0)),
+        _straight(21, (0.0, 20.0), (4.0, 20.0)),
+    ],
+    vehicle_radius=DEFAULT_VEHICLE_TYPE.swept_radius,
+)
+START = {1: 1, 2: 11, 3: 21}
+
+
+def _leg(segment: int, fixed: bool = False, goal: int | None = None) -> FleetLeg:
+    return FleetLeg(segment, Traverse.FORWARD, Progress.FORWARD, fixed, goal_for_task=goal)
+
+
+def _controller(*tasks: Task, quiet: bool = True) -> FleetController:
+    vehicles = tuple(
+        Vehicle(vid, segment, Traverse.FORWARD, Progress.FORWARD, DEFAULT_VEHICLE_TYPE)
+        for vid, segment in START.items()
+    )
+    types = {DEFAULT_VEHICLE_TYPE.name: DEFAULT_VEHICLE_TYPE}
+    return FleetController(Scenario("quiet", LAYOUT, types, vehicles, tasks), quiet=quiet)
+
+
+class Promising:
+    """Answers nothing and promises quiet for the vehicles in ``calm``, watching ``watch``; records calls."""
+
+    def __init__(self, calm: set[int], watch: frozenset[int] = frozenset(), until: float = math.inf) -> None:
+        self.calm, self.watch, self.until = calm, watch, until
+        self.calls: list[int] = []
+        self.answers: dict[int, list[FleetPlan]] = {}  # vehicle -> what its next call answers
+        self.quiet_epoch = 0
+
+    def plan_routes(self, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
+        return self.fix_legs(task, fleet, layout)
+
+    def fix_legs(self, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
+        self.calls.append(task.vehicle_id)
+        return self.answers.pop(task.vehicle_id, [])
+
+    def quiet(self, vehicle_id: int, fleet: FleetSnapshot) -> Quiet | None:
+        return Quiet(self.watch, self.until) if vehicle_id in self.calm else None
+
+
+def _round(controller: FleetController, planner: Promising, time: float) -> list[int]:
+    before = len(planner.calls)
+    controller.bookkeeping()
+    list(controller.consult_all(planner, time))
+    return planner.calls[before:]
+
+
+TASKS = (Task(1, 1, 3), Task(2, 2, 13))
+
+
+def test_a_vehicle_promised_quiet_is_not_asked_again_until_something_changes() -> None:
+    controller = _controller(*TASKS)
+    planner = Promising({1})
+    assert _round(controller, planner, 0.0) == [1, 2]
+    assert _round(controller, planner, 0.1) == [2]
+    assert _round(controller, planner, 0.2) == [2]
+
+
+def test_hints_ignored_every_vehicle_is_asked_every_round() -> None:
+    controller = _controller(*TASKS, quiet=False)
+    planner = Promising({1, 2})
+    assert [_round(controller, planner, t / 10) for t in range(3)] == [[1, 2]] * 3
+
+
+def test_a_planner_without_quiet_is_asked_as_before() -> None:
+    class Plain:
+        def __init__(self) -> None:
+            self.calls: list[int] = []
+
+        def plan_routes(self, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
+            self.calls.append(task.vehicle_id)
+            return []
+
+        fix_legs = plan_routes
+
+    controller = _controller(*TASKS)
+    planner = Plain()
+    for t in range(3):
+        list(controller.consult_all(planner, t / 10))
+    assert planner.calls == [1, 2] * 3
+
+
+def test_its_own_new_plan_wakes_a_resting_vehicle() -> None:
+    controller = _controller(*TASKS)
+    planner = Promising({1})
+    _round(controller, planner, 0.0)
+    controller.set_plan(FleetPlan(1, (_leg(1, fixed=True), _leg(2), _leg(3, goal=1))))
+    assert _round(controller, planner, 0.1) == [1, 2]
+
+
+def test_another_vehicle_fixing_a_leg_near_a_watched_segment_wakes_it_and_a_far_one_does_not() -> None:
+    controller = _controller(*TASKS)
+    planner = Promising({1}, watch=frozenset({2}))
+    _round(controller, planner, 0.0)
+    # Vehicle 2 fixes 11 (far from 2): vehicle 1 rests on; then 12, which crosses segment 2: it wakes.
+    planner.answers[2] = [FleetPlan(2, (_leg(11, fixed=True), _leg(12), _leg(13, goal=2)))]
+    assert _round(controller, planner, 0.1) == [2]
+    assert _round(controller, planner, 0.2) == [2]
+    planner.answers[2] = [FleetPlan(2, (_leg(11, fixed=True), _leg(12, fixed=True), _leg(13, goal=2)))]
+    assert _round(controller, planner, 0.3) == [2]  # vehicle 1 was asked before vehicle 2's answer
+    assert _round(controller, planner, 0.4) == [1, 2]
+
+
+def test_a_changed_queue_of_a_vehicle_holding_legs_near_a_watched_segment_wakes_it() -> None:
+    controller = _controller(*TASKS)
+    planner = Promising({1}, watch=frozenset({1}))
+    _round(controller, planner, 0.0)
+    controller.requeue(3, (), (Task(9, 3, 21),))  # vehicle 3 stands on 21, far from segment 1
+    assert _round(controller, planner, 0.1) == [2, 3]
+    controller.requeue(2, (), (Task(8, 2, 13),))  # vehicle 2 stands on 11, far too
+    assert _round(controller, planner, 0.2) == [2, 3]
+    controller.requeue(1, (), (Task(7, 1, 3),))  # its own queue
+    assert _round(controller, planner, 0.3) == [1, 2, 3]
+
+
+def test_the_time_a_vehicle_rests_until_wakes_it() -> None:
+    controller = _controller(*TASKS)
+    planner = Promising({1}, until=0.25)
+    assert [_round(controller, planner, t / 10) for t in range(4)] == [[1, 2], [2], [2], [1, 2]]
+
+
+def test_a_new_quiet_epoch_wakes_every_resting_vehicle() -> None:
+    controller = _controller(*TASKS)
+    planner = Promising({1, 2})
+    _round(controller, planner, 0.0)
+    assert _round(controller, planner, 0.1) == []
+    planner.quiet_epoch += 1
+    assert _round(controller, planner, 0.2) == [1, 2]
+    assert _round(controller, planner, 0.3) == []
+
+
+def test_a_rejected_plan_wakes_every_resting_vehicle() -> None:
+    controller = _controller(*TASKS)
+    planner = Promising({1})
+    _round(controller, planner, 0.0)
+    # Vehicle 2 answers a plan that does not start on the segment it stands on: rejected.
+    planner.answers[2] = [FleetPlan(2, (_leg(12, fixed=True), _leg(13, goal=2)))]
+    assert _round(controller, planner, 0.1) == [2]
+    assert _round(controller, planner, 0.2) == [1, 2]
+
+
+def test_resting_wakes_by_the_conflict_sets_of_the_legs_that_changed() -> None:
+    resting = Resting(LAYOUT.conflicts)
+    resting.rest(1, Quiet(frozenset({2})))
+    resting.rest(3, Quiet(frozenset({21})))
+    far = FleetPlan(2, (_leg(11, fixed=True),))
+    resting.plan_changed(None, far)
+    assert set(resting.resting) == {1, 3}
+    # Only the planned legs changed: nobody's reservations did.
+    resting.plan_changed(far, FleetPlan(2, (_leg(11, fixed=True), _leg(12))))
+    assert set(resting.resting) == {1, 3}
+    resting.plan_changed(far, FleetPlan(2, (_leg(11, fixed=True), _leg(12, fixed=True))))
+    assert set(resting.resting) == {3}
+    resting.plan_changed(None, FleetPlan(3, (_leg(21, fixed=True),)))  # its own plan
+    assert resting.resting == {}
+
+
+def _shipped() -> Iterator[tuple[str, Scenario]]:
+    for path in SUITES:
+        suite = load_suite(path)
+        for spec in suite.scenarios:
+            if spec.generate is None:
+                yield f"{path.name.split('.')[0]}::{spec.name}", load_scenario(spec, suite)
+
+
+def _run(scenario: Scenario, quiet: bool) -> tuple[tuple[object, ...], int]:
+    loop._Run.quiet = quiet
+    try:
+        result = run_scenario(scenario, ReservingPlanner(), keep_trace=True)
+    finally:
+        loop._Run.quiet = True
+    assert result.trace is not None
+    same = (result.trace.lines, result.trace_hash, result.ended, dict(result.metrics.distance), result.orders)
+    return same, result.metrics.planner_calls
+
+
+@pytest.mark.parametrize(
+    ("name", "scenario"), list(_shipped()), ids=lambda value: value if isinstance(value, str) else ""
+)
+def test_every_shipped_scenario_runs_the_same_with_the_reference_planners_hint_honoured_or_ignored(
+    name: str, scenario: Scenario
+) -> None:
+    honoured, calls = _run(scenario, quiet=True)
+    ignored, all_calls = _run(scenario, quiet=False)
+    assert honoured == ignored, name
+    assert calls <= all_calls
+
+
+def test_the_reference_planner_lets_cruising_vehicles_rest() -> None:
+    suite = load_suite(SUITES[0].parent / "examples.fleetsim.yaml")
+    honoured = ignored = 0
+    for spec in suite.scenarios:
+        scenario = load_scenario(spec, suite)
+        honoured += _run(scenario, quiet=True)[1]
+        ignored += _run(scenario, quiet=False)[1]
+    assert honoured < 0.8 * ignored, (honoured, ignored)
