@@ -3,7 +3,8 @@
 The lattice is :func:`fleetsim.strategies.geometry.warehouse` (the one Hypothesis draws too): each
 junction has a horizontal and a vertical straight crossing it and four 90° curves (10 waypoints, radius
 1 m) joining its arms; long straights (*aisles*) join neighbouring junctions: 8 segments per junction.
-:func:`write_fleet_scenario` puts a seeded fleet with tasks on such a lattice as a scenario folder.
+:func:`write_fleet_scenario` puts a seeded fleet with tasks on such a lattice as a scenario folder;
+:func:`write_congestion_scenario` one whose vehicles all work at a dozen stations.
 """
 
 from __future__ import annotations
@@ -21,7 +22,14 @@ from fleetsim.load.tiled.writer import write_map
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE
 from fleetsim.strategies.geometry import warehouse
 
-__all__ = ["aisles", "spread_starts", "warehouse", "warehouse_with_at_least", "write_fleet_scenario"]
+__all__ = [
+    "aisles",
+    "spread_starts",
+    "warehouse",
+    "warehouse_with_at_least",
+    "write_congestion_scenario",
+    "write_fleet_scenario",
+]
 
 
 def warehouse_with_at_least(segment_count: int) -> list[Segment]:
@@ -103,6 +111,45 @@ def write_fleet_scenario(
             here = goal
         near_parked |= layout.conflicts(here)
 
+    folder.mkdir(parents=True, exist_ok=True)
+    write_map(folder / "map.json", segments)
+    vehicle_lines = ["vehicle_id,start_segment_id,segment_orientation"]
+    vehicle_lines += [f"{v},{s},forward" for v, s in enumerate(starts, start=1)]
+    (folder / "vehicles.csv").write_text("\n".join(vehicle_lines) + "\n", encoding="utf-8")
+    task_lines = ["vehicle_id,goal_segment_id", *(f"{v},{g}" for v, g in rows)]
+    (folder / "tasks.csv").write_text("\n".join(task_lines) + "\n", encoding="utf-8")
+    return folder
+
+
+def write_congestion_scenario(
+    folder: Path, vehicles: int, *, seed: int = 1, stations: int = 12, trips: tuple[int, int] = (2, 3)
+) -> Path:
+    """A site where the whole fleet queues at ``stations`` pick and drop aisles, as a scenario folder.
+
+    The lattice has about two aisles per vehicle. Half the stations are picks, half drops, spread over the
+    site (their conflict sets do not meet). Each vehicle makes ``trips`` (inclusive range) trips, each a
+    pick then a drop station drawn at random, and then parks on an aisle of its own (conflicting with no
+    station and no other parking place), so that every task stays reachable. This is the reference
+    planner at its slowest: most vehicles stand queued behind others for most of the run. Seeded: the
+    same arguments give the same files. Returns ``folder``.
+    """
+    side = max(3, math.ceil(math.sqrt(2.0 * vehicles / 2)) + 2)
+    segments = warehouse(side)
+    layout = build_layout(segments, vehicle_radius=DEFAULT_VEHICLE_TYPE.swept_radius)
+    rng = random.Random(seed)
+    shuffled = aisles(side)
+    rng.shuffle(shuffled)
+    chosen = spread_starts(layout, shuffled, stations, f"aisles of a {side}x{side} lattice")
+    picks, drops = chosen[: stations // 2], chosen[stations // 2 :]
+    near_stations = set().union(*(layout.conflicts(s) for s in chosen))
+    free = [s for s in shuffled if s not in near_stations]
+    parking = spread_starts(layout, free, 2 * vehicles, "aisles away from the stations")
+    starts, parks = parking[:vehicles], parking[vehicles:]
+    rows: list[tuple[int, int]] = []
+    for vehicle_id in range(1, vehicles + 1):
+        for _ in range(rng.randint(*trips)):
+            rows += [(vehicle_id, rng.choice(picks)), (vehicle_id, rng.choice(drops))]
+        rows.append((vehicle_id, parks[vehicle_id - 1]))
     folder.mkdir(parents=True, exist_ok=True)
     write_map(folder / "map.json", segments)
     vehicle_lines = ["vehicle_id,start_segment_id,segment_orientation"]

@@ -36,13 +36,19 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
-from fleetsim.enums import JointKind, Traverse
+from fleetsim.enums import JointKind, Traverse, TurnCapability
 from fleetsim.layout.layout import Layout
 from fleetsim.layout.reachability import State, next_states
 from fleetsim.planners.choreography import Dance, choreograph
 from fleetsim.planners.fleet_index import FleetIndex
 from fleetsim.planners.making_way import WayOut, ways_out
-from fleetsim.planners.routing import legs_along, mark_goal_on_fixed, shortest_route, straight_line_estimate
+from fleetsim.planners.routing import (
+    StepTable,
+    legs_along,
+    mark_goal_on_fixed,
+    shortest_route,
+    straight_line_estimate,
+)
 from fleetsim.planning.plans import FleetLeg, FleetPlan, Response, RouteError
 from fleetsim.planning.quiet import Quiet
 from fleetsim.planning.snapshot import FleetSnapshot
@@ -81,6 +87,7 @@ class ReservingPlanner:
         self._index: FleetIndex | None = None
         self._layout: Layout | None = None
         self._lengths: dict[int, float] = {}
+        self._tables: dict[TurnCapability, StepTable] = {}  # the layout's steps, per turn capability
         self._since: dict[int, tuple[int, float]] = {}  # vehicle -> (head task, when it became the head)
         self._blocked: dict[int, float] = {}  # vehicle -> since when it stands unable to fix a leg
         self._pushed: dict[int, float] = {}  # vehicle -> when it was last moved out of the way
@@ -101,6 +108,7 @@ class ReservingPlanner:
         # the segments of those legs; the epoch changes when a dance starts (every vehicle is asked then).
         self._calm: tuple[int, frozenset[int]] | None = None
         self._calm_after_clearing = False
+        self._idle_of: tuple[object, frozenset[int]] = (None, frozenset())  # (fleet.tasks, its idle vehicles)
         self.quiet_epoch = 0
 
     def _conflicts_of(self, segment: int) -> frozenset[int]:
@@ -390,20 +398,22 @@ class ReservingPlanner:
         those it stepped aside for (they do not move by themselves once it is out of their way)."""
         moved: list[FleetPlan] = []
         taken: set[int] = {vehicle_id}
-        ahead = [
-            other
-            for leg in plan.legs[1 : self.ahead_legs]
-            for other in index.holders(vehicle_id, leg.segment)
-            if not fleet.tasks.get(other)
-        ]
+        idle = self._idle(fleet)
+        fixed_near = index.fixed_near
+        next_legs = plan.legs[1 : self.ahead_legs]
+        ahead = (
+            [other for leg in next_legs for other in index.holders(vehicle_id, leg.segment) if other in idle]
+            if idle and any(not idle.isdisjoint(fixed_near.get(leg.segment, ())) for leg in next_legs)
+            else []
+        )
         near = self._near(plan, layout) if ahead else set()
-        idle = [(other, near) for other in ahead]
+        to_move = [(other, near) for other in ahead]
         aside = self._aside.get(vehicle_id)
         if aside is not None:
-            idle += [(other, set(aside[3])) for other, _ in aside[2] if not fleet.tasks.get(other)]
+            to_move += [(other, set(aside[3])) for other, _ in aside[2] if other in idle]
         # Nobody to move, and no standing aside: nothing here changes until near vehicles do (the quiet hint).
-        self._calm_after_clearing = not idle and aside is None
-        for other, avoid in idle:
+        self._calm_after_clearing = not to_move and aside is None
+        for other, avoid in to_move:
             if other in taken:
                 continue
             plans = self._evacuate(other, avoid, (math.inf, -1), fleet, layout, index, taken, depth=0)
@@ -411,6 +421,13 @@ class ReservingPlanner:
                 moved += self._assumed(plans, index)
                 taken |= {p.vehicle_id for p in plans}
         return self._committed(moved, fleet) if moved else moved
+
+    def _idle(self, fleet: FleetSnapshot) -> frozenset[int]:
+        """The vehicles with no tasks left (worked out once per task queues shown)."""
+        tasks = fleet.tasks
+        if self._idle_of[0] is not tasks:
+            self._idle_of = (tasks, frozenset(vehicle for vehicle, queue in tasks.items() if not queue))
+        return self._idle_of[1]
 
     def _evacuate(
         self,
@@ -646,11 +663,14 @@ class ReservingPlanner:
             return total
 
         capability = fleet.vehicles[vehicle_id].type.turn_capability
+        table = self._tables.get(capability)
+        if table is None:
+            table = self._tables[capability] = StepTable(layout, capability)
         start = (last.segment, last.traverse, last.progress)
-        estimate = straight_line_estimate(layout, task.goal_segment)
+        estimate = straight_line_estimate(layout, task.goal_segment, table)
         limit = self.detour_limit if avoid_held else None
         path = shortest_route(
-            layout, capability, start, task.goal_segment, task.goal_progress, cost, estimate, limit, within
+            layout, capability, start, task.goal_segment, task.goal_progress, cost, estimate, limit, within, table
         )
         return None if path is None else legs_along(path, task, task.goal_progress)
 

@@ -22,6 +22,7 @@ from fleetsim.scenario import Task
 
 __all__ = [
     "State",
+    "StepTable",
     "breadth_first_route",
     "legs_along",
     "mark_goal_on_fixed",
@@ -63,22 +64,50 @@ def breadth_first_route(layout: Layout, capability: TurnCapability, start: State
     return None
 
 
-def straight_line_estimate(layout: Layout, goal: int) -> Estimate:
+Step = tuple[State, JointKind, tuple[int, int, int]]  # a next state, the joint crossed, its state_key
+
+
+class StepTable:
+    """One layout's :func:`next_steps` for one turn capability, each state's worked out once (with each
+    next state's :func:`state_key`), and each state's exit point: what every route search asks again and
+    again, looked up instead of worked out."""
+
+    def __init__(self, layout: Layout, capability: TurnCapability) -> None:
+        self.layout, self.capability = layout, capability
+        self._steps: dict[State, tuple[Step, ...]] = {}
+        self._exits: dict[tuple[int, Traverse], tuple[float, float]] = {}
+
+    def steps(self, state: State) -> tuple[Step, ...]:
+        steps = self._steps.get(state)
+        if steps is None:
+            found = next_steps(self.layout, self.capability, state)
+            steps = self._steps[state] = tuple((following, joint, state_key(following)) for following, joint in found)
+        return steps
+
+    def exit(self, segment: int, traverse: Traverse) -> tuple[float, float]:
+        point = self._exits.get((segment, traverse))
+        if point is None:
+            point = self._exits[segment, traverse] = self.layout.segments[segment].exit(traverse)
+        return point
+
+
+def straight_line_estimate(layout: Layout, goal: int, table: StepTable | None = None) -> Estimate:
     """An A* estimate that never overestimates a route's length to ``goal``.
 
     From the exit of a state, the vehicle must still reach an end of the goal segment (at least the
-    straight-line distance) and then drive the whole goal segment.
+    straight-line distance) and then drive the whole goal segment. ``table``: where exits are looked up.
     """
     target = layout.segments[goal]
     (ax, ay), (bx, by) = target.first, target.last
     length = target.length
     segments = layout.segments
     hypot = math.hypot
+    exit_of = table.exit if table is not None else (lambda segment, traverse: segments[segment].exit(traverse))
 
     def estimate(segment: int, traverse: Traverse) -> float:
         if segment == goal:
             return 0.0
-        x, y = segments[segment].exit(traverse)
+        x, y = exit_of(segment, traverse)
         return min(hypot(x - ax, y - ay), hypot(x - bx, y - by)) + length
 
     return estimate
@@ -94,6 +123,7 @@ def shortest_route(
     estimate: Estimate | None = None,
     limit: int | None = None,
     bound: float | None = None,
+    table: StepTable | None = None,
 ) -> list[State] | None:
     """Least total ``cost`` from ``start`` to segment ``goal`` (``start`` itself excluded).
 
@@ -103,8 +133,10 @@ def shortest_route(
     goal segment; a vehicle that turns in place can always meet it on the last leg, so only a curve-only
     vehicle's progress is constrained. A segment whose cost is infinite is never driven. The search
     gives up (``None``) after looking at ``limit`` states, or once every route left would cost more than
-    ``bound``.
+    ``bound``. ``table``: the layout's steps for ``capability``, kept between searches (else worked out
+    for this one).
     """
+    steps = (table if table is not None else StepTable(layout, capability)).steps
     must_match = arrive is not None and capability is TurnCapability.CURVE
     best: dict[State, float] = {start: 0.0}
     came_from: dict[State, State] = {}
@@ -123,13 +155,13 @@ def shortest_route(
             return None
         if state != start and state[0] == goal and (not must_match or state[2] is arrive):
             return rebuild_path(came_from, state)
-        for following, joint in next_steps(layout, capability, state):
+        for following, joint, key in steps(state):
             total = spent + cost(following[0], following[1], joint)
             if total < best.get(following, infinity):
                 best[following] = total
                 came_from[following] = state
                 bound = total + (estimate(following[0], following[1]) if estimate is not None else 0.0)
-                heapq.heappush(heap, (bound, state_key(following), total, following))
+                heapq.heappush(heap, (bound, key, total, following))
     return None
 
 
