@@ -106,7 +106,7 @@ class ReservingPlanner:
         # The quiet hint (fleetsim.planning.quiet): the vehicle of the last call when that call found it
         # cruising along legs fixed far enough ahead with no vehicle without tasks near its next legs, and
         # the segments of those legs; the epoch changes when a dance starts (every vehicle is asked then).
-        self._calm: tuple[int, frozenset[int]] | None = None
+        self._calm: tuple[int, frozenset[int], bool] | None = None
         self._calm_after_clearing = False
         self._idle_of: tuple[object, frozenset[int]] = (None, frozenset())  # (fleet.tasks, its idle vehicles)
         self.quiet_epoch = 0
@@ -161,7 +161,7 @@ class ReservingPlanner:
             # Everything up to the goal is committed already, or enough to drive on at speed: until its
             # plan or what stands near its next legs changes, asking again changes nothing.
             if not response and self._calm_after_clearing:
-                self._calm = (vehicle_id, frozenset(leg.segment for leg in plan.legs[1 : self.ahead_legs]))
+                self._calm = (vehicle_id, frozenset(leg.segment for leg in plan.legs[1 : self.ahead_legs]), False)
             if fixed_count == len(plan.legs):
                 return response
             # (_fix would fix nothing; moving, it is not standing, so _unblock would only forget its looks.)
@@ -169,6 +169,21 @@ class ReservingPlanner:
                 self._blocked.pop(vehicle_id, None)
             else:
                 self._next_look.pop(vehicle_id, None)
+            return response
+        following = plan.legs[fixed_count].segment
+        if (
+            not response
+            and self._calm_after_clearing
+            and index.others_fixed_near(vehicle_id, following)
+            and not self._standing(vehicle_id, fleet)
+        ):
+            # Still moving towards the end of its fixed legs, the next one held by another: _fix would fix
+            # nothing (its rank noted, as there) and _unblock only forget its looks. Until it stands, its
+            # plan changes or what stands near its next legs does, asking again changes nothing.
+            self._rank(vehicle_id, fleet)
+            self._next_look.pop(vehicle_id, None)
+            watch = frozenset(leg.segment for leg in plan.legs[1 : self.ahead_legs]) | {following}
+            self._calm = (vehicle_id, watch, True)
             return response
         extended = self._fix(plan, fleet, index)
         if extended is not plan:
@@ -182,14 +197,15 @@ class ReservingPlanner:
         return response + self._unblock(task, plan, fleet, layout, index)
 
     def quiet(self, vehicle_id: int, fleet: FleetSnapshot) -> Quiet | None:
-        """The quiet hint (fleetsim.planning.quiet), given for a vehicle cruising along legs fixed far enough
-        ahead, with no vehicle without tasks near its next legs, and no dance going on: asked again, it
-        would answer the same empty list, and touch nothing of this planner's, until its plan changes or
-        other vehicles' fixed legs or queues near its next legs do."""
+        """The quiet hint (fleetsim.planning.quiet), given when no dance goes on and no vehicle without tasks
+        stands near this one's next legs, for a vehicle cruising along legs fixed far enough ahead, and for
+        one still moving whose next leg another holds (until it stands): asked again, it would answer the
+        same empty list, and touch nothing of this planner's, until its plan changes or other vehicles'
+        fixed legs or queues near its next legs do."""
         calm = self._calm
         if calm is None or calm[0] != vehicle_id or self._dance is not None or vehicle_id in self._aside:
             return None
-        return Quiet(watch=calm[1])
+        return Quiet(watch=calm[1], until_standing=calm[2])
 
     # -- ranks ---------------------------------------------------------------------------------------
 

@@ -235,6 +235,7 @@ class FleetController:
         resting = self.resting if callable(quiet) else None
         if resting is not None:
             resting.wake_due(time)
+            resting.wake_standing(self._states)
             resting.epoch(getattr(planner, "quiet_epoch", None))
         for vehicle_id, task in heads:
             if resting is not None and vehicle_id in resting.resting:

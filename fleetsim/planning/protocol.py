@@ -139,7 +139,8 @@ class QuietPlanner(Planner, Protocol):
     [`Quiet`][fleetsim.planning.quiet.Quiet] answer promises that asking again would answer an empty list
     and change nothing of the planner's own, until the vehicle's plan or task queue changes, another
     vehicle's fixed legs change on a segment conflicting with one of ``Quiet.watch`` (or such a vehicle's
-    queue changes), the planning time reaches ``Quiet.until``, a plan of any call is rejected, or the
+    queue changes), the planning time reaches ``Quiet.until``, a round finds it at rest with
+    ``Quiet.until_standing``, a plan of any call is rejected, or the
     planner's ``quiet_epoch`` attribute (if any; read after every call and at every round) changes. Until
     then the vehicle is not asked. ``None`` promises nothing.
 

@@ -14,6 +14,7 @@ asks after each call for a vehicle that answered an empty list, and which return
 - another vehicle's fixed legs change on a segment that conflicts with one of ``Quiet.watch`` (a leg
   fixed or driven past there), or such a vehicle's task queue changes;
 - the planning time reaches ``Quiet.until``;
+- with ``Quiet.until_standing``, a planning round finds the vehicle at rest (below 1e-9 m/s);
 - any plan of any call is rejected (the planner may have counted it already);
 - the planner's ``quiet_epoch`` attribute changes (read after every call: the planner's own state
   changed in a way it cannot express by segments, so every resting vehicle is asked again).
@@ -29,6 +30,7 @@ import heapq
 import math
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
+from typing import Protocol
 
 from fleetsim.planning.plans import FleetPlan
 
@@ -44,10 +46,21 @@ class Quiet:
         watch: Segments: another vehicle's fixed legs changing on a segment that conflicts with one of
             these (or such a vehicle's task queue changing) ends the rest.
         until: The planning time from which the vehicle is asked again (``inf``: no time).
+        until_standing: The vehicle is asked again at the first planning round that finds it at rest
+            (its speed below 1e-9 m/s: a vehicle that braked to a stop may keep a few 1e-15 m/s).
     """
 
     watch: frozenset[int] = frozenset()
     until: float = math.inf
+    until_standing: bool = False
+
+
+STANDING = 1e-9  # m/s: below this speed a vehicle is at rest
+
+
+class _Moving(Protocol):
+    @property
+    def speed(self) -> float: ...
 
 
 def _fixed_segments(plan: FleetPlan | None) -> frozenset[int]:
@@ -64,6 +77,7 @@ class Resting:
         self._due: list[tuple[float, int]] = []  # (until, vehicle), a heap; stale entries skipped
         self._until: dict[int, float] = {}
         self._epoch: object = None  # the planner's quiet_epoch when last read
+        self._until_standing: set[int] = set()  # resting vehicles asked again once at rest
 
     def epoch(self, epoch: object) -> None:
         """The planner's ``quiet_epoch`` now: when it changed, every resting vehicle wakes."""
@@ -83,6 +97,8 @@ class Resting:
         if quiet.until != math.inf:
             self._until[vehicle] = quiet.until
             heapq.heappush(self._due, (quiet.until, vehicle))
+        if quiet.until_standing:
+            self._until_standing.add(vehicle)
 
     def wake(self, vehicle: int) -> None:
         watch = self.resting.pop(vehicle, None)
@@ -94,12 +110,21 @@ class Resting:
             if not watchers:
                 del self._watchers[segment]
         self._until.pop(vehicle, None)
+        self._until_standing.discard(vehicle)
 
     def wake_all(self) -> None:
         self.resting.clear()
         self._watchers.clear()
         self._due.clear()
         self._until.clear()
+        self._until_standing.clear()
+
+    def wake_standing(self, states: Mapping[int, _Moving]) -> None:
+        """Wake the vehicles resting until they stand that stand now (a planning round begins)."""
+        if self._until_standing:
+            for vehicle in sorted(self._until_standing):
+                if states[vehicle].speed < STANDING:
+                    self.wake(vehicle)
 
     def wake_due(self, time: float) -> None:
         """Wake the vehicles whose ``until`` has come (a planning round at ``time`` begins)."""

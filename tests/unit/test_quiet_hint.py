@@ -60,6 +60,7 @@ class Promising:
 
     def __init__(self, calm: set[int], watch: frozenset[int] = frozenset(), until: float = math.inf) -> None:
         self.calm, self.watch, self.until = calm, watch, until
+        self.until_standing = False
         self.calls: list[int] = []
         self.answers: dict[int, list[FleetPlan]] = {}  # vehicle -> what its next call answers
         self.quiet_epoch = 0
@@ -72,7 +73,7 @@ class Promising:
         return self.answers.pop(task.vehicle_id, [])
 
     def quiet(self, vehicle_id: int, fleet: FleetSnapshot) -> Quiet | None:
-        return Quiet(self.watch, self.until) if vehicle_id in self.calm else None
+        return Quiet(self.watch, self.until, self.until_standing) if vehicle_id in self.calm else None
 
 
 def _round(controller: FleetController, planner: Promising, time: float) -> list[int]:
@@ -154,6 +155,18 @@ def test_the_time_a_vehicle_rests_until_wakes_it() -> None:
     controller = _controller(*TASKS)
     planner = Promising({1}, until=0.25)
     assert [_round(controller, planner, t / 10) for t in range(4)] == [[1, 2], [2], [2], [1, 2]]
+
+
+def test_a_vehicle_resting_until_it_stands_is_asked_at_the_first_round_that_finds_it_at_rest() -> None:
+    controller = _controller(*TASKS)
+    planner = Promising({1})
+    planner.until_standing = True
+    moving = controller.states[1]._replace(speed=0.5)
+    controller.set_state(moving)
+    assert _round(controller, planner, 0.0) == [1, 2]
+    assert _round(controller, planner, 0.1) == [2]
+    controller.set_state(moving._replace(speed=3e-15))  # braked to a stop, a rounding error left
+    assert _round(controller, planner, 0.2) == [1, 2]
 
 
 def test_a_new_quiet_epoch_wakes_every_resting_vehicle() -> None:
