@@ -1,19 +1,22 @@
 """Compare the speed of this tree with another commit's, in alternating runs on one scenario.
 
     python benchmarks/compare.py REF [--rounds 4] [--vehicles 100] [--planner ReservingPlanner]
-                                     [--seconds 60] [--seed 1] [--site warehouse|congestion]
+                                     [--seconds 60] [--seed 1] [--site warehouse|congestion] [--best-of 3]
 
 A shared machine's speed drifts by tens of per cent within minutes, so two figures taken at different
 times cannot tell a change of a few per cent from the drift. This script checks ``REF`` out into a
-temporary git worktree and runs the same generated warehouse scenario in both trees in turn, ``--rounds``
-times, each round a fresh process per tree keeping the best of three runs. It prints, per tree, the
+temporary git worktree and runs the same generated scenario in both trees in turn, ``--rounds`` times,
+each round a fresh process per tree keeping the fastest of ``--best-of`` runs. It prints, per tree, the
 real-time factor (simulated seconds per wall second), the planner's time per call and per vehicle-step
 (calls differ where a planner's quiet hint lets vehicles rest), the harness's time per vehicle-step, the
-harness share and the calls made, every round and their medians; then how many times faster this tree
-simulates than REF (the ratio of the median real-time factors), and whether the two trees' trace hashes
-agree (a pure speed-up leaves behaviour, and so the hash, unchanged). The scenario is generated once, by
-this tree's ``warehouse.py`` (``--site``: the lattice with tasks a few junctions away, or the congestion
-site where the fleet queues at a dozen stations), and loaded by both.
+harness share, the calls made and the process's peak memory, every round and their medians; then how
+many times faster this tree simulates than REF (the ratio of the median real-time factors), and whether
+the two trees' trace hashes agree (a pure speed-up leaves behaviour, and so the hash, unchanged). The
+scenario is generated once, by this tree's ``warehouse.py`` (``--site``: the lattice with tasks a few
+junctions away, or the congestion site where the fleet queues at a dozen stations), and loaded by both.
+
+``benchmarks/simulation.py --vs REF`` and ``benchmarks/scale.py --vs REF`` run the same comparison for
+each of their fleet sizes (:func:`side_by_side`).
 """
 
 from __future__ import annotations
@@ -25,26 +28,32 @@ import statistics
 import subprocess
 import sys
 import tempfile
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent))
 
 from warehouse import write_congestion_scenario, write_fleet_scenario
 
-SITES = {"warehouse": write_fleet_scenario, "congestion": write_congestion_scenario}
+# Site generators: (folder, vehicles, seed=...) -> the folder written.
+SITES: dict[str, Callable[..., Path]] = {"warehouse": write_fleet_scenario, "congestion": write_congestion_scenario}
+HERE = Path(__file__).resolve().parent.parent
 
-# Run inside each tree: the best of three runs of the scenario, as one JSON line.
+# Run inside each tree: the fastest of N runs of the scenario, as one JSON line.
 CHILD = """
-import json, sys
+import json, resource, sys
 from pathlib import Path
+from fleetsim import planners
 from fleetsim.load.suites.scenario import load_scenario_dir
-from fleetsim.planners import BFSPlanner, ReservingPlanner
 from fleetsim.scenario import ScenarioSettings
 from fleetsim.sim.loop import run_scenario
-folder, planner, seconds, vehicles = Path(sys.argv[1]), sys.argv[2], float(sys.argv[3]), int(sys.argv[4])
+folder, planner, seconds, vehicles, best_of = Path(sys.argv[1]), sys.argv[2], float(sys.argv[3]), int(sys.argv[4]), int(sys.argv[5])
 scenario = load_scenario_dir(folder, settings=ScenarioSettings(time_limit=seconds, stop_on=()))
-runs = [run_scenario(scenario, {"BFSPlanner": BFSPlanner, "ReservingPlanner": ReservingPlanner}[planner](), keep_trace=False)
-        for _ in range(3)]
+runs = [run_scenario(scenario, getattr(planners, planner)(), keep_trace=False) for _ in range(best_of)]
+if len({run.trace_hash for run in runs}) != 1:
+    raise SystemExit("the same scenario gave different trace hashes: the run is not deterministic")
 best = min(runs, key=lambda run: run.metrics.wall_time)
 m = best.metrics
 print(json.dumps({
@@ -55,18 +64,76 @@ print(json.dumps({
     "per_vehicle_step": (m.wall_time - m.planner_wall_time) / (best.steps * vehicles) * 1e6,
     "share": 1.0 - m.planner_wall_time / m.wall_time,
     "calls": m.planner_calls,
+    "peak_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
 }))
 """
 
+# (label, key, format) of each figure printed per tree.
+FIGURES = (
+    ("real time x", "realtime", "{:7.1f}"),
+    ("planner µs/call", "per_call", "{:7.1f}"),
+    ("planner µs/vs", "planner_per_vehicle_step", "{:7.2f}"),
+    ("harness µs/vs", "per_vehicle_step", "{:7.2f}"),
+    ("harness share", "share", "{:7.1%}"),
+    ("planner calls", "calls", "{:7.0f}"),
+    ("peak MiB", "peak_mib", "{:7.0f}"),
+)
 
-def run_in(tree: Path, folder: Path, args: argparse.Namespace) -> dict[str, float | str]:
+Results = dict[str, list[dict[str, float | str]]]  # tree name -> one figure set per round
+
+
+@dataclass(frozen=True)
+class Case:
+    """One scenario to compare on."""
+
+    vehicles: int
+    seconds: float
+    planner: str = "ReservingPlanner"
+    site: str = "warehouse"
+    seed: int = 1
+    best_of: int = 3
+
+
+@contextmanager
+def trees(ref: str) -> Iterator[dict[str, Path]]:
+    """``REF`` checked out in a temporary worktree, beside this tree: name -> folder."""
+    commit = subprocess.run(
+        ["git", "rev-parse", "--verify", f"{ref}^{{commit}}"], cwd=HERE, capture_output=True, text=True
+    )
+    if commit.returncode != 0:
+        raise SystemExit(f"ref={ref!r} is not a commit of {HERE}: {commit.stderr.strip()}")
+    sha = commit.stdout.strip()
+    with tempfile.TemporaryDirectory() as tmp:
+        worktree = Path(tmp) / "ref"
+        subprocess.run(["git", "worktree", "add", "--detach", "-q", str(worktree), sha], cwd=HERE, check=True)
+        try:
+            yield {f"{ref} ({sha[:10]})": worktree, "this tree": HERE}
+        finally:
+            subprocess.run(["git", "worktree", "remove", "--force", str(worktree)], cwd=HERE, check=False)
+
+
+def run_in(tree: Path, folder: Path, case: Case) -> dict[str, float | str]:
     env = {**os.environ, "PYTHONPATH": str(tree)}
-    command = [sys.executable, "-c", CHILD, str(folder), args.planner, str(args.seconds), str(args.vehicles)]
-    done = subprocess.run(command, cwd=tree, env=env, capture_output=True, text=True, check=False)
+    arguments = [str(folder), case.planner, str(case.seconds), str(case.vehicles), str(case.best_of)]
+    done = subprocess.run(
+        [sys.executable, "-c", CHILD, *arguments], cwd=tree, env=env, capture_output=True, text=True, check=False
+    )
     if done.returncode != 0:
         raise SystemExit(f"the run in {tree} failed:\n{done.stderr}")
     result: dict[str, float | str] = json.loads(done.stdout.splitlines()[-1])
     return result
+
+
+def side_by_side(both: dict[str, Path], case: Case, rounds: int) -> Results:
+    """``rounds`` alternating rounds of ``case`` in each of ``both`` trees."""
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp) / "scenario"
+        SITES[case.site](folder, case.vehicles, seed=case.seed)
+        results: Results = {name: [] for name in both}
+        for _ in range(rounds):
+            for name, tree in both.items():
+                results[name].append(run_in(tree, folder, case))
+    return results
 
 
 def column(results: list[dict[str, float | str]], key: str, form: str) -> str:
@@ -75,52 +142,40 @@ def column(results: list[dict[str, float | str]], key: str, form: str) -> str:
     return " ".join(form.format(v) for v in values) + "  median " + form.format(statistics.median(values))
 
 
+def report(results: Results, case: Case, rounds: int) -> float:
+    """Print the comparison; returns how many times faster the last tree simulates than the first."""
+    print(
+        f"{case.site} site, {case.vehicles} vehicles, {case.planner}, {case.seconds:g} s simulated; "
+        f"{rounds} alternating rounds, fastest of {case.best_of} runs each"
+    )
+    for name, figures in results.items():
+        print(f"  {name}")
+        for label, key, form in FIGURES:
+            print(f"    {label:<22} {column(figures, key, form)}")
+    before, after = (statistics.median(float(r["realtime"]) for r in figures) for figures in results.values())
+    first = next(iter(results))
+    print(f"  this tree simulates {after / before:.2f}x as fast as {first}")
+    hashes = {str(r["hash"]) for figures in results.values() for r in figures}
+    print("  trace hashes agree" if len(hashes) == 1 else f"  trace hashes DIFFER: {sorted(h[:12] for h in hashes)}")
+    return after / before
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("ref", help="the commit to compare with (anything git rev-parse accepts)")
     parser.add_argument("--rounds", type=int, default=4)
     parser.add_argument("--vehicles", type=int, default=100)
-    parser.add_argument("--planner", choices=["BFSPlanner", "ReservingPlanner"], default="ReservingPlanner")
+    parser.add_argument(
+        "--planner", choices=["BFSPlanner", "GreedyPlanner", "ReservingPlanner"], default="ReservingPlanner"
+    )
     parser.add_argument("--seconds", type=float, default=60.0)
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--site", choices=SITES, default="warehouse")
+    parser.add_argument("--best-of", type=int, default=3)
     args = parser.parse_args()
-    here = Path(__file__).resolve().parent.parent
-    commit = subprocess.run(
-        ["git", "rev-parse", "--verify", f"{args.ref}^{{commit}}"], cwd=here, capture_output=True, text=True
-    )
-    if commit.returncode != 0:
-        raise SystemExit(f"ref={args.ref!r} is not a commit of {here}: {commit.stderr.strip()}")
-    with tempfile.TemporaryDirectory() as tmp:
-        worktree, folder = Path(tmp) / "ref", Path(tmp) / "scenario"
-        subprocess.run(
-            ["git", "worktree", "add", "--detach", "-q", str(worktree), commit.stdout.strip()], cwd=here, check=True
-        )
-        try:
-            SITES[args.site](folder, args.vehicles, seed=args.seed)
-            trees = {f"{args.ref} ({commit.stdout.strip()[:10]})": worktree, "this tree": here}
-            rounds: dict[str, list[dict[str, float | str]]] = {name: [] for name in trees}
-            for _ in range(args.rounds):
-                for name, tree in trees.items():
-                    rounds[name].append(run_in(tree, folder, args))
-        finally:
-            subprocess.run(["git", "worktree", "remove", "--force", str(worktree)], cwd=here, check=False)
-    print(
-        f"{args.site} site, {args.vehicles} vehicles, {args.planner}, {args.seconds:g} s simulated; "
-        f"{args.rounds} alternating rounds, best of 3 runs each"
-    )
-    for name, results in rounds.items():
-        print(f"  {name}")
-        print(f"    real time x            {column(results, 'realtime', '{:6.1f}')}")
-        print(f"    planner µs/call        {column(results, 'per_call', '{:6.1f}')}")
-        print(f"    planner µs/vs          {column(results, 'planner_per_vehicle_step', '{:6.2f}')}")
-        print(f"    harness µs/vs          {column(results, 'per_vehicle_step', '{:6.2f}')}")
-        print(f"    harness share          {column(results, 'share', '{:6.1%}')}")
-        print(f"    planner calls          {column(results, 'calls', '{:6.0f}')}")
-    before, after = (statistics.median(float(r["realtime"]) for r in results) for results in rounds.values())
-    print(f"  this tree simulates {after / before:.2f}x as fast as {args.ref}")
-    hashes = {str(r["hash"]) for results in rounds.values() for r in results}
-    print("  trace hashes agree" if len(hashes) == 1 else f"  trace hashes DIFFER: {sorted(h[:12] for h in hashes)}")
+    case = Case(args.vehicles, args.seconds, args.planner, args.site, args.seed, args.best_of)
+    with trees(args.ref) as both:
+        report(side_by_side(both, case, args.rounds), case, args.rounds)
     return 0
 
 

@@ -1,6 +1,7 @@
 """Does the harness cost the same per vehicle whatever the fleet size? 100, 1,000 and 10,000 vehicles.
 
     python benchmarks/scale.py [--sizes 100,1000,10000] [--seconds 60] [--repeat 3] [--planner BFSPlanner]
+                               [--vs REF]
 
 Each size gets a generated warehouse sized to the fleet (``warehouse.write_fleet_scenario``: about four
 aisles per vehicle, 2-3 tasks each, seeded), written once in a process of its own. Each repeat loads it
@@ -12,6 +13,10 @@ own cost is what is measured; the harness's time is the run's wall time less the
 calls. Per size: harness µs per vehicle-step (median of the repeats, and its ratio to the first size's),
 planner µs per call, realtime factor, peak memory, and the time to write and to load the scenario. The
 trace hash of every repeat of a size must be the same (the script fails otherwise).
+
+``--vs REF`` compares this tree with commit REF instead, side by side in one invocation: each size in
+both trees in alternating fresh processes, ``--repeat`` rounds (``benchmarks/compare.py``): harness and
+planner time per vehicle-step, peak memory, the speed-up and whether the hashes agree.
 
 Targets (issue 18): harness µs per vehicle-step at 1,000 vehicles <= 1.2x the figure at 100, at
 10,000 <= 1.5x; a 10,000-vehicle scenario simulates 60 s to the end in under 4 GiB.
@@ -33,6 +38,7 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).parent))
 
+from compare import Case, report, side_by_side, trees
 from warehouse import write_fleet_scenario
 
 PLANNERS = ("BFSPlanner", "GreedyPlanner", "ReservingPlanner")
@@ -88,7 +94,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--write", type=int, help=argparse.SUPPRESS)
     parser.add_argument("--child", type=int, help=argparse.SUPPRESS)
     parser.add_argument("--folder", type=Path, help=argparse.SUPPRESS)
+    parser.add_argument("--vs", metavar="REF", help="compare with commit REF side by side instead")
     args = parser.parse_args(argv)
+    if args.vs is not None:
+        with trees(args.vs) as both:
+            for size in (int(part) for part in args.sizes.split(",")):
+                case = Case(size, args.seconds, args.planner, best_of=1)
+                report(side_by_side(both, case, args.repeat), case, args.repeat)
+                print()
+        return 0
     if args.write is not None:
         print(json.dumps(write_one(args.write, args.folder)))
         return 0

@@ -2,7 +2,8 @@
 
     python benchmarks/simulation.py [--sizes 10,100,1000] [--time-limit 60] [--large-time-limit 5]
                                     [--planning-period 0.1] [--seed 1] [--repeat 1] [--phases]
-                                    [--profile 100:ReservingPlanner] [--top 30]
+                                    [--profile 100:ReservingPlanner] [--top 30] [--site warehouse]
+                                    [--vs REF [--rounds 3]]
 
 Targets (issue): 100 vehicles with ReservingPlanner run at >= 20x realtime with the harness's own share
 of wall time <= 25 %, and 1000 vehicles run at all.
@@ -26,6 +27,14 @@ the planner (the call overhead: task lookup, snapshot, guard, checking and apply
 reservation check, motion, and the trace (encoding and hashing the step); "rest" is bookkeeping and the
 loop itself.
 
+``--site congestion`` runs the site where the whole fleet queues at a dozen stations instead
+(``warehouse.write_congestion_scenario``: the reference planner at its slowest).
+
+``--vs REF`` compares this tree with commit REF instead, side by side in one invocation: for each size,
+ReservingPlanner on the chosen site in both trees in alternating fresh processes, ``--rounds`` rounds of
+the fastest of ``--repeat`` runs (``benchmarks/compare.py``): real-time factor, planner and harness time
+per vehicle-step, planner time per call, calls, peak memory, the speed-up and whether the hashes agree.
+
 ``--profile SIZE:PLANNER`` runs that case once more under cProfile and prints its own time by module
 and the functions with the most own time (cProfile slows pure-Python code about 2x; read shares, not
 seconds).
@@ -47,7 +56,7 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).parent))
 
-from warehouse import write_fleet_scenario
+from compare import SITES, Case, report, side_by_side, trees
 
 from fleetsim.load.suites.scenario import load_scenario_dir
 from fleetsim.planners import BFSPlanner, ReservingPlanner
@@ -69,8 +78,11 @@ HEADER = (
 PHASES = {"plan": "planning", "check_reservations": "reservation check", "move": "motion"}
 
 
+SITE = "warehouse"  # the site generated (--site)
+
+
 def fleet_scenario(folder: Path, vehicles: int, settings: ScenarioSettings, seed: int) -> Scenario:
-    write_fleet_scenario(folder, vehicles, seed=seed)
+    SITES[SITE](folder, vehicles, seed=seed)
     return load_scenario_dir(folder, settings=settings)
 
 
@@ -223,9 +235,22 @@ def main() -> int:
     )
     parser.add_argument("--profile", type=parse_profile, metavar="SIZE:PLANNER")
     parser.add_argument("--top", type=int, default=30, help="functions listed with --profile")
+    parser.add_argument("--site", choices=SITES, default="warehouse")
+    parser.add_argument("--vs", metavar="REF", help="compare with commit REF side by side instead")
+    parser.add_argument("--rounds", type=int, default=3, help="alternating rounds per size with --vs")
     args = parser.parse_args()
     if args.repeat < 1:
         parser.error(f"--repeat={args.repeat} must be at least 1")
+    global SITE
+    SITE = args.site
+    if args.vs is not None:
+        with trees(args.vs) as both:
+            for size in args.sizes:
+                seconds = args.large_time_limit if size >= LARGE_FLEET else args.time_limit
+                case = Case(size, seconds, TARGET_PLANNER, args.site, args.seed, args.repeat)
+                report(side_by_side(both, case, args.rounds), case, args.rounds)
+                print()
+        return 0
 
     def settings(size: int) -> ScenarioSettings:
         time_limit = args.large_time_limit if size >= LARGE_FLEET else args.time_limit

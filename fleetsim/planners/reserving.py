@@ -58,6 +58,9 @@ __all__ = ["ReservingPlanner"]
 
 Rank = tuple[float, int]
 _OPPOSITE = {Traverse.FORWARD: Traverse.BACKWARD, Traverse.BACKWARD: Traverse.FORWARD}
+# Seconds: a vehicle resting until a moment is asked again this much before it (the planner compares
+# times with a tolerance of 1e-9 s; asking early changes nothing, asking late would).
+_EARLY = 1e-6
 
 
 class ReservingPlanner:
@@ -106,10 +109,14 @@ class ReservingPlanner:
         # The quiet hint (fleetsim.planning.quiet): the vehicle of the last call when that call found it
         # cruising along legs fixed far enough ahead with no vehicle without tasks near its next legs, and
         # the segments of those legs; the epoch changes when a dance starts (every vehicle is asked then).
-        self._calm: tuple[int, frozenset[int], bool] | None = None
+        self._calm: tuple[int, Quiet] | None = None
         self._calm_after_clearing = False
         self._idle_of: tuple[object, frozenset[int]] = (None, frozenset())  # (fleet.tasks, its idle vehicles)
         self.quiet_epoch = 0
+        # The hint holds for this class's answers: a subclass that answers otherwise gets none (unless it
+        # gives its own quiet()).
+        cls = type(self)
+        self._own_calls = cls.fix_legs is ReservingPlanner.fix_legs and cls.plan_routes is ReservingPlanner.plan_routes
 
     def _conflicts_of(self, segment: int) -> frozenset[int]:
         assert self._layout is not None
@@ -161,7 +168,7 @@ class ReservingPlanner:
             # Everything up to the goal is committed already, or enough to drive on at speed: until its
             # plan or what stands near its next legs changes, asking again changes nothing.
             if not response and self._calm_after_clearing:
-                self._calm = (vehicle_id, frozenset(leg.segment for leg in plan.legs[1 : self.ahead_legs]), False)
+                self._calm = (vehicle_id, Quiet(self._next_segments(plan)))
             if fixed_count == len(plan.legs):
                 return response
             # (_fix would fix nothing; moving, it is not standing, so _unblock would only forget its looks.)
@@ -182,8 +189,7 @@ class ReservingPlanner:
             # plan changes or what stands near its next legs does, asking again changes nothing.
             self._rank(vehicle_id, fleet)
             self._next_look.pop(vehicle_id, None)
-            watch = frozenset(leg.segment for leg in plan.legs[1 : self.ahead_legs]) | {following}
-            self._calm = (vehicle_id, watch, True)
+            self._calm = (vehicle_id, Quiet(self._next_segments(plan) | {following}, until_standing=True))
             return response
         extended = self._fix(plan, fleet, index)
         if extended is not plan:
@@ -201,11 +207,15 @@ class ReservingPlanner:
         stands near this one's next legs, for a vehicle cruising along legs fixed far enough ahead, and for
         one still moving whose next leg another holds (until it stands): asked again, it would answer the
         same empty list, and touch nothing of this planner's, until its plan changes or other vehicles'
-        fixed legs or queues near its next legs do."""
+        fixed legs or queues near its next legs do. A subclass that overrides ``fix_legs`` or
+        ``plan_routes`` gets none (its answers may depend on more), unless it overrides this too."""
         calm = self._calm
         if calm is None or calm[0] != vehicle_id or self._dance is not None or vehicle_id in self._aside:
             return None
-        return Quiet(watch=calm[1], until_standing=calm[2])
+        return calm[1] if self._own_calls else None
+
+    def _next_segments(self, plan: FleetPlan) -> frozenset[int]:
+        return frozenset(leg.segment for leg in plan.legs[1 : self.ahead_legs])
 
     # -- ranks ---------------------------------------------------------------------------------------
 
@@ -335,7 +345,9 @@ class ReservingPlanner:
             if moved_on is not plan:
                 self._blocked.pop(vehicle_id, None)
                 return [moved_on]
-        if fleet.time - since >= self.push_after - 1e-9:
+        pushing = fleet.time - since >= self.push_after - 1e-9
+        lower: list[int] = []
+        if pushing:
             mine = self._rank(vehicle_id, fleet)
             lower = [other for other in index.holders(vehicle_id, following.segment) if self._rank(other, fleet) > mine]
             moved: list[FleetPlan] = []
@@ -381,7 +393,22 @@ class ReservingPlanner:
             if detour is not None and detour != plan.legs[len(plan.fixed_legs) :]:
                 rerouted = FleetPlan(vehicle_id, (*plan.fixed_legs, *detour))
                 return [self._fix(rerouted, fleet, index)]
+        if self._calm_after_clearing and not lower and index.others_fixed_near(vehicle_id, following.segment):
+            self._calm_standing(vehicle_id, plan, since, pushing, following.segment)
         return []
+
+    def _calm_standing(self, vehicle_id: int, plan: FleetPlan, since: float, pushing: bool, following: int) -> None:
+        """The quiet hint for a vehicle that stands blocked right ahead by vehicles that all rank above it
+        (none to move away), with none without tasks near its next legs: until one of them or its own plan
+        changes, what it does changes only with time, when it may move blockers (``push_after``), start a
+        dance or look for a way round; it is asked again a little before the first of these."""
+        moments = [] if pushing else [since + self.push_after]
+        if self._dance is None:
+            moments.append(max(since + self.dance_after, self._no_dance.get(vehicle_id, -math.inf)))
+        if vehicle_id not in self._haven and vehicle_id in self._next_look:
+            moments.append(self._next_look[vehicle_id][0])
+        until = min(moments) - _EARLY
+        self._calm = (vehicle_id, Quiet(self._next_segments(plan) | {following}, until=until))
 
     @staticmethod
     def _assumed(plans: list[FleetPlan], index: FleetIndex) -> list[FleetPlan]:
@@ -631,7 +658,7 @@ class ReservingPlanner:
         }
         dance.advance(current, fleet.time)
         if dance.finished or fleet.time - dance.progressed > self.dance_patience:
-            self._dance, self._group = None, frozenset()
+            self._end_dance()
             return []
         member, state = dance.moves[dance.done]
         plan = fleet.plans[member]
@@ -640,13 +667,17 @@ class ReservingPlanner:
             return []  # still driving its previous move
         leg = plan.legs[first]
         if (leg.segment, leg.traverse, leg.progress) != state:
-            self._dance, self._group = None, frozenset()  # its plan is no longer the dance's
+            self._end_dance()  # its plan is no longer the dance's
             return []
         if first > 1 or index.others_fixed_near(member, leg.segment):
             return []  # it has not reached its last move yet, or someone else is in the way
         fixed = FleetPlan(member, (*plan.legs[:first], replace(leg, fixed=True), *plan.legs[first + 1 :]))
         index.assume(member, fixed)
         return [fixed]
+
+    def _end_dance(self) -> None:
+        self._dance, self._group = None, frozenset()
+        self.quiet_epoch += 1  # a vehicle that stands blocked may start one now: every vehicle is asked
 
     # -- routing -------------------------------------------------------------------------------------
 

@@ -19,6 +19,7 @@ from fleetsim.exec.spec import load_planner_factory
 from fleetsim.orders import Order, Shift, Stop
 from fleetsim.planners import ReservingPlanner
 from fleetsim.scenario import Scenario
+import fleetsim.sim.loop as sim_loop
 from fleetsim.sim.loop import NO_DISPATCHER, run_scenario
 from fleetsim.sim.result import RunResult
 
@@ -76,6 +77,12 @@ def loop(orders: tuple[Order, ...] = ORDERS) -> Scenario:
     shipped = _suite_scenario("examples.fleetsim.yaml", "loop-one-way")
     settings = dataclasses.replace(shipped.settings, stop_on=(), time_limit=60.0)
     return dataclasses.replace(shipped, tasks=(), orders=orders, settings=settings, shift=Shift(duration=60.0))
+
+
+@pytest.fixture(autouse=True)
+def _every_vehicle_asked(monkeypatch: pytest.MonkeyPatch) -> None:
+    """In-process runs ask about every vehicle, as a planner process is asked (their calls are compared)."""
+    monkeypatch.setattr(sim_loop._Run, "quiet", False)
 
 
 def _outcome(result: RunResult) -> tuple[object, ...]:

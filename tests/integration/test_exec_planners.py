@@ -17,6 +17,7 @@ from fleetsim.exec import SubprocessPlanner, process
 from fleetsim.exec.protocol import LegBook, decode_response
 from fleetsim.planners import BFSPlanner, ReservingPlanner
 from fleetsim.scenario import Scenario
+import fleetsim.sim.loop as loop
 from fleetsim.sim.loop import run_scenario
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -34,9 +35,10 @@ def example(name: str) -> Scenario:
 @pytest.mark.parametrize("planner", [ReservingPlanner, BFSPlanner])
 @pytest.mark.parametrize("rounds", [True, False], ids=["rounds", "one-call-at-a-time"])
 def test_a_python_planner_served_over_the_protocol_gives_the_in_process_run(
-    name: str, planner: type, rounds: bool
+    name: str, planner: type, rounds: bool, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     scenario = example(name)
+    monkeypatch.setattr(loop._Run, "quiet", False)  # a process is asked about every vehicle: so is this one
     direct = run_scenario(scenario, planner())
     options = [] if rounds else ["--no-rounds"]
     process = SubprocessPlanner([*SERVE, *options, f"fleetsim.planners:{planner.__name__}"])

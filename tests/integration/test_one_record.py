@@ -5,6 +5,8 @@ own ones listed in ``PRODUCER_KEYS``, and the same values, all valid against the
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -14,6 +16,10 @@ from sweep_support import TABLE_PLANNER, planners_on_path, write_suite_sweep, wr
 from fleetsim.cli import main
 from fleetsim.sim.record import ENTRY_KEYS, PRODUCER_KEYS
 from fleetsim.sweep.results import read_results
+
+# Imported before the test, not inside it: pytester takes out of sys.modules what a test imported, and
+# distributed taken out so leaves the process unable to load pytest plugins in later in-process runs.
+pytest.importorskip("distributed")
 
 WALL_CLOCK = ("planner_wall_time", "wall_time", "realtime_factor", "harness_share")
 
@@ -33,7 +39,6 @@ def _shared(record: dict[str, object], producer: str | None) -> dict[str, object
 def test_run_json_result_json_and_a_sweep_record_agree(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str], pytester: pytest.Pytester
 ) -> None:
-    pytest.importorskip("distributed")
     monkeypatch.delenv("CI", raising=False)  # no lock file here: under CI pytest would fail the missing hash
     planners_on_path(monkeypatch)
     suite = write_table_project(tmp_path)
@@ -48,11 +53,12 @@ def test_run_json_result_json_and_a_sweep_record_agree(
     [written] = (pytester.path / "out").rglob("result.json")
     under_pytest = json.loads(written.read_text(encoding="utf-8"))
 
+    # The sweep in a process of its own: its Dask cluster changes the process it runs in (environment
+    # variables, imports), and a pytest run in this process afterwards would load no plugins.
     results = tmp_path / "sweep" / "results.jsonl"
-    assert (
-        main(["sweep", str(write_suite_sweep(tmp_path, suite, [TABLE_PLANNER])), "-o", str(results), "--workers", "1"])
-        == 0
-    )
+    spec = write_suite_sweep(tmp_path, suite, [TABLE_PLANNER])
+    command = [sys.executable, "-m", "fleetsim", "sweep", str(spec), "-o", str(results), "--workers", "1"]
+    assert subprocess.run(command, capture_output=True, text=True, check=False).returncode == 0
     _, [swept] = read_results(results)
 
     for record in (run, under_pytest, swept):

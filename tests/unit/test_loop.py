@@ -17,6 +17,7 @@ from fleetsim.planners import BFSPlanner, ReservingPlanner
 from fleetsim.planning.plans import FleetLeg, FleetPlan
 from fleetsim.scenario import Expectations, Scenario
 from fleetsim.sim.divergence import first_divergence
+import fleetsim.sim.loop as loop
 from fleetsim.sim.loop import run_scenario
 from fleetsim.sim.trace import TRACE_FORMAT
 
@@ -146,7 +147,8 @@ def test_required_rejection_codes_are_expectations() -> None:
     assert [f.kind for f in run_scenario(scenario, _WrongWay()).failures] == ["expectation"]
 
 
-def test_planning_period_consults_the_planner_less_often() -> None:
+def test_planning_period_consults_the_planner_less_often(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(loop._Run, "quiet", False)  # every vehicle asked in every planning round
     every_step = run_scenario(example("crossing"), ReservingPlanner())
     every_second = run_scenario(example("crossing", planning_period=1.0), ReservingPlanner())
     assert every_second.status == "passed"
