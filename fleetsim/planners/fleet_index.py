@@ -10,11 +10,12 @@ and only the vehicles whose plans changed are counted again.
 from __future__ import annotations
 
 from collections import Counter
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Sequence
 
 from fleetsim.enums import Traverse
 from fleetsim.layout.layout import Layout
 from fleetsim.planning.plans import FleetPlan
+from fleetsim.planning.snapshot import FleetSnapshot
 from fleetsim.planning.views import replaced
 
 __all__ = ["FleetIndex"]
@@ -51,27 +52,55 @@ class FleetIndex:
     def __init__(self, layout: Layout, ahead: int) -> None:
         self._conflicts = {sid: tuple(sorted(layout.conflicts(sid))) for sid in layout.segments}
         self._ahead = ahead
-        self._plans: object = None  # the mapping last refreshed from
+        self._plans: object = None  # the mapping last refreshed from, when the snapshot has no plans version
+        self._version: int | None = None  # else the plans version last refreshed from
+        self._touched: set[int] = set()  # vehicles assumed or restored since the last refresh
+        self._order: dict[int, int] = {}  # vehicle -> its place in the plans mapping (the order counted in)
         self._seen: dict[int, FleetPlan] = {}
         self.fixed_near: dict[int, Counts] = {}
         self.ahead_near: dict[int, Counts] = {}
         self.route_near: dict[int, Counts] = {}
         self.drives: dict[Drive, Counts] = {}
 
-    def refresh(self, plans: Mapping[int, FleetPlan]) -> None:
-        if plans is self._plans:
+    def refresh(self, fleet: FleetSnapshot) -> None:
+        """Count the plans of a snapshot that changed since the last refresh: those the snapshot says changed
+        since the version last refreshed from (:meth:`FleetSnapshot.plans_changed`) and those this index
+        assumed meanwhile, else every plan that is another object than the one counted. An unchanged fleet
+        is known by its ``plans_version`` without holding on to its plans (which would make every later
+        snapshot copy them whole), or else by the mapping's identity."""
+        plans, version = fleet.plans, fleet.plans_version
+        if version is not None:
+            if version == self._version:
+                return  # the same plans as last call
+            changed = fleet.plans_changed(self._version) if self._version is not None else None
+            self._version, self._plans = version, None
+        elif plans is self._plans:
             return  # the same snapshot as last call: nothing can have changed
-        self._plans = plans
-        # Only the plans that are other objects (found in C for a run's snapshots: a large fleet's differ
-        # in a few plans after each change).
-        for vehicle_id in replaced(plans, self._seen):
-            self.assume(vehicle_id, plans[vehicle_id])
+        else:
+            changed, self._version, self._plans = None, None, plans
+        touched, self._touched = self._touched, set()
+        if changed is None or len(self._order) != len(plans):
+            # Every plan that is another object (found in C: a large fleet's differ in a few plans).
+            self._order = {vehicle: place for place, vehicle in enumerate(plans)}
+            for vehicle_id in replaced(plans, self._seen):
+                self.assume(vehicle_id, plans[vehicle_id])
+            self._touched.clear()
+            return
+        # The same vehicles as counting them all would find, in the same order: any other vehicle's plan is
+        # the one counted at an earlier refresh, unchanged since.
+        seen, order = self._seen, self._order
+        for vehicle_id in sorted(changed | touched, key=order.__getitem__):
+            plan = plans[vehicle_id]
+            if plan is not seen.get(vehicle_id):
+                self.assume(vehicle_id, plan)
+        self._touched.clear()
 
     def assume(self, vehicle: int, plan: FleetPlan) -> FleetPlan | None:
         """Count ``plan`` as the vehicle's from now on (a plan about to be returned, so that what else the
         same response decides sees it); the plan it replaces, for :meth:`restore`."""
         old = self._seen.get(vehicle)
         if old is not plan:
+            self._touched.add(vehicle)
             if old is None:
                 self._count(vehicle, plan, 1)
             else:
@@ -84,6 +113,7 @@ class FleetIndex:
         current = self._seen.get(vehicle)
         if current is old:
             return
+        self._touched.add(vehicle)
         if current is None:
             assert old is not None
             self._count(vehicle, old, 1)

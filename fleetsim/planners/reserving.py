@@ -127,7 +127,7 @@ class ReservingPlanner:
             self._layout = layout
             self._index = FleetIndex(layout, self.ahead_legs)
             self._lengths = {sid: segment.length for sid, segment in layout.segments.items()}
-        self._index.refresh(fleet.plans)
+        self._index.refresh(fleet)
         return self._index
 
     # -- the protocol --------------------------------------------------------------------------------

@@ -23,7 +23,7 @@ from fleetsim.planning.plans import FleetPlan, RouteError, hands_back
 from fleetsim.planning.protocol import Planner, RoundCall, RoundPlanner
 from fleetsim.planning.quiet import Quiet, Resting
 from fleetsim.planning.reservations import CollisionAlert, ConflictTable, ReservationIndex
-from fleetsim.planning.snapshot import FleetSnapshot, VehicleState, initial_plan, initial_state, read_only
+from fleetsim.planning.snapshot import FleetSnapshot, PlanLog, VehicleState, initial_plan, initial_state, read_only
 from fleetsim.planning.tasks import TaskBook
 from fleetsim.planning.views import LiveCopy, held_only_here
 from fleetsim.scenario import Scenario, Task
@@ -114,6 +114,8 @@ class FleetController:
         # The last snapshot handed out; reused until something it shows changes (most calls change nothing).
         self._snapshot: FleetSnapshot | None = None
         self._stale = False  # something the last snapshot shows has changed since
+        self._plans_version = 0  # counts plan changes (FleetSnapshot.plans_version)
+        self._plan_log = PlanLog(4 * len(self._plans) + 64)  # whose they were, the recent ones
         # The read-only copies of the states and plans that snapshots show, brought up to date by what
         # changed (a planning round changes plans many times and states not at all).
         self._states_copy = LiveCopy(self._states)
@@ -150,6 +152,8 @@ class FleetController:
             plans=self._plans_copy.view(exclusive),
             tasks=self.tasks.queues(),
             routed=self.tasks.routed_for_snapshot(exclusive),
+            plans_version=self._plans_version,
+            _log=self._plan_log,
         )
         self._stale = False
         return self._snapshot
@@ -164,6 +168,8 @@ class FleetController:
     # -- changes -------------------------------------------------------------------------------------
 
     def _put_plan(self, plan: FleetPlan) -> None:
+        self._plans_version += 1
+        self._plan_log.add(plan.vehicle_id)
         if self.resting is not None:
             self.resting.plan_changed(self._plans.get(plan.vehicle_id), plan)
         self._plans[plan.vehicle_id] = plan

@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from collections.abc import Set as AbstractSet
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import NamedTuple, TypeVar
 
@@ -18,7 +18,32 @@ from fleetsim.layout.layout import Layout
 from fleetsim.planning.plans import FleetLeg, FleetPlan
 from fleetsim.scenario import Task, Vehicle, VehicleType
 
-__all__ = ["FleetSnapshot", "VehicleState", "initial_plan", "initial_state", "read_only"]
+__all__ = ["FleetSnapshot", "PlanLog", "VehicleState", "initial_plan", "initial_state", "read_only"]
+
+
+class PlanLog:
+    """Whose plan each of a run's plan changes was, numbered from 1 (``FleetSnapshot.plans_version`` is the
+    number of the last), for the most recent ``keep`` changes at least: what :meth:`FleetSnapshot.plans_changed`
+    answers from."""
+
+    __slots__ = ("_base", "_keep", "_vehicles")
+
+    def __init__(self, keep: int) -> None:
+        self._keep = max(keep, 1)
+        self._vehicles: list[int] = []  # change number _base + 1 + i was vehicle _vehicles[i]
+        self._base = 0
+
+    def add(self, vehicle: int) -> None:
+        self._vehicles.append(vehicle)
+        if len(self._vehicles) > 2 * self._keep:
+            del self._vehicles[: self._keep]
+            self._base += self._keep
+
+    def between(self, since: int, until: int) -> frozenset[int] | None:
+        """The vehicles of changes ``since + 1`` to ``until``; None when the log no longer holds them all."""
+        if since < self._base or until - self._base > len(self._vehicles) or since > until:
+            return None
+        return frozenset(self._vehicles[since - self._base : until - self._base])
 
 
 class VehicleState(NamedTuple):
@@ -76,6 +101,11 @@ class FleetSnapshot:
             harness then asks ``fix_legs`` for them, else ``plan_routes``. A read-only set
             (``collections.abc.Set``: ``in``, ``len``, iteration, ``|``, ``&``, ``-``); its iteration
             order is not meaningful, so sort it where order matters.
+        plans_version: A number that changes whenever a plan does, within one run (``None``: not known,
+            as in a planner process). Two snapshots of a run with the same number show the same plans, so
+            a planner that keeps its own tables of the plans can tell it has nothing to bring up to date
+            without holding on to ``plans`` (holding a snapshot's mappings makes every later snapshot copy
+            them whole, which costs a large fleet a copy per plan accepted).
     """
 
     time: float
@@ -83,6 +113,17 @@ class FleetSnapshot:
     plans: Mapping[int, FleetPlan]
     tasks: Mapping[int, tuple[Task, ...]]  # each vehicle's queue, head first
     routed: AbstractSet[int]  # ids of queued tasks that an accepted plan already marks as a goal
+    plans_version: int | None = None
+    _log: PlanLog | None = field(default=None, repr=False, compare=False)
+
+    def plans_changed(self, since: int) -> frozenset[int] | None:
+        """The vehicles whose plans changed after version ``since`` (an earlier snapshot's ``plans_version``)
+        up to this snapshot's, or ``None`` when that is not known (no versions, or too long ago: then
+        compare the plans themselves). A planner's own tables of the plans need bringing up to date for
+        these vehicles only."""
+        if self._log is None or self.plans_version is None:
+            return None
+        return self._log.between(since, self.plans_version)
 
     def head_task(self, vehicle_id: int) -> Task | None:
         """The task the vehicle works on now, or ``None`` when it has no more tasks."""

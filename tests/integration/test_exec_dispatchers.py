@@ -12,6 +12,7 @@ from pathlib import Path
 
 import pytest
 
+import fleetsim.sim.loop as sim_loop
 from fleetsim import load_scenario, load_suite
 from fleetsim.dispatch.protocol import Assignment, OrderBoard
 from fleetsim.exec import SubprocessPlanner
@@ -19,7 +20,6 @@ from fleetsim.exec.spec import load_planner_factory
 from fleetsim.orders import Order, Shift, Stop
 from fleetsim.planners import ReservingPlanner
 from fleetsim.scenario import Scenario
-import fleetsim.sim.loop as sim_loop
 from fleetsim.sim.loop import NO_DISPATCHER, run_scenario
 from fleetsim.sim.result import RunResult
 

@@ -11,13 +11,13 @@ from pathlib import Path
 
 import pytest
 
+import fleetsim.sim.loop as loop
 from fleetsim import load_scenario, load_suite
 from fleetsim.cli import main
 from fleetsim.exec import SubprocessPlanner, process
 from fleetsim.exec.protocol import LegBook, decode_response
 from fleetsim.planners import BFSPlanner, ReservingPlanner
 from fleetsim.scenario import Scenario
-import fleetsim.sim.loop as loop
 from fleetsim.sim.loop import run_scenario
 
 ROOT = Path(__file__).resolve().parents[2]

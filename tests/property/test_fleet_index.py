@@ -10,6 +10,7 @@ from fleetsim.enums import Progress, Traverse
 from fleetsim.layout import build_layout
 from fleetsim.planners.fleet_index import FleetIndex
 from fleetsim.planning.plans import FleetLeg, FleetPlan
+from fleetsim.planning.snapshot import FleetSnapshot, PlanLog
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE
 from fleetsim.strategies.geometry import grid
 
@@ -90,27 +91,61 @@ fleet_steps = st.lists(
 )
 
 
+def _shown(
+    fleet: dict[int, FleetPlan], order: list[int], version: int | None = None, log: PlanLog | None = None
+) -> FleetSnapshot:
+    plans = {vehicle: fleet[vehicle] for vehicle in order}
+    return FleetSnapshot(0.0, {}, plans, {}, frozenset(), plans_version=version, _log=log)
+
+
+def in_order(index: FleetIndex) -> list[object]:
+    """The tables with the order of their entries (what iterates over them sees)."""
+    return [[(key, list(counts.items())) for key, counts in table.items()] for table in tables(index)]
+
+
 @settings(max_examples=200, deadline=None)
-@given(st.dictionaries(st.integers(1, 5), plans, min_size=1, max_size=5), fleet_steps)
+@given(st.dictionaries(st.integers(1, 5), plans, min_size=1, max_size=5), fleet_steps, st.integers(1, 6))
 def test_refreshing_from_each_fleet_counts_that_fleet(
-    first: dict[int, FleetPlan], steps: list[tuple[dict[int, FleetPlan], bool, list[FleetPlan]]]
+    first: dict[int, FleetPlan], steps: list[tuple[dict[int, FleetPlan], bool, list[FleetPlan]]], keep: int
 ) -> None:
-    # Refresh recounts the vehicles whose plans are other objects than those it counts, found in C when
-    # the fleet lists the same vehicles in the same order, else one by one; either way the tables must be
-    # those of the fleet, counted from scratch.
+    # Refresh recounts the vehicles whose plans are other objects than those it counts: found in C when
+    # the fleet lists the same vehicles in the same order, else one by one, or (with plan versions) those
+    # the snapshot's log names and those it assumed itself. A run shows the same plans mapping (and plans
+    # version) again until a plan changes, and a refresh from it changes nothing. After a change, every
+    # way gives the tables of the fleet counted from scratch, and the versioned way counts them in the same
+    # order as the first.
     index = FleetIndex(LAYOUT, AHEAD)
+    versioned = FleetIndex(LAYOUT, AHEAD)  # refreshed by plan versions, from a log of ``keep`` changes
+    log, version = PlanLog(keep), 0
     fleet = {vehicle: FleetPlan(vehicle, plan.legs) for vehicle, plan in sorted(first.items())}
-    index.refresh(dict(fleet))
+    order = sorted(fleet)
+    shown = _shown(fleet, order)
+    index.refresh(shown)
+    versioned.refresh(_shown(fleet, order, version, log))
+    reordered = False  # (a run's mapping lists its vehicles in one order: the order compared only then)
     for changes, reorder, assumed in steps:
+        reordered |= reorder
+        changed = False
         for vehicle, plan in changes.items():
             if vehicle in fleet:
                 fleet[vehicle] = FleetPlan(vehicle, plan.legs)
+                version += 1
+                log.add(vehicle)
+                changed = True
         for plan in assumed:
             if plan.vehicle_id in fleet:
                 index.assume(plan.vehicle_id, plan)
-        shown = dict(reversed(list(fleet.items()))) if reorder else dict(fleet)
+                versioned.assume(plan.vehicle_id, plan)
+        if changed or reorder:
+            shown = _shown(fleet, order[::-1] if reorder else order)
         index.refresh(shown)
+        versioned.refresh(_shown(fleet, order, version, log))
         fresh = FleetIndex(LAYOUT, AHEAD)
         for vehicle, held in sorted(fleet.items()):
             fresh.assume(vehicle, held)
-        assert tables(index) == tables(fresh)
+        if changed or reorder:
+            assert tables(index) == tables(fresh)
+        if changed:
+            assert tables(versioned) == tables(fresh)
+        if not reordered:
+            assert in_order(versioned) == in_order(index)

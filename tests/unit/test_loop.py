@@ -10,6 +10,7 @@ import pytest
 from result_document import RESULT_KEYS, schema_errors
 from scenario_factory import make_scenario
 
+import fleetsim.sim.loop as loop
 from fleetsim import load_scenario, load_suite
 from fleetsim.enums import Direction, Shape
 from fleetsim.layout import Segment
@@ -17,7 +18,6 @@ from fleetsim.planners import BFSPlanner, ReservingPlanner
 from fleetsim.planning.plans import FleetLeg, FleetPlan
 from fleetsim.scenario import Expectations, Scenario
 from fleetsim.sim.divergence import first_divergence
-import fleetsim.sim.loop as loop
 from fleetsim.sim.loop import run_scenario
 from fleetsim.sim.trace import TRACE_FORMAT
 
