@@ -10,11 +10,13 @@ and only the vehicles whose plans changed are counted again.
 from __future__ import annotations
 
 from collections import Counter
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Iterator, Sequence
+from itertools import compress, islice
+from operator import is_not
 
 from fleetsim.enums import Traverse
 from fleetsim.layout.layout import Layout
-from fleetsim.planning.plans import FleetPlan
+from fleetsim.planning.plans import FleetLeg, FleetPlan
 from fleetsim.planning.snapshot import FleetSnapshot
 from fleetsim.planning.views import replaced
 
@@ -40,10 +42,32 @@ def _add(table: dict[object, Counts], key: object, vehicle: int, amount: int) ->
 def _parts(plan: FleetPlan, ahead: int) -> tuple[Sequence[object], ...]:
     """What a plan counts: its fixed legs', its next ``ahead`` legs' and all its legs' segments, and its
     drives (segment, traverse)."""
-    segments = [leg.segment for leg in plan.legs]
-    fixed = len(plan.fixed_legs)
-    drives = [(leg.segment, leg.traverse) for leg in plan.legs]
-    return (segments[:fixed], segments[:ahead], segments, drives)
+    return (*_short_parts(plan, ahead), *_route_parts(plan))
+
+
+def _short_parts(plan: FleetPlan, ahead: int) -> tuple[list[int], list[int]]:
+    """Its fixed legs' and its next ``ahead`` legs' segments."""
+    legs = plan.legs
+    return [leg.segment for leg in plan.fixed_legs], [leg.segment for leg in legs[:ahead]]
+
+
+def _route_parts(plan: FleetPlan) -> tuple[list[int], list[tuple[int, Traverse]]]:
+    """All its legs' segments, and its drives (segment, traverse)."""
+    legs = plan.legs
+    return [leg.segment for leg in legs], [(leg.segment, leg.traverse) for leg in legs]
+
+
+def _delta(before: Sequence[object], after: Sequence[object]) -> Iterable[tuple[object, int]]:
+    """How many more of each key ``after`` has than ``before``, keys in the order of ``after`` then
+    ``before`` (first occurrences)."""
+    delta = Counter(after)
+    delta.subtract(before)
+    return delta.items()
+
+
+def _others(old: Sequence[FleetLeg], new: Sequence[FleetLeg]) -> Iterator[tuple[FleetLeg, FleetLeg]]:
+    """The pairs of legs at the same places of two routes of one length that are other objects."""
+    return compress(zip(old, new, strict=True), map(is_not, old, new))
 
 
 class FleetIndex:
@@ -132,14 +156,30 @@ class FleetIndex:
 
     def _recount(self, vehicle: int, old: FleetPlan, new: FleetPlan) -> None:
         """Count ``new`` instead of ``old``: only the legs that differ (a plan mostly changes by a leg
-        fixed or a leg driven)."""
+        fixed or a leg driven).
+
+        The whole route's tables (routes near, drives) need no walk through a long route in the two
+        commonest changes: legs fixed (the same drives, only legs' flags changed) and the first leg driven
+        past (the same leg objects but the first). Either way the changes are those the general way
+        finds, in the same order (the order of a vehicle's entries in the tables depends on it)."""
         ahead = self._ahead
-        for table, before, after in zip(self._tables(), _parts(old, ahead), _parts(new, ahead), strict=True):
-            if before == after:
-                continue
-            delta = Counter(after)
-            delta.subtract(before)
-            self._add_all(table, vehicle, delta.items())
+        tables = self._tables()
+        short = _short_parts(old, ahead), _short_parts(new, ahead)
+        for table, before, after in zip(tables[:2], *short, strict=True):
+            if before != after:
+                self._add_all(table, vehicle, _delta(before, after))
+        o, n = old.legs, new.legs
+        if len(o) == len(n) and all(a.segment == b.segment and a.traverse == b.traverse for a, b in _others(o, n)):
+            return  # the same route, driven the same way
+        if len(n) == len(o) - 1 and not any(map(is_not, islice(o, 1, None), n)):
+            first = o[0]
+            self._add_all(tables[2], vehicle, ((first.segment, -1),))
+            self._add_all(tables[3], vehicle, (((first.segment, first.traverse), -1),))
+            return
+        old_parts, new_parts = _route_parts(old), _route_parts(new)
+        for table, was, now in ((tables[2], old_parts[0], new_parts[0]), (tables[3], old_parts[1], new_parts[1])):
+            if was != now:
+                self._add_all(table, vehicle, _delta(was, now))
 
     def _tables(self) -> tuple[dict[object, Counts], ...]:
         return (self.fixed_near, self.ahead_near, self.route_near, self.drives)  # type: ignore[return-value]

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field, replace
 from enum import Enum
 from itertools import pairwise
 
-from fleetsim.enums import JointKind
+from fleetsim.enums import JointKind, Progress, Traverse, TurnCapability
 from fleetsim.layout.continuations import progresses_after
 from fleetsim.layout.layout import Layout
 from fleetsim.layout.segment_ids import not_in_map, segment_ids
@@ -146,9 +146,46 @@ class CheckContext:
     plans: Mapping[int, FleetPlan]  # the plans in force now
     queues: Mapping[int, tuple[Task, ...]]  # head first
     routed: AbstractSet[int] = frozenset()  # queued tasks an accepted plan already marks
+    drives: DriveMemo | None = None  # drives already found legal, kept between checks (one layout)
 
 
 Check = Callable[[FleetPlan, CheckContext], "Rejection | None"]
+
+
+class DriveMemo:
+    """The drives and pairs of consecutive drives that passed the wrong-way, not-connected and
+    illegal-progress-change checks, on one layout: those checks judge each leg and each pair of legs
+    alone, so a plan made only of drives and pairs passed before passes them again, and is not walked
+    through again (a planner that fixes one more leg of a long route sends the same route again and
+    again). A plan with anything new is checked in full, as ever, and what passes is remembered."""
+
+    __slots__ = ("_legs", "_pairs")
+
+    def __init__(self) -> None:
+        self._legs: set[tuple[int, Traverse]] = set()
+        self._pairs: set[tuple[TurnCapability, int, Traverse, Progress, int, Traverse, Progress]] = set()
+
+    def _keys(
+        self, plan: FleetPlan, capability: TurnCapability
+    ) -> tuple[
+        list[tuple[int, Traverse]], list[tuple[TurnCapability, int, Traverse, Progress, int, Traverse, Progress]]
+    ]:
+        legs = plan.legs
+        drives = [(leg.segment, leg.traverse) for leg in legs]
+        pairs = [
+            (capability, a.segment, a.traverse, a.progress, b.segment, b.traverse, b.progress)
+            for a, b in pairwise(legs)
+        ]
+        return drives, pairs
+
+    def passed(self, plan: FleetPlan, capability: TurnCapability) -> bool:
+        drives, pairs = self._keys(plan, capability)
+        return self._legs.issuperset(drives) and self._pairs.issuperset(pairs)
+
+    def learn(self, plan: FleetPlan, capability: TurnCapability) -> None:
+        drives, pairs = self._keys(plan, capability)
+        self._legs.update(drives)
+        self._pairs.update(pairs)
 
 
 def _reject(code: RejectionCode, plan: FleetPlan, index: int | None, message: str) -> Rejection:
@@ -366,12 +403,18 @@ def check_plan(plan: FleetPlan, ctx: CheckContext) -> Rejection | None:
     says so too, whichever check that was (``...; besides, leg 2 names segment 999, which is not in the
     map (segments 1–8)``).
     """
+    memo = ctx.drives
+    capability = ctx.vehicle_types[plan.vehicle_id].turn_capability if memo is not None else None
     for check in (*TASK_CHECKS, *SANITY_CHECKS):
+        if check is wrong_way and memo is not None and capability is not None and memo.passed(plan, capability):
+            return None  # the rest (wrong way, connections, progress) passed for these very drives before
         rejection = check(plan, ctx)
         if rejection is not None:
             if rejection.code is RejectionCode.UNKNOWN_SEGMENT:
                 return rejection
             return _naming_missing_segments(rejection, plan, ctx.layout)
+    if memo is not None and capability is not None:
+        memo.learn(plan, capability)
     return None
 
 

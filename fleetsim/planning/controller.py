@@ -18,7 +18,7 @@ from typing import Literal, cast
 
 from fleetsim.errors import PlannerError
 from fleetsim.layout.layout import Layout
-from fleetsim.planning.checks import CheckContext, Rejection, check_plans
+from fleetsim.planning.checks import CheckContext, DriveMemo, Rejection, check_plans
 from fleetsim.planning.plans import FleetPlan, RouteError, hands_back
 from fleetsim.planning.protocol import Planner, RoundCall, RoundPlanner
 from fleetsim.planning.quiet import Quiet, Resting
@@ -116,6 +116,7 @@ class FleetController:
         self._stale = False  # something the last snapshot shows has changed since
         self._plans_version = 0  # counts plan changes (FleetSnapshot.plans_version)
         self._plan_log = PlanLog(4 * len(self._plans) + 64)  # whose they were, the recent ones
+        self._drives = DriveMemo()  # drives the plan checks found legal on this layout
         # The read-only copies of the states and plans that snapshots show, brought up to date by what
         # changed (a planning round changes plans many times and states not at all).
         self._states_copy = LiveCopy(self._states)
@@ -313,7 +314,9 @@ class FleetController:
         return self._apply(vehicle_id, method, task, items, time)
 
     def _context(self) -> CheckContext:
-        return CheckContext(self.layout, self._types, self._plans, self.tasks.queues(), self.tasks.routed_now)
+        return CheckContext(
+            self.layout, self._types, self._plans, self.tasks.queues(), self.tasks.routed_now, self._drives
+        )
 
     def _apply(
         self, vehicle_id: int, method: Method, task: Task, items: tuple[FleetPlan | RouteError, ...], time: float

@@ -3,12 +3,14 @@ tables counted from scratch, whatever sequence of plans, assumptions and restore
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from fleetsim.enums import Progress, Traverse
 from fleetsim.layout import build_layout
-from fleetsim.planners.fleet_index import FleetIndex
+from fleetsim.planners.fleet_index import FleetIndex, _delta, _parts
 from fleetsim.planning.plans import FleetLeg, FleetPlan
 from fleetsim.planning.snapshot import FleetSnapshot, PlanLog
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE
@@ -149,3 +151,58 @@ def test_refreshing_from_each_fleet_counts_that_fleet(
             assert tables(versioned) == tables(fresh)
         if not reordered:
             assert in_order(versioned) == in_order(index)
+
+
+class _CountedInFull(FleetIndex):
+    """The index as it recounted before the short ways: every part of both plans compared in full."""
+
+    def _recount(self, vehicle: int, old: FleetPlan, new: FleetPlan) -> None:
+        for table, before, after in zip(self._tables(), _parts(old, AHEAD), _parts(new, AHEAD), strict=True):
+            if before != after:
+                self._add_all(table, vehicle, _delta(before, after))
+
+
+def _fix_one_more(plan: FleetPlan) -> FleetPlan:
+    legs = plan.legs
+    first = len(plan.fixed_legs)
+    if first >= len(legs):
+        return plan
+    return FleetPlan(plan.vehicle_id, (*legs[:first], replace(legs[first], fixed=True), *legs[first + 1 :]))
+
+
+def _drive_past(plan: FleetPlan) -> FleetPlan:
+    legs = plan.legs
+    if len(plan.fixed_legs) < 2:
+        return plan
+    return FleetPlan(plan.vehicle_id, legs[1:])
+
+
+evolutions = st.lists(
+    st.tuples(st.integers(1, 3), st.sampled_from(["fix", "drive", "new"]), plans), min_size=1, max_size=30
+)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.dictionaries(st.integers(1, 3), plans, min_size=1, max_size=3), evolutions)
+def test_recounting_a_fixed_leg_or_a_leg_driven_past_changes_the_tables_as_counting_in_full(
+    first: dict[int, FleetPlan], steps: list[tuple[int, str, FleetPlan]]
+) -> None:
+    index, full = FleetIndex(LAYOUT, AHEAD), _CountedInFull(LAYOUT, AHEAD)
+    fleet = {vehicle: FleetPlan(vehicle, plan.legs) for vehicle, plan in sorted(first.items())}
+    for vehicle, plan in fleet.items():
+        index.assume(vehicle, plan)
+        full.assume(vehicle, plan)
+    for vehicle, how, drawn in steps:
+        if vehicle not in fleet:
+            continue
+        plan = fleet[vehicle]
+        if how == "fix":
+            plan = _fix_one_more(plan)
+        elif how == "drive":
+            plan = _drive_past(plan)
+        else:
+            plan = FleetPlan(vehicle, drawn.legs)
+        fleet[vehicle] = plan
+        index.assume(vehicle, plan)
+        full.assume(vehicle, plan)
+        assert in_order(index) == in_order(full)
