@@ -12,6 +12,7 @@ from __future__ import annotations
 import heapq
 import math
 from collections.abc import Callable
+from collections.abc import Set as AbstractSet
 from dataclasses import dataclass
 
 from fleetsim.enums import JointKind, TurnCapability
@@ -39,7 +40,7 @@ def ways_out(
     vehicle: int,
     start: State,
     capability: TurnCapability,
-    avoid: set[int] | frozenset[int],
+    avoid: AbstractSet[int],
     layout: Layout,
     index: FleetIndex,
     lengths: dict[int, float],

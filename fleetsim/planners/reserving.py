@@ -34,6 +34,7 @@ by state, never by hashing).
 from __future__ import annotations
 
 import math
+from collections.abc import Set as AbstractSet
 from dataclasses import replace
 
 from fleetsim.enums import JointKind, Traverse, TurnCapability
@@ -91,6 +92,7 @@ class ReservingPlanner:
         self._layout: Layout | None = None
         self._lengths: dict[int, float] = {}
         self._tables: dict[TurnCapability, StepTable] = {}  # the layout's steps, per turn capability
+        self._near_cache: dict[int, tuple[FleetPlan, frozenset[int]]] = {}  # vehicle -> (plan, its _near)
         self._since: dict[int, tuple[int, float]] = {}  # vehicle -> (head task, when it became the head)
         self._blocked: dict[int, float] = {}  # vehicle -> since when it stands unable to fix a leg
         self._pushed: dict[int, float] = {}  # vehicle -> when it was last moved out of the way
@@ -430,9 +432,14 @@ class ReservingPlanner:
             self._blocked.pop(plan.vehicle_id, None)
         return plans
 
-    @staticmethod
-    def _near(plan: FleetPlan, layout: Layout) -> set[int]:
-        return {near for leg in plan.legs for near in layout.conflicts(leg.segment)}
+    def _near(self, plan: FleetPlan, layout: Layout) -> frozenset[int]:
+        """The segments near a plan's legs (worked out once per plan: a long route's take a while)."""
+        cached = self._near_cache.get(plan.vehicle_id)
+        if cached is not None and cached[0] is plan:
+            return cached[1]
+        near = frozenset(near for leg in plan.legs for near in layout.conflicts(leg.segment))
+        self._near_cache[plan.vehicle_id] = (plan, near)
+        return near
 
     def _clear_idle_ahead(
         self, vehicle_id: int, plan: FleetPlan, fleet: FleetSnapshot, layout: Layout, index: FleetIndex
@@ -449,8 +456,8 @@ class ReservingPlanner:
             if idle and any(not idle.isdisjoint(fixed_near.get(leg.segment, ())) for leg in next_legs)
             else []
         )
-        near = self._near(plan, layout) if ahead else set()
-        to_move = [(other, near) for other in ahead]
+        near = self._near(plan, layout) if ahead else frozenset()
+        to_move: list[tuple[int, AbstractSet[int]]] = [(other, near) for other in ahead]
         aside = self._aside.get(vehicle_id)
         if aside is not None:
             to_move += [(other, set(aside[3])) for other, _ in aside[2] if other in idle]
@@ -475,7 +482,7 @@ class ReservingPlanner:
     def _evacuate(
         self,
         vehicle_id: int,
-        avoid: set[int],
+        avoid: AbstractSet[int],
         above: Rank,
         fleet: FleetSnapshot,
         layout: Layout,
@@ -533,7 +540,13 @@ class ReservingPlanner:
         return None
 
     def _way_out_past(
-        self, vehicle_id: int, past: int, avoid: set[int], fleet: FleetSnapshot, layout: Layout, index: FleetIndex
+        self,
+        vehicle_id: int,
+        past: int,
+        avoid: AbstractSet[int],
+        fleet: FleetSnapshot,
+        layout: Layout,
+        index: FleetIndex,
     ) -> set[int]:
         """The segments near the way ``vehicle_id`` would take out of ``avoid`` if ``past`` were not there."""
         current = fleet.plans[vehicle_id].legs[0]
