@@ -409,7 +409,7 @@ class ReservingPlanner:
             moments.append(max(since + self.dance_after, self._no_dance.get(vehicle_id, -math.inf)))
         if vehicle_id not in self._haven and vehicle_id in self._next_look:
             moments.append(self._next_look[vehicle_id][0])
-        until = min(moments) - _EARLY
+        until = min(moments) - _EARLY if moments else math.inf  # (none: a dance goes on, no hint is given)
         self._calm = (vehicle_id, Quiet(self._next_segments(plan) | {following}, until=until))
 
     @staticmethod

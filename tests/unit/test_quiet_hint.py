@@ -244,3 +244,15 @@ def test_the_reference_planner_lets_cruising_vehicles_rest() -> None:
         honoured += _run(scenario, quiet=True)[1]
         ignored += _run(scenario, quiet=False)[1]
     assert honoured < 0.8 * ignored, (honoured, ignored)
+
+
+def test_a_vehicle_standing_blocked_while_a_dance_goes_on_gets_no_hint_and_no_error() -> None:
+    """Found by an 8-hour shift: no moment to wake at (pushing already, a dance going on, sent to wait
+    somewhere) left nothing to take the earliest of."""
+    planner = ReservingPlanner()
+    planner._dance = object()  # type: ignore[assignment]  # a dance goes on
+    planner._haven[7] = 3
+    plan = FleetPlan(7, (_leg(1, fixed=True), _leg(2)))
+    planner._calm_standing(7, plan, since=0.0, pushing=True, following=2)
+    assert planner._calm is not None and planner._calm[1].until == math.inf
+    assert planner.quiet(7, None) is None  # type: ignore[arg-type]  # (the dance: no hint)
