@@ -43,7 +43,7 @@ def walks(draw: st.DrawFn) -> FleetPlan:
 
 def _verdict(plan: FleetPlan, memo: DriveMemo | None) -> object:
     plans = {vehicle: FleetPlan(vehicle, (START[vehicle],)) for vehicle in TYPES}
-    ctx = CheckContext(LAYOUT, TYPES, plans, {vehicle: () for vehicle in TYPES}, drives=memo)
+    ctx = CheckContext(LAYOUT, TYPES, plans, dict.fromkeys(TYPES, ()), drives=memo)
     rejection = check_plan(plan, ctx)
     return None if rejection is None else (rejection.code, rejection.leg_index, rejection.message)
 
