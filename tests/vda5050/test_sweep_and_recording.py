@@ -350,9 +350,12 @@ def test_the_whole_example_suite_passes_under_pytest_on_two_workers_and_records_
     for name in ("examples.fleetsim.yaml", "examples.fleetsim.lock.json"):
         shutil.copy(ROOT / "scenario_suites" / name, pytester.path)
     lock = (pytester.path / "examples.fleetsim.lock.json").read_bytes()
-    spec = f"vda5050:speed=20,exec={sys.executable} {ROOT / MASTER}"
+    # Paced at 10x, not 20x: two workers, each with its broker traffic and master control, beside the
+    # rest of a parallel test run, fell 0.35 s behind a 20x pace, and a master control's order made for
+    # a vehicle that had driven on was refused (a real race of a paced run, not what this test is about).
+    spec = f"vda5050:speed=10,exec={sys.executable} {ROOT / MASTER}"
     result = pytester.runpytest_subprocess(
-        "-p", "no:cacheprovider", "-n", "2", "--planner", spec, "--fleetsim-update-hashes", timeout=120
+        "-p", "no:cacheprovider", "-n", "2", "--planner", spec, "--fleetsim-update-hashes", timeout=180
     )
     assert result.ret == pytest.ExitCode.OK, result.stdout.str()
     result.assert_outcomes(passed=4)
