@@ -17,6 +17,7 @@ from operator import is_not
 from fleetsim.enums import Traverse
 from fleetsim.layout.layout import Layout
 from fleetsim.planning.plans import FleetLeg, FleetPlan
+from fleetsim.planning.reservations import fixed_segments
 from fleetsim.planning.snapshot import FleetSnapshot
 from fleetsim.planning.views import replaced
 
@@ -47,8 +48,7 @@ def _parts(plan: FleetPlan, ahead: int) -> tuple[Sequence[object], ...]:
 
 def _short_parts(plan: FleetPlan, ahead: int) -> tuple[list[int], list[int]]:
     """Its fixed legs' and its next ``ahead`` legs' segments."""
-    legs = plan.legs
-    return [leg.segment for leg in plan.fixed_legs], [leg.segment for leg in legs[:ahead]]
+    return fixed_segments(plan), [leg.segment for leg in plan.legs[:ahead]]
 
 
 def _route_parts(plan: FleetPlan) -> tuple[list[int], list[tuple[int, Traverse]]]:
@@ -102,18 +102,16 @@ class FleetIndex:
             return  # the same snapshot as last call: nothing can have changed
         else:
             changed, self._version, self._plans = None, None, plans
-        touched, self._touched = self._touched, set()
         if changed is None or len(self._order) != len(plans):
             # Every plan that is another object (found in C: a large fleet's differ in a few plans).
             self._order = {vehicle: place for place, vehicle in enumerate(plans)}
-            for vehicle_id in replaced(plans, self._seen):
-                self.assume(vehicle_id, plans[vehicle_id])
-            self._touched.clear()
-            return
-        # The same vehicles as counting them all would find, in the same order: any other vehicle's plan is
-        # the one counted at an earlier refresh, unchanged since.
-        seen, order = self._seen, self._order
-        for vehicle_id in sorted(changed | touched, key=order.__getitem__):
+            again = replaced(plans, self._seen)
+        else:
+            # The same vehicles as counting them all would find, in the same order: any other vehicle's plan
+            # is the one counted at an earlier refresh, unchanged since.
+            again = sorted(changed | self._touched, key=self._order.__getitem__)
+        seen = self._seen
+        for vehicle_id in again:
             plan = plans[vehicle_id]
             if plan is not seen.get(vehicle_id):
                 self.assume(vehicle_id, plan)

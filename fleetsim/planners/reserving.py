@@ -166,18 +166,15 @@ class ReservingPlanner:
         fixed_count = len(plan.fixed_legs)
         cleared = self._clear_idle_ahead(vehicle_id, plan, fleet, layout, index)
         response: list[FleetPlan] = [*danced, *cleared]
-        if fixed_count == len(plan.legs) or self._far_enough(plan, fleet):
-            # Everything up to the goal is committed already, or enough to drive on at speed: until its
-            # plan or what stands near its next legs changes, asking again changes nothing.
+        committed = fixed_count == len(plan.legs)  # everything up to the goal
+        if committed or self._fixed_ahead(plan) >= self._horizon(vehicle_id, fleet):
+            # Committed, or enough to drive on at speed: until its plan or what stands near its next legs
+            # changes, asking again changes nothing.
             if not response and self._calm_after_clearing:
                 self._calm = (vehicle_id, Quiet(self._next_segments(plan)))
-            if fixed_count == len(plan.legs):
-                return response
-            # (_fix would fix nothing; moving, it is not standing, so _unblock would only forget its looks.)
-            if cleared:
-                self._blocked.pop(vehicle_id, None)
-            else:
-                self._next_look.pop(vehicle_id, None)
+            if not committed:
+                # (_fix would fix nothing; moving, it is not standing, so _unblock would only forget its looks.)
+                (self._blocked if cleared else self._next_look).pop(vehicle_id, None)
             return response
         following = plan.legs[fixed_count].segment
         if (
@@ -247,10 +244,10 @@ class ReservingPlanner:
         legs = plan.legs
         first = len(plan.fixed_legs)
         lengths = self._lengths
-        ahead = sum(lengths[leg.segment] for leg in legs[1:first])
+        ahead = self._fixed_ahead(plan)
         horizon = self._horizon(vehicle_id, fleet)
         if ahead >= horizon:
-            return plan  # it has enough fixed before it to drive on at speed (_far_enough)
+            return plan  # it has enough fixed before it to drive on at speed
         end = first
         while end < len(legs) and not index.others_fixed_near(vehicle_id, legs[end].segment):
             end += 1
@@ -277,11 +274,10 @@ class ReservingPlanner:
         committed = tuple(replace(leg, fixed=True) for leg in legs[first:take])
         return FleetPlan(vehicle_id, (*legs[:first], *committed, *legs[take:]))
 
-    def _far_enough(self, plan: FleetPlan, fleet: FleetSnapshot) -> bool:
-        """Its fixed legs ahead reach past its horizon: :meth:`_fix` fixes nothing more."""
+    def _fixed_ahead(self, plan: FleetPlan) -> float:
+        """Metres of fixed legs before the vehicle, past the leg it is on."""
         lengths = self._lengths
-        ahead = sum(lengths[leg.segment] for leg in plan.legs[1 : len(plan.fixed_legs)])
-        return ahead >= self._horizon(plan.vehicle_id, fleet)
+        return sum(lengths[leg.segment] for leg in plan.legs[1 : len(plan.fixed_legs)])
 
     def _horizon(self, vehicle_id: int, fleet: FleetSnapshot) -> float:
         """How far ahead a vehicle fixes its way: its braking distance from full speed and a margin."""

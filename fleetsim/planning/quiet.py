@@ -33,6 +33,7 @@ from dataclasses import dataclass
 from typing import Protocol
 
 from fleetsim.planning.plans import FleetPlan
+from fleetsim.planning.reservations import fixed_segments
 
 __all__ = ["Quiet", "Resting"]
 
@@ -64,7 +65,7 @@ class _Moving(Protocol):
 
 
 def _fixed_segments(plan: FleetPlan | None) -> frozenset[int]:
-    return frozenset(leg.segment for leg in plan.fixed_legs) if plan is not None else frozenset()
+    return frozenset(fixed_segments(plan)) if plan is not None else frozenset()
 
 
 class Resting:
