@@ -6,21 +6,10 @@ from __future__ import annotations
 
 from disturbed_fleets import disturbed
 from hypothesis import HealthCheck, given, settings
+from loop_switches import run_switched, same_run
 
-import fleetsim.sim.loop as loop
 from fleetsim.planners import ReservingPlanner
 from fleetsim.scenario import Scenario
-from fleetsim.sim.loop import run_scenario
-
-
-def _run(scenario: Scenario, quiet: bool) -> tuple[object, ...]:
-    loop._Run.quiet = quiet
-    try:
-        result = run_scenario(scenario, ReservingPlanner(), keep_trace=True)
-    finally:
-        loop._Run.quiet = True
-    assert result.trace is not None
-    return result.trace.lines, dict(result.metrics.distance), dict(result.metrics.waiting_time), result.ended
 
 
 @settings(
@@ -31,4 +20,5 @@ def _run(scenario: Scenario, quiet: bool) -> tuple[object, ...]:
 )
 @given(disturbed())
 def test_runs_are_identical_with_the_quiet_hint_honoured_or_ignored(scenario: Scenario) -> None:
-    assert _run(scenario, quiet=True) == _run(scenario, quiet=False)
+    honoured = run_switched(scenario, ReservingPlanner(), quiet=True)
+    assert same_run(honoured) == same_run(run_switched(scenario, ReservingPlanner(), quiet=False))

@@ -14,9 +14,9 @@ from collections import Counter
 from pathlib import Path
 
 import pytest
+from loop_switches import run_switched, same_run
 from scenario_factory import AGV, TUGGER
 
-import fleetsim.sim.loop as loop
 from fleetsim.enums import Direction, Progress, Shape, Traverse
 from fleetsim.layout import Segment, build_layout
 from fleetsim.load.suites.scenario import load_scenario
@@ -228,16 +228,7 @@ def test_a_vehicle_at_rest_or_turning_is_not_armed() -> None:
 
 
 def _runs(scenario: Scenario, planner: type[ReservingPlanner] | type[BFSPlanner]) -> list[object]:
-    seen = []
-    for batched in (True, False):
-        loop._Run.batched = batched
-        try:
-            result = run_scenario(scenario, planner(), keep_trace=True)
-        finally:
-            loop._Run.batched = None
-        assert result.trace is not None
-        seen.append((result.trace.lines, dict(result.metrics.distance), dict(result.metrics.waiting_time)))
-    return seen
+    return [same_run(run_switched(scenario, planner(), batched=batched)) for batched in (True, False)]
 
 
 @pytest.mark.parametrize("suite_path", SUITES, ids=[p.name.split(".")[0] for p in SUITES])

@@ -9,8 +9,8 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from loop_switches import run_switched, same_run
 
-import fleetsim.sim.loop as loop
 from fleetsim.enums import Direction, Progress, Shape, Traverse
 from fleetsim.layout import Layout, Segment, build_layout
 from fleetsim.load.suites.scenario import load_scenario
@@ -19,7 +19,6 @@ from fleetsim.planners import ReservingPlanner
 from fleetsim.planning import FleetController, FleetLeg, FleetPlan, FleetSnapshot, Response
 from fleetsim.planning.quiet import Quiet, Resting
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Scenario, Task, Vehicle
-from fleetsim.sim.loop import run_scenario
 
 SUITES = sorted((Path(__file__).resolve().parents[2] / "scenario_suites").glob("*.fleetsim.yaml"))
 
@@ -214,14 +213,8 @@ def _shipped() -> Iterator[tuple[str, Scenario]]:
 
 
 def _run(scenario: Scenario, quiet: bool) -> tuple[tuple[object, ...], int]:
-    loop._Run.quiet = quiet
-    try:
-        result = run_scenario(scenario, ReservingPlanner(), keep_trace=True)
-    finally:
-        loop._Run.quiet = True
-    assert result.trace is not None
-    same = (result.trace.lines, result.trace_hash, result.ended, dict(result.metrics.distance), result.orders)
-    return same, result.metrics.planner_calls
+    result = run_switched(scenario, ReservingPlanner(), quiet=quiet)
+    return (*same_run(result), result.trace_hash, result.orders), result.metrics.planner_calls
 
 
 @pytest.mark.parametrize(
