@@ -111,14 +111,7 @@ def write_fleet_scenario(
             here = goal
         near_parked |= layout.conflicts(here)
 
-    folder.mkdir(parents=True, exist_ok=True)
-    write_map(folder / "map.json", segments)
-    vehicle_lines = ["vehicle_id,start_segment_id,segment_orientation"]
-    vehicle_lines += [f"{v},{s},forward" for v, s in enumerate(starts, start=1)]
-    (folder / "vehicles.csv").write_text("\n".join(vehicle_lines) + "\n", encoding="utf-8")
-    task_lines = ["vehicle_id,goal_segment_id", *(f"{v},{g}" for v, g in rows)]
-    (folder / "tasks.csv").write_text("\n".join(task_lines) + "\n", encoding="utf-8")
-    return folder
+    return _write(folder, segments, starts, rows)
 
 
 def write_congestion_scenario(
@@ -150,6 +143,12 @@ def write_congestion_scenario(
         for _ in range(rng.randint(*trips)):
             rows += [(vehicle_id, rng.choice(picks)), (vehicle_id, rng.choice(drops))]
         rows.append((vehicle_id, parks[vehicle_id - 1]))
+    return _write(folder, segments, starts, rows)
+
+
+def _write(folder: Path, segments: list[Segment], starts: list[int], rows: list[tuple[int, int]]) -> Path:
+    """The map, the vehicles (vehicle ``k`` on ``starts[k - 1]``) and the tasks ``(vehicle, goal)`` as a
+    scenario folder; ``folder``."""
     folder.mkdir(parents=True, exist_ok=True)
     write_map(folder / "map.json", segments)
     vehicle_lines = ["vehicle_id,start_segment_id,segment_orientation"]
