@@ -51,7 +51,7 @@ from fleetsim.planners.routing import (
     straight_line_estimate,
 )
 from fleetsim.planning.plans import FleetLeg, FleetPlan, Response, RouteError
-from fleetsim.planning.quiet import Quiet
+from fleetsim.planning.quiet import STANDING, Quiet
 from fleetsim.planning.snapshot import FleetSnapshot
 from fleetsim.scenario import Task
 
@@ -232,7 +232,7 @@ class ReservingPlanner:
     def _standing(self, vehicle_id: int, fleet: FleetSnapshot) -> bool:
         """At rest at the end of what it may drive (only the leg it is on is fixed)."""
         # (A vehicle that braked to a stop may keep a speed of a few 1e-15 m/s from rounding.)
-        return fleet.vehicles[vehicle_id].speed < 1e-9 and len(fleet.plans[vehicle_id].fixed_legs) == 1
+        return fleet.vehicles[vehicle_id].speed < STANDING and len(fleet.plans[vehicle_id].fixed_legs) == 1
 
     # -- fixing --------------------------------------------------------------------------------------
 

@@ -30,12 +30,12 @@ import heapq
 import math
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
-from typing import Protocol
 
 from fleetsim.planning.plans import FleetPlan
 from fleetsim.planning.reservations import fixed_segments
+from fleetsim.planning.snapshot import VehicleState
 
-__all__ = ["Quiet", "Resting"]
+__all__ = ["STANDING", "Quiet", "Resting"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -56,12 +56,9 @@ class Quiet:
     until_standing: bool = False
 
 
-STANDING = 1e-9  # m/s: below this speed a vehicle is at rest
-
-
-class _Moving(Protocol):
-    @property
-    def speed(self) -> float: ...
+# m/s: below this speed a vehicle is at rest (one that braked to a stop may keep a few 1e-15 m/s); a
+# planner whose hint rests until_standing judges standing by the same figure.
+STANDING = 1e-9
 
 
 def _fixed_segments(plan: FleetPlan | None) -> frozenset[int]:
@@ -120,7 +117,7 @@ class Resting:
         self._until.clear()
         self._until_standing.clear()
 
-    def wake_standing(self, states: Mapping[int, _Moving]) -> None:
+    def wake_standing(self, states: Mapping[int, VehicleState]) -> None:
         """Wake the vehicles resting until they stand that stand now (a planning round begins)."""
         if self._until_standing:
             for vehicle in sorted(self._until_standing):
