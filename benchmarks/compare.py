@@ -28,7 +28,7 @@ import statistics
 import subprocess
 import sys
 import tempfile
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -136,6 +136,14 @@ def side_by_side(both: dict[str, Path], case: Case, rounds: int) -> Results:
     return results
 
 
+def compare_cases(ref: str, cases: Iterable[Case], rounds: int) -> None:
+    """Each of ``cases`` side by side in ``ref`` and this tree, reported one after the other."""
+    with trees(ref) as both:
+        for case in cases:
+            report(side_by_side(both, case, rounds), case, rounds)
+            print()
+
+
 def column(results: list[dict[str, float | str]], key: str, form: str) -> str:
     """One figure of every round, then their median."""
     values = [float(result[key]) for result in results]
@@ -174,8 +182,7 @@ def main() -> int:
     parser.add_argument("--best-of", type=int, default=3)
     args = parser.parse_args()
     case = Case(args.vehicles, args.seconds, args.planner, args.site, args.seed, args.best_of)
-    with trees(args.ref) as both:
-        report(side_by_side(both, case, args.rounds), case, args.rounds)
+    compare_cases(args.ref, [case], args.rounds)
     return 0
 
 

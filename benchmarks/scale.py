@@ -38,7 +38,7 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).parent))
 
-from compare import Case, report, side_by_side, trees
+from compare import Case, compare_cases
 from warehouse import write_fleet_scenario
 
 PLANNERS = ("BFSPlanner", "GreedyPlanner", "ReservingPlanner")
@@ -97,11 +97,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--vs", metavar="REF", help="compare with commit REF side by side instead")
     args = parser.parse_args(argv)
     if args.vs is not None:
-        with trees(args.vs) as both:
-            for size in (int(part) for part in args.sizes.split(",")):
-                case = Case(size, args.seconds, args.planner, best_of=1)
-                report(side_by_side(both, case, args.repeat), case, args.repeat)
-                print()
+        cases = [Case(int(part), args.seconds, args.planner, best_of=1) for part in args.sizes.split(",")]
+        compare_cases(args.vs, cases, args.repeat)
         return 0
     if args.write is not None:
         print(json.dumps(write_one(args.write, args.folder)))

@@ -56,7 +56,7 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).parent))
 
-from compare import SITES, Case, report, side_by_side, trees
+from compare import SITES, Case, compare_cases
 
 from fleetsim.load.suites.scenario import load_scenario_dir
 from fleetsim.planners import BFSPlanner, ReservingPlanner
@@ -78,11 +78,8 @@ HEADER = (
 PHASES = {"plan": "planning", "check_reservations": "reservation check", "move": "motion"}
 
 
-SITE = "warehouse"  # the site generated (--site)
-
-
-def fleet_scenario(folder: Path, vehicles: int, settings: ScenarioSettings, seed: int) -> Scenario:
-    SITES[SITE](folder, vehicles, seed=seed)
+def fleet_scenario(folder: Path, vehicles: int, settings: ScenarioSettings, seed: int, site: str) -> Scenario:
+    SITES[site](folder, vehicles, seed=seed)
     return load_scenario_dir(folder, settings=settings)
 
 
@@ -241,15 +238,13 @@ def main() -> int:
     args = parser.parse_args()
     if args.repeat < 1:
         parser.error(f"--repeat={args.repeat} must be at least 1")
-    global SITE
-    SITE = args.site
     if args.vs is not None:
-        with trees(args.vs) as both:
-            for size in args.sizes:
-                seconds = args.large_time_limit if size >= LARGE_FLEET else args.time_limit
-                case = Case(size, seconds, TARGET_PLANNER, args.site, args.seed, args.repeat)
-                report(side_by_side(both, case, args.rounds), case, args.rounds)
-                print()
+        cases = [
+            Case(size, args.large_time_limit if size >= LARGE_FLEET else args.time_limit, TARGET_PLANNER,
+                 args.site, args.seed, args.repeat)
+            for size in args.sizes
+        ]  # fmt: skip
+        compare_cases(args.vs, cases, args.rounds)
         return 0
 
     def settings(size: int) -> ScenarioSettings:
@@ -260,19 +255,19 @@ def main() -> int:
     print(HEADER)
     with tempfile.TemporaryDirectory() as tmp:
         for size in args.sizes:
-            scenario = fleet_scenario(Path(tmp) / f"warehouse-{size}", size, settings(size), args.seed)
+            scenario = fleet_scenario(Path(tmp) / f"{args.site}-{size}", size, settings(size), args.seed, args.site)
             for name, planner in PLANNERS.items():
                 result = best_run(scenario, planner, name, args.repeat if size < LARGE_FLEET else 1)
                 results[size, name] = result
                 print(row(size, name, result), flush=True)
         if args.phases:
             scenario = fleet_scenario(
-                Path(tmp) / f"phases-{TARGET_SIZE}", TARGET_SIZE, settings(TARGET_SIZE), args.seed
+                Path(tmp) / f"phases-{TARGET_SIZE}", TARGET_SIZE, settings(TARGET_SIZE), args.seed, args.site
             )
             show_phases(scenario, TARGET_SIZE, TARGET_PLANNER, args.repeat)
         if args.profile is not None:
             size, name = args.profile
-            scenario = fleet_scenario(Path(tmp) / f"profile-{size}", size, settings(size), args.seed)
+            scenario = fleet_scenario(Path(tmp) / f"profile-{size}", size, settings(size), args.seed, args.site)
             profile = cProfile.Profile()
             result = profile.runcall(run_scenario, scenario, PLANNERS[name](), planner_name=name, keep_trace=False)
             print(f"\nprofiled (under cProfile):\n{HEADER}\n{row(size, name, result)}")
