@@ -704,18 +704,22 @@ class ReservingPlanner:
         lengths = self._lengths
         turnaround, oncoming, near_parked = self.turnaround_penalty, self.oncoming_penalty, self.parked_penalty
         avoid_held = within is not None
-        others_drive, others_fixed_near = index.others_drive, index.others_fixed_near
+        # (FleetIndex.others_drive and others_fixed_near, read in place: a search asks them at every step.)
+        drives, fixed_near = index.drives.get, index.fixed_near.get
 
         def cost(segment: int, traverse: Traverse, joint: JointKind) -> float:
             total = lengths[segment]
             if joint is JointKind.OPPOSITE:
                 total += turnaround
-            if others_drive(vehicle_id, segment, _OPPOSITE[traverse]):
+            counts = drives((segment, _OPPOSITE[traverse]))
+            if counts is not None and (len(counts) > 1 or vehicle_id not in counts):
                 total += oncoming
             if segment in parked:
                 total += near_parked
-            if avoid_held and others_fixed_near(vehicle_id, segment):
-                return math.inf
+            if avoid_held:
+                counts = fixed_near(segment)
+                if counts is not None and (len(counts) > 1 or vehicle_id not in counts):
+                    return math.inf
             return total
 
         capability = fleet.vehicles[vehicle_id].type.turn_capability

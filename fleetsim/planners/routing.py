@@ -76,6 +76,8 @@ class StepTable:
         self.layout, self.capability = layout, capability
         self._steps: dict[State, tuple[Step, ...]] = {}
         self._exits: dict[tuple[int, Traverse], tuple[float, float]] = {}
+        # Per goal segment: the straight-line estimate of each (segment, traverse) asked so far.
+        self.estimates: dict[int, dict[tuple[int, Traverse], float]] = {}
 
     def steps(self, state: State) -> tuple[Step, ...]:
         steps = self._steps.get(state)
@@ -95,7 +97,8 @@ def straight_line_estimate(layout: Layout, goal: int, table: StepTable | None = 
     """An A* estimate that never overestimates a route's length to ``goal``.
 
     From the exit of a state, the vehicle must still reach an end of the goal segment (at least the
-    straight-line distance) and then drive the whole goal segment. ``table``: where exits are looked up.
+    straight-line distance) and then drive the whole goal segment. ``table``: where exits are looked up,
+    and where the estimates for ``goal`` are kept once worked out (searches to one goal share them).
     """
     target = layout.segments[goal]
     (ax, ay), (bx, by) = target.first, target.last
@@ -110,7 +113,17 @@ def straight_line_estimate(layout: Layout, goal: int, table: StepTable | None = 
         x, y = exit_of(segment, traverse)
         return min(hypot(x - ax, y - ay), hypot(x - bx, y - by)) + length
 
-    return estimate
+    if table is None:
+        return estimate
+    known = table.estimates.setdefault(goal, {})
+
+    def remembered(segment: int, traverse: Traverse) -> float:
+        value = known.get((segment, traverse))
+        if value is None:
+            value = known[segment, traverse] = estimate(segment, traverse)
+        return value
+
+    return remembered
 
 
 def shortest_route(

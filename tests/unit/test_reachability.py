@@ -76,3 +76,17 @@ def test_goal_states_follow_the_segments_direction() -> None:
 
 def test_the_route_searches_use_the_same_progress_rules() -> None:
     assert routing.next_steps is next_steps
+
+
+def test_remembered_estimates_are_the_estimates_worked_out_afresh() -> None:
+    # A step table keeps each goal's estimates; a second search to the same goal reads them, and they are
+    # the very floats a search without a table works out (so routes, and hashes, stay the same).
+    for layout in example_layouts():
+        table = routing.StepTable(layout, TurnCapability.IN_PLACE)
+        for goal in sorted(layout.segments):
+            fresh = routing.straight_line_estimate(layout, goal)
+            first = routing.straight_line_estimate(layout, goal, table)
+            again = routing.straight_line_estimate(layout, goal, table)
+            for segment, traverse, _ in every_state(layout):
+                assert first(segment, traverse) == fresh(segment, traverse) == again(segment, traverse)
+            assert set(table.estimates[goal]) == {(s, t) for s, t, _ in every_state(layout)}
