@@ -229,10 +229,12 @@ def show_measures(result: RunResult) -> None:
     assert result.measures is not None
     m = result.measures
     service = m.service_time
+    # (No service time when no order released in the window was completed in it: shown as "–".)
+    median, p95 = (f"{service.median:.0f} s", f"{service.p95:.0f} s") if service else ("–", "–")
     print(
         f"  measures (after {m.window[0]:.0f} s warm-up): {m.released} released, {m.completed} completed, "
-        f"{m.orders_per_hour:.1f} orders/h, service median {service.median if service else 0:.0f} s, "
-        f"p95 {service.p95 if service else 0:.0f} s; utilisation {m.utilisation:.0%} (idle {m.idle_share:.0%}, "
+        f"{m.orders_per_hour:.1f} orders/h, service median {median}, "
+        f"p95 {p95}; utilisation {m.utilisation:.0%} (idle {m.idle_share:.0%}, "
         f"dwelling {m.dwelling_share:.0%}, blocked {m.blocked_share:.0%}); stalls {m.stalls}; "
         f"backlog slope {m.backlog_slope:+.1f}/h, overloaded: {m.overloaded}"
     )
