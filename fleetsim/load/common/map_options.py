@@ -13,7 +13,8 @@ __all__ = ["MapOptions", "SiteMap"]
 
 @dataclass(frozen=True, slots=True)
 class MapOptions:
-    """A suite's ``map_options``: which part of a LIF or RMF file forms the driving map.
+    """A suite's ``map_options``: which part of a LIF or RMF file forms the driving map, and how big a
+    MovingAI map's cells are.
 
     ``layout`` (LIF ``layoutId``) and ``robot_type`` (LIF ``manufacturer/seriesName``, or a LIF 1.0
     ``vehicleTypeId``) choose a LIF layout and whose edges form the map; ``level`` (a level name) and
@@ -24,10 +25,17 @@ class MapOptions:
     robot_type: str | None = None
     level: str | None = None
     graph: int | None = None
+    cell_size: float | None = None
 
-    def given(self) -> dict[str, str | int]:
+    def given(self) -> dict[str, str | int | float]:
         """The options that are set, by name (in declaration order)."""
-        values = {"layout": self.layout, "robot_type": self.robot_type, "level": self.level, "graph": self.graph}
+        values = {
+            "layout": self.layout,
+            "robot_type": self.robot_type,
+            "level": self.level,
+            "graph": self.graph,
+            "cell_size": self.cell_size,
+        }
         return {name: value for name, value in values.items() if value is not None}
 
 
@@ -35,9 +43,9 @@ class MapOptions:
 class SiteMap:
     """A loaded driving map: segments sorted by id, and what loading it had to say.
 
-    ``format`` is ``tiled``, ``lif`` or ``rmf``; ``meters_per_pixel`` is known for Tiled and RMF maps
+    ``format`` is ``tiled``, ``lif``, ``rmf`` or ``movingai``; ``meters_per_pixel`` is known for Tiled and RMF maps
     drawn on an image. ``part`` names what was read of a LIF or RMF file (layout and robot type, level and
-    graph). ``stations`` are the station sets the map names (:mod:`fleetsim.load.common.stations`): set
+    graph, a MovingAI map's size). ``stations`` are the station sets the map names (:mod:`fleetsim.load.common.stations`): set
     name → its stations, each set's segments ascending, each once.
     """
 
