@@ -29,6 +29,7 @@ from fleetsim.load.common.map_options import MapOptions, SiteMap
 from fleetsim.load.maps.site_map import load_site_map
 from fleetsim.load.suites.disturbances import check_disturbances
 from fleetsim.load.suites.order_checks import apply_order_setup, order_reach_errors
+from fleetsim.load.suites.scen_entry import ScenSetup, scen_agents
 from fleetsim.load.suites.suite import ScenarioSpec, Suite
 from fleetsim.load.suites.task_reach import check_tasks_reachable
 from fleetsim.load.tables.orders import ORDERS_FILE_NAME, collect_orders
@@ -48,6 +49,7 @@ from fleetsim.scenario import (
     Expectations,
     Scenario,
     ScenarioSettings,
+    Task,
     Vehicle,
     VehicleType,
     longest_vehicle,
@@ -72,6 +74,7 @@ def load_scenario(spec: ScenarioSpec, suite: Suite) -> Scenario:
         Location(spec.suite_path, line=spec.line),
         spec.map_options,
         spec.order_setup.orders_path,
+        spec.scen,
     )
     scenario = replace(scenario, planner_setup=spec.planner_setup)
     scenario = apply_order_setup(scenario, spec.order_setup)
@@ -141,6 +144,7 @@ def _assemble(
     origin: Location,
     map_options: MapOptions,
     orders_path: Path | None = None,
+    scen: ScenSetup | None = None,
 ) -> Scenario:
     map_path, vehicles_path, tasks_path = paths
     errors = ErrorCollector()
@@ -157,16 +161,25 @@ def _assemble(
     # cannot be judged) and tasks.csv without knowing which vehicles exist.
     segments = {segment.id: segment for segment in site.segments} if site is not None else None
     vehicle_rows = VehicleRows((), None)
-    if typed:
+    located_tasks: tuple[tuple[Task, int], ...] = ()
+    if scen is not None:  # a MovingAI scenario: vehicles and tasks from its agents, once the map is loaded
+        if site is not None and typed:
+            with errors.collecting():
+                # A suite that declares no vehicle types gets the MovingAI type, not the built-in default.
+                given_type = default_type if default_type is not DEFAULT_VEHICLE_TYPE else None
+                agents, located_tasks, agent_type = scen_agents(scen, site, map_options, given_type)
+                vehicle_rows = VehicleRows(agents, frozenset(vehicle.id for vehicle, _ in agents))
+                vehicle_types = MappingProxyType({**vehicle_types, agent_type.name: agent_type})
+    elif typed:
         vehicle_rows = collect_vehicles(
             vehicles_path, segments, vehicle_types, default_type, errors, map_name=map_path.name
         )
     else:
         check_table(vehicles_path, VEHICLE_COLUMNS, errors)
-    # Tasks are checked against every vehicle id vehicles.csv names, bad rows' included.
-    located_tasks = collect_tasks(
-        tasks_path, segments, vehicle_rows.ids, errors, map_name=map_path.name, vehicles_name=vehicles_path.name
-    )
+    if scen is None:  # tasks are checked against every vehicle id vehicles.csv names, bad rows' included
+        located_tasks = collect_tasks(
+            tasks_path, segments, vehicle_rows.ids, errors, map_name=map_path.name, vehicles_name=vehicles_path.name
+        )
     orders = collect_orders(orders_path, segments, tuple(vehicle_types), errors) if orders_path is not None else ()
     errors.raise_if_any()
     assert site is not None and typed  # raise_if_any raised the error that left them unset

@@ -25,6 +25,7 @@ from fleetsim.load.suites.disturbances import HuntDisturbances, declared_disturb
 from fleetsim.load.suites.entry_tables import check_entry_tables
 from fleetsim.load.suites.orders_entry import DEFAULT_ORDER_KEYS, ORDER_KEYS, OrderSetup, order_setup
 from fleetsim.load.suites.planner_setup import PLANNER_KEYS, planner_setup
+from fleetsim.load.suites.scen_entry import ScenSetup, scen_files
 from fleetsim.load.suites.schema import SchemaCheck, raise_suite_errors, schema_check, suite_error, suite_schema
 from fleetsim.load.tables.scenario_files import (
     MAP_FILE_NAMES,
@@ -106,6 +107,8 @@ class ScenarioSpec:
             over the defaults' (`fleetsim.load.suites.orders_entry`).
         gate: What a change of behaviour fails on: ``hash`` (the recorded trace hash), ``measures`` (the
             ``expect`` bounds on measures; no hash is recorded or compared) or ``both``.
+        scen: A MovingAI scenario file that gives the vehicles and tasks (``scen`` and ``agents``), or
+            ``None``; then ``vehicles_path`` and ``tasks_path`` are that file.
     """
 
     name: str
@@ -127,6 +130,7 @@ class ScenarioSpec:
     planner_setup: PlannerSetup = field(default_factory=PlannerSetup)
     order_setup: OrderSetup = field(default_factory=OrderSetup)
     gate: Gate = "hash"
+    scen: ScenSetup | None = None
 
     @property
     def hunts(self) -> bool:
@@ -509,6 +513,7 @@ def _scenario_entry(
     complete = True
     generate = None
     paths: tuple[Path, Path, Path] | None = None
+    scen: ScenSetup | None = None
     files_missing = False
     if "generate" in entry:
         paths = (suite_path.parent,) * 3
@@ -516,6 +521,10 @@ def _scenario_entry(
             with errors.collecting():
                 generate = _generation(entry["generate"], types, locate, (*where, "generate"))
         complete = generate is not None
+    elif "scen" in entry:
+        if check.intact(where) and all(check.clean((*where, key)) for key in ("scen", "map", "agents")):
+            with errors.collecting():
+                paths, scen = scen_files(suite_path.parent, entry, locate, where)
     elif check.intact(where) and all(check.clean((*where, key)) for key in ("dir", "map", "vehicles", "tasks")):
         with errors.collecting():
             paths = _scenario_files(suite_path.parent, entry, locate, where)
@@ -572,6 +581,7 @@ def _scenario_entry(
         map_options=MapOptions(**{**base_options, **options}),
         planner_setup=setup,
         order_setup=orders,
+        scen=scen,
         **disturbances,
     )
 
