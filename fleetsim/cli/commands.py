@@ -130,8 +130,11 @@ def _lint_notes(layout: Layout, vehicle_length: float) -> list[str]:
 
 
 def map_options(args: argparse.Namespace) -> MapOptions:
-    """The map options given on the command line (``--layout``, ``--robot-type``, ``--level``, ``--graph``)."""
-    return MapOptions(layout=args.layout, robot_type=args.robot_type, level=args.level, graph=args.graph)
+    """The map options given on the command line (``--layout``, ``--robot-type``, ``--level``, ``--graph``,
+    ``--cell-size``)."""
+    return MapOptions(
+        layout=args.layout, robot_type=args.robot_type, level=args.level, graph=args.graph, cell_size=args.cell_size
+    )
 
 
 def _layout_from_args(args: argparse.Namespace) -> tuple[SiteMap, Layout]:

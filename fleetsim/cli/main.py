@@ -117,7 +117,7 @@ def _speed(text: str) -> float | None:
 
 def _add_map_options(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group(
-        "map options", "which part of a LIF or Open-RMF map to read (as map_options in a suite)"
+        "map options", "which part of a LIF or Open-RMF map to read, a MovingAI map's cells (as map_options in a suite)"
     )
     group.add_argument("--layout", metavar="ID", help="LIF: the layoutId (required when the file has several)")
     group.add_argument(
@@ -127,6 +127,9 @@ def _add_map_options(parser: argparse.ArgumentParser) -> None:
     )
     group.add_argument("--level", metavar="NAME", help="RMF: the level (default: the first)")
     group.add_argument("--graph", type=int, metavar="N", help="RMF: the lane graph_idx (default: 0)")
+    group.add_argument(
+        "--cell-size", type=float, metavar="M", help="MovingAI (.map): a grid cell's side in metres (default: 1)"
+    )
 
 
 def _command(name: str) -> Any:
