@@ -8,9 +8,10 @@ file writes each key once, so a run Dask happened to finish twice still counts o
 
 from __future__ import annotations
 
+import contextlib
 import os
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -19,7 +20,7 @@ from fleetsim.sweep.items import RunItem
 from fleetsim.sweep.results import ResultsFile
 from fleetsim.sweep.worker import failed_row, run_item
 
-__all__ = ["DaskMissingError", "Progress", "run_items"]
+__all__ = ["DaskMissingError", "Progress", "dask_client", "run_items"]
 
 
 class DaskMissingError(FleetsimError, ImportError):
@@ -50,21 +51,12 @@ def _distributed() -> Any:
     return distributed
 
 
-def run_items(
-    items: Sequence[RunItem],
-    results: ResultsFile,
-    *,
-    scheduler: str | None = None,
-    workers: int | None = None,
-    on_progress: Callable[[Progress], None] = lambda progress: None,
-) -> Progress:
-    """Run the items not yet in ``results`` on Dask; every finished run's row goes into ``results`` once."""
+@contextlib.contextmanager
+def dask_client(scheduler: str | None = None, workers: int | None = None) -> Iterator[Any]:
+    """A Dask client: of the scheduler at ``scheduler``, else of a local cluster of ``workers`` processes
+    (default: one per core), closed (with the local cluster) on leaving. ``fleetsim capacity`` keeps one
+    open over the rounds of its search."""
     distributed = _distributed()
-    todo = [item for item in items if item["key"] not in results.done]
-    start = time.monotonic()
-    progress = Progress(0, 0, len(todo), 0.0)
-    if not todo:
-        return progress
     if scheduler is not None:
         client = distributed.Client(scheduler, timeout="20s")
         cluster = None
@@ -75,22 +67,52 @@ def run_items(
         )
         client = distributed.Client(cluster)
     try:
-        futures = {client.submit(run_item, item, key=_task_key(item), pure=False): item for item in todo}
-        failing = 0
-        for done, future in enumerate(distributed.as_completed(futures), start=1):
-            item = futures[future]
-            try:
-                row = future.result()
-            except Exception as error:
-                row = failed_row(item, f"the run's workers died {type(error).__name__}: {error}")
-            results.add(row)
-            failing += row["status"] != "passed"
-            progress = Progress(done, failing, len(todo), time.monotonic() - start)
-            on_progress(progress)
+        yield client
     finally:
         client.close()
         if cluster is not None:
             cluster.close()
+
+
+def run_items(
+    items: Sequence[RunItem],
+    results: ResultsFile,
+    *,
+    scheduler: str | None = None,
+    workers: int | None = None,
+    on_progress: Callable[[Progress], None] = lambda progress: None,
+    client: Any = None,
+) -> Progress:
+    """Run the items not yet in ``results`` on Dask; every finished run's row goes into ``results`` once.
+
+    On ``client`` when given (an open :func:`dask_client`), else on a client opened for these items alone."""
+    todo = [item for item in items if item["key"] not in results.done]
+    if not todo:
+        return Progress(0, 0, 0, 0.0)
+    if client is None:
+        with dask_client(scheduler, workers) as opened:
+            return _run_on(opened, todo, results, on_progress)
+    return _run_on(client, todo, results, on_progress)
+
+
+def _run_on(
+    client: Any, todo: Sequence[RunItem], results: ResultsFile, on_progress: Callable[[Progress], None]
+) -> Progress:
+    distributed = _distributed()
+    start = time.monotonic()
+    progress = Progress(0, 0, len(todo), 0.0)
+    futures = {client.submit(run_item, item, key=_task_key(item), pure=False): item for item in todo}
+    failing = 0
+    for done, future in enumerate(distributed.as_completed(futures), start=1):
+        item = futures[future]
+        try:
+            row = future.result()
+        except Exception as error:
+            row = failed_row(item, f"the run's workers died {type(error).__name__}: {error}")
+        results.add(row)
+        failing += row["status"] != "passed"
+        progress = Progress(done, failing, len(todo), time.monotonic() - start)
+        on_progress(progress)
     return progress
 
 

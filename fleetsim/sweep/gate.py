@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -36,14 +36,16 @@ class Condition:
     relative: bool
 
 
-def parse_condition(text: str) -> Condition:
+def parse_condition(text: str, known: Collection[str] = METRICS.keys(), example: str = "throughput") -> Condition:
+    """``text`` read as ``METRIC OP baseline [+|- AMOUNT[%]]``, METRIC one of ``known`` (a sweep's metrics
+    by default; ``fleetsim capacity`` knows ``capacity``)."""
     match = _FORM.match(text)
     if match is None:
-        msg = f"--fail-if={text!r} must read METRIC OP baseline [+|- AMOUNT[%]], e.g. 'throughput < baseline - 2%'"
+        msg = f"--fail-if={text!r} must read METRIC OP baseline [+|- AMOUNT[%]], e.g. '{example} < baseline - 2%'"
         raise GateError(msg)
     metric, operator, sign, amount, percent = match.groups()
-    if metric not in METRICS:
-        msg = f"--fail-if={text!r}: unknown metric {metric!r}; known: {', '.join(sorted(METRICS))}"
+    if metric not in known:
+        msg = f"--fail-if={text!r}: unknown metric {metric!r}; known: {', '.join(sorted(known))}"
         raise GateError(msg)
     offset = float(amount or 0) * (-1 if sign == "-" else 1)
     return Condition(text.strip(), metric, operator, offset, bool(percent))
