@@ -15,6 +15,7 @@ from collections.abc import Sequence
 from importlib import import_module
 from typing import Any
 
+from fleetsim.cli.capacity import add_capacity_arguments
 from fleetsim.cli.generate import add_generate_arguments
 from fleetsim.cli.orders import add_orders_arguments
 from fleetsim.enums import ConflictModel
@@ -367,6 +368,14 @@ def build_parser() -> argparse.ArgumentParser:
         command="fleetsim.cli.sweep:sweep",
     )
     sweep_parser.add_argument("arguments", nargs=argparse.REMAINDER)
+
+    capacity_parser = sub.add_parser(
+        "capacity",
+        help="the highest order arrival rate a fleet sustains, searched over seeds on Dask, with a CI gate",
+        command="fleetsim.cli.capacity:capacity",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    add_capacity_arguments(capacity_parser)
     return parser
 
 
