@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -138,20 +138,25 @@ class RunsFile(ResultsFile):
 
 @dataclass
 class Runner:
-    """Runs ``target`` at a rate on ``client`` and judges each seed's run: the search's evaluator."""
+    """Runs ``target`` at a rate and judges each seed's run: the search's evaluator. The Dask client comes
+    from ``open_client``, called once, when the first rate has runs the runs file lacks (a search resumed
+    to its end starts no cluster)."""
 
     target: Target
     planner: str
     seeds: tuple[int, ...]
     criteria: Criteria
     runs: RunsFile
-    client: Any
+    open_client: Callable[[], Any]
     timeout: float | None = 10.0
     on_rate: Callable[[float, Mapping[int, Judgement]], None] = lambda rate, runs: None
+    _client: Any = field(default=None, init=False, repr=False)
 
     def __call__(self, rate: float) -> dict[int, Judgement]:
         items = rate_items(self.target, rate, self.seeds, self.planner, self.timeout)
-        run_items(items, self.runs, client=self.client)
+        if any(item["key"] not in self.runs.done for item in items):
+            self._client = self._client or self.open_client()
+            run_items(items, self.runs, client=self._client)
         rows = [self.runs.rows[item["key"]] for item in items]
         if all(row.get("error") for row in rows):
             msg = f"{self.target.where}: no run of {self.target.id} at {rate:g} orders/h ran: {rows[0]['error']}"

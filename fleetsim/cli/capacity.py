@@ -10,6 +10,7 @@ the runs file; ``--resume`` goes on from them).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
 import time
 from collections.abc import Mapping
@@ -109,8 +110,12 @@ def _capacity(args: argparse.Namespace) -> int:
     header = {"name": f"capacity {target.id}", "spec": target.where, "planners": [args.planner], "baseline": args.planner, "capacity": about}  # fmt: skip
     print(f"capacity of {target.id}: from {target.rate:g} orders/h, seeds {_seeds_text(settings.seeds)}", file=sys.stderr)  # fmt: skip
     started = time.monotonic()
-    with RunsFile(runs_path, header, resume=args.resume) as runs, dask_client(args.scheduler, args.workers) as client:
-        runner = Runner(target, args.planner, settings.seeds, criteria, runs, client, timeout, _show_rate)
+    with RunsFile(runs_path, header, resume=args.resume) as runs, contextlib.ExitStack() as stack:
+
+        def open_client() -> object:
+            return stack.enter_context(dask_client(args.scheduler, args.workers))
+
+        runner = Runner(target, args.planner, settings.seeds, criteria, runs, open_client, timeout, _show_rate)
         result = search(settings, runner)
     document = capacity_document(target, args.planner, criteria, result, runs_path.name)
     write_capacity(output, document)
