@@ -308,6 +308,9 @@ class Scenario:
         warnings: Notes from loading that did not stop it (shapes given to non-polylines, say).
         planner_setup: What the suite entry gives the planner: its options, folder and data files.
         orders: Transport orders (``orders.csv``), in file order; a dispatcher assigns them.
+        order_pool: Release ``orders`` as a closed pool of this many open orders (file order; one more
+            for each completed, as a League of Robot Runners problem reveals its tasks), or ``None``: each
+            at its own release time.
         order_stream: Orders to generate as the run goes, or ``None``.
         stations: The map's and the suite's station sets, by name, each segment once, ascending.
         shift: The run as a shift (its length, warm-up, stalls), or ``None``: a run of fixed tasks.
@@ -330,6 +333,7 @@ class Scenario:
     warnings: tuple[str, ...] = ()
     planner_setup: PlannerSetup = field(default_factory=PlannerSetup)
     orders: tuple[Order, ...] = ()
+    order_pool: int | None = None
     order_stream: OrderStream | None = None
     stations: Mapping[str, tuple[Station, ...]] = field(default_factory=lambda: MappingProxyType({}))
     shift: Shift | None = None

@@ -19,6 +19,10 @@ stream's. Arrival processes:
 
 No release after ``until``; at most ``limit`` orders in all.
 
+``orders.csv`` orders may be released as a closed pool too (``pool=N``, as a League of Robot Runners
+problem reveals its tasks): in file order, whatever their ``release``, the first ``N`` at step 0, then the
+next one for each of them completed, at the start of the next step.
+
 Determinism on every platform and Python ≥ 3.2, as the random disturbances draw
 (:mod:`fleetsim.sim.disturbances`): two generators seeded from strings (by SHA-512),
 ``random.Random(f"fleetsim-orders/{seed}/arrivals")`` for when orders come and
@@ -166,6 +170,8 @@ class OrderSource:
         stream: The order stream to generate, or ``None``.
         stations: The station sets by name (the stream's stops are drawn from them).
         time_step: Seconds per step.
+        pool: Release ``orders`` as a closed pool of this many open orders (see the module), or ``None``:
+            each at its ``release``.
 
     Raises ``ValueError`` for a stream the loader should have refused (a set that names no station, a
     rate, interval or pool size that is not positive, no stop at all) and for an ``orders.csv`` id of the
@@ -178,16 +184,24 @@ class OrderSource:
         stream: OrderStream | None,
         stations: Mapping[str, tuple[Station, ...]],
         time_step: float,
+        pool: int | None = None,
     ) -> None:
         if not time_step > 0.0:
             msg = f"time_step={time_step!r} must be > 0"
             raise ValueError(msg)
+        if pool is not None and not pool >= 1:
+            msg = f"pool={pool!r} must be at least 1"
+            raise ValueError(msg)
         self._dt = time_step
-        # Stably by release: rows come in release order; this only guards orders made in code.
-        self._orders = tuple(sorted(orders, key=lambda o: o.release))
+        self._pool = pool
+        # Stably by release: rows come in release order; this only guards orders made in code. (A pool
+        # releases them in file order.)
+        self._orders = tuple(orders) if pool is not None else tuple(sorted(orders, key=lambda o: o.release))
         self._next_order = 0
         # The step each orders.csv order is released at: the first whose start is >= release - 1e-9.
         self._order_steps = tuple(self._first_step_at(o.release) for o in self._orders)
+        self._pool_credit = pool or 0  # a pool: orders to release at the next step asked for
+        self._pool_open: set[str] = set()  # a pool: its orders released and not completed
         self._stream = stream
         self._asked = -1  # the last step asked about
         self._made = 0  # generated orders so far
@@ -253,7 +267,16 @@ class OrderSource:
             msg = f"step={step!r} was already asked for (the last was {self._asked})"
             raise ValueError(msg)
         released: list[Order] = []
-        while self._next_order < len(self._orders) and self._order_steps[self._next_order] <= step:
+        if self._pool is not None:
+            while self._pool_credit and self._next_order < len(self._orders):
+                order = self._orders[self._next_order]
+                released.append(order)
+                self._pool_open.add(order.id)
+                self._next_order += 1
+                self._pool_credit -= 1
+        while (
+            self._pool is None and self._next_order < len(self._orders) and self._order_steps[self._next_order] <= step
+        ):
             released.append(self._orders[self._next_order])
             self._next_order += 1
         if not self._stream_done:
@@ -265,6 +288,10 @@ class OrderSource:
 
     def completed(self, order_id: str) -> None:
         """``order_id`` was completed: a closed pool releases another at the next step's start."""
+        if order_id in self._pool_open:
+            self._pool_open.discard(order_id)
+            self._pool_credit += 1
+            return
         if order_id not in self._open:
             if _GENERATED.fullmatch(order_id) and self._stream is not None and int(order_id[1:]) <= self._made:
                 msg = f"order {order_id!r} was already completed"
@@ -280,11 +307,13 @@ class OrderSource:
 
     def header(self) -> dict[str, Any]:
         """What decides the run's orders, canonical and in integers (ms, thousandths), for the trace header:
-        ``orders`` (each ``orders.csv`` order) and ``stream`` (the stream and the stations it draws from).
-        Empty without either."""
+        ``orders`` (each ``orders.csv`` order), ``order_pool`` (only when they are released as a pool) and
+        ``stream`` (the stream and the stations it draws from). Empty without any."""
         header: dict[str, Any] = {}
         if self._orders:
             header["orders"] = [_order_record(order) for order in self._orders]
+        if self._pool is not None:
+            header["order_pool"] = self._pool
         stream = self._stream
         if stream is not None:
             arrivals = stream.arrivals

@@ -61,7 +61,7 @@ class Dispatching:
         invoke: InvokeDispatch,
     ) -> None:
         dt = scenario.settings.time_step
-        self.source = OrderSource(scenario.orders, scenario.order_stream, scenario.stations, dt)
+        self.source = OrderSource(scenario.orders, scenario.order_stream, scenario.stations, dt, scenario.order_pool)
         first_task = max((task.id for task in scenario.tasks), default=0) + 1
         self.book = OrderBook(scenario.orders, {v.id: v.type.name for v in scenario.vehicles}, first_task)
         self.dispatcher = dispatcher

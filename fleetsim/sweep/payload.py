@@ -3,7 +3,7 @@
 Workers get no paths into the machine that planned the sweep (they may be elsewhere: SLURM, Kubernetes),
 only the scenario folder's contents (``map.json``, ``vehicles.csv``, ``tasks.csv`` as written by
 :func:`fleetsim.strategies.save_scenario`) with the vehicle types, settings and expectations (bounds on
-measures included), the transport orders, order stream, station sets, shift and dispatcher spec of a
+measures included), the transport orders (and their pool), order stream, station sets, shift and dispatcher spec of a
 scenario with orders, and what the suite entry gives its planner: its ``planner_options`` and the bytes of
 its data ``files`` (a folder listed there sends every file below it), which a worker puts at the same
 relative paths in the folder its planner gets as ``scenario_dir``. A scenario sent this way runs exactly as
@@ -72,6 +72,7 @@ def scenario_payload(scenario: Scenario) -> dict[str, Any]:
         else dataclasses.asdict(scenario.random_disturbances),
         "planner_setup": _setup_payload(scenario.planner_setup),
         "orders": _plain(scenario.orders),
+        "order_pool": scenario.order_pool,
         "order_stream": _plain(scenario.order_stream),
         "stations": _plain(scenario.stations),
         "shift": _plain(scenario.shift),
@@ -124,6 +125,7 @@ def scenario_from_payload(payload: dict[str, Any], scenario_dir: Path | None = N
         random_disturbances=None if drawn is None else RandomDisturbances(**{**drawn, "stop": tuple(drawn["stop"])}),
         planner_setup=_setup_from(payload.get("planner_setup"), scenario_dir),
         orders=tuple(_order(order) for order in payload.get("orders", ())),
+        order_pool=payload.get("order_pool"),
         order_stream=_stream(payload.get("order_stream")),
         stations=MappingProxyType({
             name: tuple(Station(**station) for station in members) for name, members in payload.get("stations", {}).items()

@@ -98,6 +98,41 @@ def test_completing_a_csv_order_changes_nothing() -> None:
     assert src.due(1) == []
 
 
+# -- orders.csv as a closed pool -----------------------------------------------------------------------
+
+
+def test_a_csv_pool_releases_the_first_n_in_file_order_then_one_at_the_step_after_each_completion() -> None:
+    orders = (order("c", 50.0), order("a", 0.0), order("b", 9.0), order("d", 0.0))  # releases are not used
+    src = OrderSource(orders, None, STATIONS, 0.1, pool=2)
+    assert [o.id for o in src.due(0)] == ["c", "a"]
+    assert src.due(1) == []
+    src.completed("a")
+    assert [o.id for o in src.due(2)] == ["b"]
+    assert not src.exhausted()
+    src.completed("c")
+    src.completed("b")
+    assert [o.id for o in src.due(3)] == ["d"]
+    assert src.exhausted()
+    assert src.header()["order_pool"] == 2
+
+
+def test_a_csv_pool_as_large_as_the_orders_releases_them_all_at_once() -> None:
+    orders = tuple(order(f"o{k}", float(k)) for k in range(3))
+    src = OrderSource(orders, None, STATIONS, 0.1, pool=3)
+    assert [o.id for o in src.due(0)] == ["o0", "o1", "o2"] and src.exhausted()
+
+
+def test_csv_orders_without_a_pool_have_no_pool_in_the_header() -> None:
+    # (Recorded hashes of runs with orders stay as they were: the header gains no key.)
+    assert "order_pool" not in OrderSource((order("a", 0.0),), None, STATIONS, 0.1).header()
+
+
+@pytest.mark.parametrize("pool", [0, -1])
+def test_a_pool_of_no_orders_is_refused(pool: int) -> None:
+    with pytest.raises(ValueError, match=f"pool={pool} must be at least 1"):
+        OrderSource((order("a", 0.0),), None, STATIONS, 0.1, pool=pool)
+
+
 # -- determinism ---------------------------------------------------------------------------------------
 
 

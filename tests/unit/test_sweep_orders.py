@@ -77,6 +77,17 @@ def test_orders_made_in_code_travel_with_their_stops_release_and_vehicle_types()
     assert sent(typed).orders[3].vehicle_types == ("tugger",)
 
 
+def test_orders_released_as_a_pool_travel_with_their_pool() -> None:
+    scenario = dataclasses.replace(loop_scenario(ORDERS[:3]), dispatcher=OLDEST, order_pool=1)
+    worker = sent(scenario)
+    assert worker.order_pool == 1
+    pooled = run_scenario(scenario, ReservingPlanner())
+    assert run_scenario(worker, ReservingPlanner()).trace_hash == pooled.trace_hash
+    # The pool is what decides when the orders come: without it they come at their own times.
+    unpooled = run_scenario(dataclasses.replace(scenario, order_pool=None), ReservingPlanner())
+    assert unpooled.trace_hash != pooled.trace_hash
+
+
 def test_a_scenario_without_orders_sends_none() -> None:
     suite = load_suite(ROOT / "scenario_suites" / "examples.fleetsim.yaml")
     scenario = load_scenario(suite.scenarios[0], suite)
