@@ -12,11 +12,12 @@ from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
 from fleetsim.enums import Traverse
+from fleetsim.layout.segment import Point
 from fleetsim.planning.plans import FleetPlan
 from fleetsim.planning.reservations import CollisionAlert
 from fleetsim.recording import messages as m
 from fleetsim.recording.colours import ALERT, CONTESTED, CYCLE, DISTURBED, MAP_RVIZ, WAITS, vehicle_colours, with_alpha
-from fleetsim.recording.labels import LabelSpace, box_around, nearest_point, spots_beside
+from fleetsim.recording.labels import Label, LabelLayout, nearest_point, spots_beside
 from fleetsim.recording.orders import OrderTracker
 from fleetsim.recording.rviz import framed_view
 from fleetsim.recording.stuck import contested_segments, root_vehicles, stuck_relations
@@ -52,6 +53,9 @@ class Scene:
         self._sent: dict[tuple[str, int], tuple[tuple[int, Traverse], ...]] = {}  # (namespace, vehicle) -> legs drawn
         # (segment, traverse, z) -> the leg's points in driving order, and the same without the first
         self._paths: dict[tuple[int, Traverse, float], tuple[m.Points, m.Points]] = {}
+        self._alert_labels = LabelLayout(8.0 * self.letter, self.letter)  # kept from step to step
+        self._offsets = [k * 1.4 * self.letter for k in range(1, 12)]
+        self._beside: dict[int, tuple[list[Point], Point]] = {}  # segment -> label spots beside it, its middle
 
     def points(self, segments: Iterable[int], z: float) -> m.Points:
         """LINE_LIST points of ``segments`` at height ``z`` (each segment's packed once)."""
@@ -128,28 +132,33 @@ class Scene:
         thesis text goes to ``/rosout``.
         """
         markers = [m.delete_all(time, "")]
-        space = LabelSpace(4.0 * self.letter)
-        offsets = [k * 1.4 * self.letter for k in range(1, 12)]
-        for number, alert in enumerate(alerts):
-            segment = self.scenario.layout.segments[alert.segment]
+        texts = [alert_label(alert) for alert in alerts]
+        labels = [
+            Label((alert.segment, text), self._spots(alert.segment)[0], text)
+            for alert, text in zip(alerts, texts, strict=True)
+        ]
+        places = self._alert_labels.place(labels)
+        for number, (alert, text, (index, box, _)) in enumerate(zip(alerts, texts, places, strict=True)):
             markers.append(
                 m.line_list(time, "alert_segments", number, self.points([alert.segment], 0.05), _ALERT_WIDTH, ALERT)
             )
-            text = alert_label(alert)
-            spots = spots_beside(segment, offsets)
-            placed = space.place(spots, text, self.letter)
-            if placed is None:  # an alert is never left unlabelled: on top of another label, then
-                placed = len(spots) - 1, box_around(spots[-1], text, self.letter)
-                space.add(placed[1])
-            index, box = placed
             x, y = (box[0] + box[2]) / 2, (box[1] + box[3]) / 2
             markers.append(m.text_marker(time, "map", "alert_text", number, text, (x, y, 1.0), self.letter, ALERT))
             if index >= 2:  # the first two spots are beside the middle, left and right
-                mx, my, _ = segment.pose_at(segment.length / 2, Traverse.FORWARD)
+                mx, my = self._spots(alert.segment)[1]
                 ex, ey = nearest_point(box, (mx, my))
                 ends = m.Points.of([(ex, ey, 1.0), (mx, my, 0.05)])
                 markers.append(m.line_list(time, "alert_leaders", number, ends, _LEADER_WIDTH, ALERT))
         return m.marker_array(markers)
+
+    def _spots(self, segment_id: int) -> tuple[list[Point], Point]:
+        """The label spots beside a segment's middle, nearest first, and the middle (each worked out once)."""
+        known = self._beside.get(segment_id)
+        if known is None:
+            segment = self.scenario.layout.segments[segment_id]
+            mx, my, _ = segment.pose_at(segment.length / 2, Traverse.FORWARD)
+            known = self._beside[segment_id] = (spots_beside(segment, self._offsets), (mx, my))
+        return known
 
     def stuck(self, time: m.Stamp, poses: Mapping[int, Any], stuck: Mapping[str, Any]) -> m.MarkerArray:
         """Who waits for whom at the end of a stuck run (the failure's details, as in result.json)."""
