@@ -10,9 +10,10 @@ shift after its warm-up; docs/orders.md, "Measures", defines each figure):
 3. the backlog stays bounded: the run is not ``overloaded`` (its backlog's least-squares slope exceeds 5 %
    of the window's arrival rate *and* the backlog ended more than 5 orders above where the window began);
 4. throughput keeps up with demand: the orders completed in the window fall short of those released in
-   it by no more than ``tolerance`` of them, or by no more than 5 orders (the allowance ``overloaded``
-   gives: a few orders on board when the window closes are no backlog). Completed − released over the
-   window is the backlog's change over it, so this bounds the backlog's level where 3 bounds its trend;
+   it by no more than ``tolerance`` of them, or by no more than one order per vehicle (each vehicle may
+   hold one order more when the window closes than when it opened). Released − completed over the window
+   is the backlog's growth over it, so this bounds the backlog's level where 3 bounds its trend (whose
+   5 orders let a short window's queue build up unseen);
 5. with a service-time bound, the 95th percentile of the service times is within it (a run that
    completed no order released in the window has none, and does not sustain the rate).
 
@@ -28,9 +29,7 @@ from typing import Any
 
 from fleetsim.sim.measures import measure_value
 
-__all__ = ["ALLOWANCE", "Criteria", "Judgement", "judge_run"]
-
-ALLOWANCE = 5  # orders a window's completions may fall short of its releases by, whatever the tolerance
+__all__ = ["Criteria", "Judgement", "judge_run"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -46,7 +45,7 @@ class Criteria:
     max_service_p95: float | None = None
 
     def to_dict(self) -> dict[str, Any]:
-        return {"tolerance": self.tolerance, "allowance": ALLOWANCE, "max_service_p95": self.max_service_p95}
+        return {"tolerance": self.tolerance, "max_service_p95": self.max_service_p95}
 
 
 @dataclass(frozen=True, slots=True)
@@ -116,7 +115,8 @@ def judge_run(record: Mapping[str, Any], criteria: Criteria) -> Judgement:
         measure_value(measures, "service_time_median"), measure_value(measures, "service_time_p95"),
         float(measures["backlog_slope"]), bool(measures["overloaded"]),
     )  # fmt: skip
-    reason = _failed(record) or _broken_rule(figures, int(measures.get("stalls") or 0), criteria)
+    stalls = int(measures.get("stalls") or 0)
+    reason = _failed(record) or _broken_rule(figures, stalls, _fleet_size(record, measures), criteria)
     return figures if not reason else replace(figures, sustained=False, reason=reason)
 
 
@@ -131,13 +131,22 @@ def _failed(record: Mapping[str, Any]) -> str:
     return f"the run failed: {first.get('kind')}: {first.get('message', '')}".strip()
 
 
-def _broken_rule(run: Judgement, stalls: int, criteria: Criteria) -> str:
+def _fleet_size(record: Mapping[str, Any], measures: Mapping[str, Any]) -> int:
+    """The run's vehicles: a sweep row says it; ``fleetsim run --json``'s document shows it as the ratio of
+    two of its measures (rounded to four places, which a fleet of up to a thousand survives)."""
+    if isinstance(record.get("vehicles"), int):
+        return int(record["vehicles"])
+    per_vehicle = float(measures.get("orders_per_vehicle_hour") or 0.0)
+    return round(float(measures["orders_per_hour"]) / per_vehicle) if per_vehicle > 0 else 0
+
+
+def _broken_rule(run: Judgement, stalls: int, vehicles: int, criteria: Criteria) -> str:
     if stalls:
         return f"{stalls} vehicle(s) stalled"
     if run.overloaded:
         return f"overloaded: the backlog grew ({run.backlog_slope:+.1f} orders/h)"
     shortfall = run.released - run.completed
-    allowed = max(criteria.tolerance * run.released, ALLOWANCE)
+    allowed = max(criteria.tolerance * run.released, vehicles)
     if shortfall > allowed:
         return f"throughput fell behind: {run.completed} of {run.released} orders completed ({shortfall} short, {allowed:.4g} allowed)"
     bound = criteria.max_service_p95

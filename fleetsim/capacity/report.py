@@ -66,7 +66,7 @@ def rules(document: Mapping[str, Any]) -> str:
     service = "" if c["max_service_p95"] is None else f", service time p95 at most {c['max_service_p95']:g} s"
     return (
         f"A run sustains its rate when it does not fail, no vehicle stalls, its backlog is not overloaded, and it "
-        f"completes all but {c['tolerance'] * 100:g} % (or {c['allowance']}) of the orders released after the "
+        f"completes all but {c['tolerance'] * 100:g} % (or one per vehicle) of the orders released after the "
         f"warm-up{service}; a rate is sustained when every seed's run sustains it."
     )
 

@@ -38,7 +38,7 @@ def add_capacity_arguments(parser: argparse.ArgumentParser) -> None:
     search = parser.add_argument_group("the search")
     search.add_argument("--seeds", default="1,2,3", metavar="S,S,...", help="order stream seeds each rate is run with; a rate is sustained when every seed's run sustains it (default: %(default)s)")  # fmt: skip
     search.add_argument("--resolution", default="2%", metavar="R", help="stop when the bracket is this narrow: percent of its low end (2%%) or orders/h (5) (default: %(default)s)")  # fmt: skip
-    search.add_argument("--tolerance", default="10%", metavar="PERCENT", help="of the orders released after the warm-up, the share a sustaining run may leave uncompleted (at least 5 orders are allowed) (default: %(default)s)")  # fmt: skip
+    search.add_argument("--tolerance", default="10%", metavar="PERCENT", help="of the orders released after the warm-up, the share a sustaining run may leave uncompleted (at least one per vehicle) (default: %(default)s)")  # fmt: skip
     search.add_argument("--max-service-p95", metavar="SECONDS", help="also require the service times' 95th percentile to be at most this")  # fmt: skip
     search.add_argument("--min-rate", metavar="ORDERS/H", help=f"halving stops here (default: the entry's rate / {_RANGE})")  # fmt: skip
     search.add_argument("--max-rate", metavar="ORDERS/H", help=f"doubling stops here (default: the entry's rate x {_RANGE})")  # fmt: skip
@@ -126,7 +126,7 @@ def _capacity(args: argparse.Namespace) -> int:
     text = markdown(document, verdicts)
     if args.markdown:
         Path(args.markdown).write_text(text, encoding="utf-8")
-    print(text)
+    print(text, flush=True)  # before the lines on stderr that follow it
     print(f"{result.runs} runs in {time.monotonic() - started:.0f} s; results in {output}", file=sys.stderr)
     print(f"report: {html_path}", file=sys.stderr)
     return 1 if any(v.holds for v in verdicts) else 0

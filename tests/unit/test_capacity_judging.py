@@ -18,13 +18,14 @@ CRITERIA = Criteria(tolerance=0.1)
 
 
 def record(failures: tuple[dict[str, Any], ...] = (), **measures: Any) -> dict[str, Any]:
-    """A result document's keys that capacity reads: a run of a 1-hour window that kept up."""
+    """A result document's keys that capacity reads: a run of 5 vehicles over a 1-hour window that kept up."""
     figures = {
         "window": [300.0, 3900.0], "released": 60, "completed": 59, "orders_per_hour": 59.0,
         "service_time": {"count": 59, "median": 150.0, "p95": 300.0, "max": 320.0},
         "backlog_slope": 0.5, "overloaded": False, "stalls": 0,
     }  # fmt: skip
-    return {"status": "failed" if failures else "passed", "failures": list(failures), "measures": figures | measures}
+    status = "failed" if failures else "passed"
+    return {"status": status, "failures": list(failures), "measures": figures | measures, "vehicles": 5}
 
 
 def test_a_run_that_keeps_up_sustains_its_rate_and_carries_its_figures() -> None:
@@ -67,10 +68,16 @@ def test_a_run_that_stalls_overloads_or_falls_behind_does_not_sustain_its_rate(
     assert (run.sustained, run.reason) == (False, reason)
 
 
-def test_falling_behind_by_the_tolerance_or_by_five_orders_is_still_keeping_up() -> None:
+def test_falling_behind_by_the_tolerance_or_by_one_order_per_vehicle_is_still_keeping_up() -> None:
     assert judge_run(record(completed=54), CRITERIA).sustained  # 6 short of 60: 10 %
-    assert judge_run(record(released=20, completed=15, window=[0.0, 1200.0]), CRITERIA).sustained  # 5 orders
+    assert judge_run(record(released=20, completed=15, window=[0.0, 1200.0]), CRITERIA).sustained  # 5 vehicles
     assert not judge_run(record(released=20, completed=14, window=[0.0, 1200.0]), CRITERIA).sustained
+
+
+def test_a_result_document_without_the_fleet_size_shows_it_in_its_measures() -> None:
+    run = {**record(released=20, completed=14, window=[0.0, 1200.0]), "vehicles": None}
+    run["measures"] |= {"orders_per_hour": 42.0, "orders_per_vehicle_hour": 7.0}  # 6 vehicles
+    assert judge_run(run, CRITERIA).sustained
 
 
 def test_the_service_time_bound_applies_only_when_given_and_a_run_without_service_times_misses_it() -> None:
