@@ -129,6 +129,13 @@ class Marker(NamedTuple):
     points: Points
     text: str
 
+    def restamped(self, stamp: Stamp, marker_id: int) -> Marker:
+        """This marker at ``stamp`` with the id ``marker_id`` (for markers sent again and again)."""
+        return _new(Marker, (stamp, self[1], self[2], marker_id, *self[4:]))
+
+
+_new = tuple.__new__
+
 
 class MarkerArray(NamedTuple):
     """A ``visualization_msgs/msg/MarkerArray``."""
@@ -155,6 +162,14 @@ def _pack_marker(buffer: bytearray, marker: Marker) -> None:
     buffer += _IDS.pack(marker_id, kind, action)
     buffer += _ZEROS[: (4 - len(buffer)) % 8]
     buffer += _BODY.pack(*position, 0.0, 0.0, 0.0, 1.0, *scale, *color, 0, 0, frame_locked)
+    buffer += _tail(points, text, len(buffer) % 8)
+
+
+# Keyed by bytes and text only: floats would make 0.0 and -0.0 one key, and they differ in CDR.
+@lru_cache(maxsize=4096)  # a recording sends most markers again and again with a new stamp or id
+def _tail(points: Points, text: str, offset: int) -> bytes:
+    """A marker's bytes from its points on, starting at ``offset`` mod 8."""
+    buffer = bytearray(offset)  # so that the padding below is as at the marker's place
     buffer += _ZEROS[: -len(buffer) % 4]
     buffer += _U32.pack(points.length)
     if points.length:
@@ -165,6 +180,7 @@ def _pack_marker(buffer: bytearray, marker: Marker) -> None:
     buffer += text_bytes
     buffer += _ZEROS[: -len(text_bytes) % 4]
     buffer += _AFTER_TEXT
+    return bytes(buffer[offset:])
 
 
 def pack_clock(stamp: Stamp) -> bytes:

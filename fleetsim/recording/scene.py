@@ -17,7 +17,7 @@ from fleetsim.planning.plans import FleetPlan
 from fleetsim.planning.reservations import CollisionAlert
 from fleetsim.recording import messages as m
 from fleetsim.recording.colours import ALERT, CONTESTED, CYCLE, DISTURBED, MAP_RVIZ, WAITS, vehicle_colours, with_alpha
-from fleetsim.recording.labels import Label, LabelLayout, nearest_point, spots_beside
+from fleetsim.recording.labels import Label, LabelLayout, Placed, nearest_point, spots_beside
 from fleetsim.recording.orders import OrderTracker
 from fleetsim.recording.rviz import framed_view
 from fleetsim.recording.stuck import contested_segments, root_vehicles, stuck_relations
@@ -56,6 +56,8 @@ class Scene:
         self._alert_labels = LabelLayout(8.0 * self.letter, self.letter)  # kept from step to step
         self._offsets = [k * 1.4 * self.letter for k in range(1, 12)]
         self._beside: dict[int, tuple[list[Point], Point]] = {}  # segment -> label spots beside it, its middle
+        # The last step's alert markers (at time 0, id 0) by segment, label text and spot taken
+        self._alert_shapes: dict[tuple[int, str, int], tuple[m.Marker, ...]] = {}
 
     def points(self, segments: Iterable[int], z: float) -> m.Points:
         """LINE_LIST points of ``segments`` at height ``z`` (each segment's packed once)."""
@@ -138,18 +140,32 @@ class Scene:
             for alert, text in zip(alerts, texts, strict=True)
         ]
         places = self._alert_labels.place(labels)
-        for number, (alert, text, (index, box, _)) in enumerate(zip(alerts, texts, places, strict=True)):
-            markers.append(
-                m.line_list(time, "alert_segments", number, self.points([alert.segment], 0.05), _ALERT_WIDTH, ALERT)
-            )
-            x, y = (box[0] + box[2]) / 2, (box[1] + box[3]) / 2
-            markers.append(m.text_marker(time, "map", "alert_text", number, text, (x, y, 1.0), self.letter, ALERT))
-            if index >= 2:  # the first two spots are beside the middle, left and right
-                mx, my = self._spots(alert.segment)[1]
-                ex, ey = nearest_point(box, (mx, my))
-                ends = m.Points.of([(ex, ey, 1.0), (mx, my, 0.05)])
-                markers.append(m.line_list(time, "alert_leaders", number, ends, _LEADER_WIDTH, ALERT))
+        drawn: dict[tuple[int, str, int], tuple[m.Marker, ...]] = {}
+        for number, (alert, text, place) in enumerate(zip(alerts, texts, places, strict=True)):
+            key = (alert.segment, text, place.spot)  # the spot gives the box
+            shapes = self._alert_shapes.get(key)
+            if shapes is None:
+                shapes = self._alert_markers(alert.segment, text, place)
+            drawn[key] = shapes
+            markers += [shape.restamped(time, number) for shape in shapes]
+        self._alert_shapes = drawn  # the last step's only: most alerts stay from one step to the next
         return m.marker_array(markers)
+
+    def _alert_markers(self, segment: int, text: str, place: Placed) -> tuple[m.Marker, ...]:
+        """An alert's segment, label and leader line (if it has one), at time 0 with id 0."""
+        time = m.stamp(0)
+        box = place.box
+        centre = ((box[0] + box[2]) / 2, (box[1] + box[3]) / 2, 1.0)
+        shapes = [
+            m.line_list(time, "alert_segments", 0, self.points([segment], 0.05), _ALERT_WIDTH, ALERT),
+            m.text_marker(time, "map", "alert_text", 0, text, centre, self.letter, ALERT),
+        ]
+        if place.spot >= 2:  # the first two spots are beside the middle, left and right
+            mx, my = self._spots(segment)[1]
+            ex, ey = nearest_point(box, (mx, my))
+            ends = m.Points.of([(ex, ey, 1.0), (mx, my, 0.05)])
+            shapes.append(m.line_list(time, "alert_leaders", 0, ends, _LEADER_WIDTH, ALERT))
+        return tuple(shapes)
 
     def _spots(self, segment_id: int) -> tuple[list[Point], Point]:
         """The label spots beside a segment's middle, nearest first, and the middle (each worked out once)."""

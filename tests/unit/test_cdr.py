@@ -126,3 +126,15 @@ def test_points_are_packed_as_triples_and_joined_in_order() -> None:
     assert cdr.NO_POINTS.rest() == cdr.NO_POINTS
     with pytest.raises(ValueError, match=r"must be \(x, y, z\)"):
         Points.of([(1.0, 2.0)])  # type: ignore[list-item]
+
+
+def test_markers_sent_again_pack_as_new_ones_at_every_offset() -> None:
+    # A marker's bytes after its points are kept for the next marker with the same points and text: at
+    # another offset mod 8, with another stamp and id, or a position of -0.0 instead of 0.0, they must
+    # still be the typestore's.
+    shown = marker(type=9, text="segment 7: 1 \u27c2 2", position=(0.0, 1.0, 1.0))
+    again = [shown, shown.restamped(Stamp(13, 0), 8), marker(ns="p"), shown._replace(position=(-0.0, 1.0, 1.0))]
+    fillers = [marker(ns="n" * k, points=cdr.NO_POINTS) for k in range(8)]  # shifting the next one by 4s
+    array = m.marker_array([marker for filler in fillers for marker in (*again, filler)])
+    assert cdr.pack_marker_array(array) == typestore_bytes(array)
+    assert again[1] == shown._replace(stamp=Stamp(13, 0), id=8)
