@@ -8,7 +8,7 @@ are kept in a grid of cells, so placing a label costs the same on a map of ten s
 
 A list of labels placed again and again as it changes a little (a recording's alert labels, step after
 step) is placed by :class:`LabelLayout`, which gives the same places as placing it from scratch while
-trying again only the labels whose neighbourhood changed.
+trying a spot against the grid again only when the label that took it last time moved or went.
 """
 
 from __future__ import annotations
@@ -83,14 +83,18 @@ class LabelSpace:
 
     def free(self, box: Box, cells: Sequence[Cell] | None = None) -> bool:
         """Whether ``box`` overlaps no box placed so far (``cells``: its :meth:`cells_of`, if known)."""
+        return self.taker(box, cells) is None
+
+    def taker(self, box: Box, cells: Sequence[Cell] | None = None) -> Box | None:
+        """A box placed so far that ``box`` overlaps, if any (``cells``: its :meth:`cells_of`, if known)."""
         # Plain loops, no generators: a recording asks this hundreds of thousands of times.
         placed = self._cells
         x0, y0, x1, y1 = box
         for key in self.cells_of(box) if cells is None else cells:
             for other in placed.get(key, ()):
                 if x0 < other[2] and other[0] < x1 and y0 < other[3] and other[1] < y1:  # they overlap
-                    return False
-        return True
+                    return other
+        return None
 
     def add(self, box: Box, cells: Sequence[Cell] | None = None) -> None:
         """Place ``box`` (``cells``: its :meth:`cells_of`, if known)."""
@@ -127,102 +131,75 @@ class Placed(NamedTuple):
 
     spot: int
     box: Box
-    # The bounding box of every box tried: a label placed before it that changes outside it cannot change
-    # where this one goes.
-    reach: Box
-
-
-class _Candidate(NamedTuple):
-    """A label at one of its spots: its box, the cells the box touches, and the bounding box of this and
-    the spots before it."""
-
-    box: Box
-    cells: list[Cell]
-    reach: Box
 
 
 class _Tried:
-    """A label and its candidates, worked out as far as they were tried (most labels take an early spot)."""
+    """A label's spots as far as they were tried: each one's box and cells, and the box that took it
+    (``None``: free when last tried)."""
 
-    __slots__ = ("candidates", "label")
+    __slots__ = ("boxes", "cells", "label", "takers")
 
     def __init__(self, label: Label) -> None:
         if not label.spots:
             msg = f"label={label!r} must have at least one spot"
             raise ValueError(msg)
         self.label = label
-        self.candidates: list[_Candidate] = []
-
-    def candidate(self, index: int, letter: float, space: LabelSpace) -> _Candidate:
-        """The label at its ``index``-th spot (the spots before it worked out already; ``space`` for its
-        grid)."""
-        candidates = self.candidates
-        if index < len(candidates):
-            return candidates[index]
-        box = box_around(self.label.spots[index], self.label.text, letter)
-        reach = _bounding(candidates[-1].reach, box) if candidates else box
-        candidates.append(_Candidate(box, space.cells_of(box), reach))
-        return candidates[-1]
+        self.boxes: list[Box] = []
+        self.cells: list[list[Cell]] = []
+        self.takers: list[Box | None] = []
 
 
 class LabelLayout:
-    """The places of a list of labels, placed greedily in order as by :class:`LabelSpace` (a label with
-    no free spot takes its last one, over another label), kept from one call to the next.
+    """The places of a list of labels placed again and again as it changes (a recording's alert labels,
+    step after step), each time exactly as placing it from scratch with :class:`LabelSpace` does (a
+    label with no free spot takes its last one, over another label).
 
-    Each call gives exactly what placing its labels from scratch would, but a label placed in the last call
-    keeps its place without trying its spots again when nothing placed before it changed within its
-    reach (:class:`Placed`): the labels placed before it then overlap its tried boxes as they did. A list
-    that changes a little costs about as much as the labels near a change.
+    A label keeps from one call to the next the box that took each spot it tried. If that box is placed
+    before it again, the spot is taken again (a set lookup), so a spot is tried against the grid again only
+    when the label that took it moved or went: a list that changes a little costs little more than a
+    lookup per spot.
     """
 
     def __init__(self, cell: float, letter: float) -> None:
         self.cell = cell
         self.letter = letter
-        self._last: list[tuple[Placed, _Tried]] = []  # the last call's labels in order, and their places
-        self._position: dict[Hashable, int] = {}  # key -> its position in _last
+        self._tried: dict[Hashable, _Tried] = {}  # the last call's labels by key
 
     def place(self, labels: Sequence[Label]) -> list[Placed]:
         """Each label's place, in order."""
-        last, position = self._last, self._position
         space = LabelSpace(self.cell)
-        # A superset of the boxes that differ between the labels placed before the current one now and
-        # those placed before its match last time: those dropped, those new, and both boxes of one moved.
-        changed = LabelSpace(2.0 * self.cell)  # coarser: it is mostly empty
-        placed: list[tuple[Placed, _Tried]] = []
-        unmatched = 0  # the last call's labels before this position are matched or counted as changed
+        boxes: set[Box] = set()  # those in space
+        tried_now: dict[Hashable, _Tried] = {}
+        places = []
         for label in labels:
-            at = position.get(label.key, -1)
-            if at >= unmatched:  # matched in order: the labels before it are matched or changed
-                for dropped, _ in last[unmatched:at]:
-                    changed.add(dropped.box)
-                unmatched = at + 1
-                before, tried = last[at]
-                if not changed.boxes or changed.free(before.reach):
-                    now = before
-                else:
-                    now = self._first_free(space, tried)
-                    if now.box != before.box:
-                        changed.add(before.box)
-                        changed.add(now.box)
+            tried = tried_now.get(label.key) or self._tried.get(label.key) or _Tried(label)
+            tried_now[label.key] = tried
+            place = self._first_free(space, boxes, tried)
+            space.add(place.box, tried.cells[place.spot])
+            boxes.add(place.box)
+            places.append(place)
+        self._tried = tried_now
+        return places
+
+    def _first_free(self, space: LabelSpace, boxes: set[Box], tried: _Tried) -> Placed:
+        """The label's first spot free in ``space`` (whose boxes are ``boxes``), else its last; ``tried``
+        learns what took each spot."""
+        spots, text, letter = tried.label.spots, tried.label.text, self.letter
+        known, takers = len(tried.boxes), tried.takers
+        for spot in range(len(spots)):
+            if spot < known:
+                taker = takers[spot]
+                if taker is not None and taker in boxes:
+                    continue  # taken again by the same box
+                box, cells = tried.boxes[spot], tried.cells[spot]
+                taker = takers[spot] = space.taker(box, cells)
             else:
-                tried = _Tried(label)
-                now = self._first_free(space, tried)
-                changed.add(now.box)
-            space.add(now.box, tried.candidates[now.spot].cells)
-            placed.append((now, tried))
-        self._last = placed
-        self._position = {tried.label.key: number for number, (_, tried) in enumerate(placed)}
-        return [now for now, _ in placed]
-
-    def _first_free(self, space: LabelSpace, tried: _Tried) -> Placed:
-        """The label's first spot free in ``space``, else its last (not added to ``space``)."""
-        letter, free = self.letter, space.free
-        for index in range(len(tried.label.spots)):
-            box, cells, reach = tried.candidate(index, letter, space)
-            if free(box, cells):
-                return Placed(index, box, reach)
-        return Placed(index, box, reach)
-
-
-def _bounding(a: Box, b: Box) -> Box:
-    return min(a[0], b[0]), min(a[1], b[1]), max(a[2], b[2]), max(a[3], b[3])
+                box = box_around(spots[spot], text, letter)
+                cells = space.cells_of(box)
+                taker = space.taker(box, cells)
+                tried.boxes.append(box)
+                tried.cells.append(cells)
+                takers.append(taker)
+            if taker is None:
+                return Placed(spot, box)
+        return Placed(len(spots) - 1, tried.boxes[-1])
