@@ -17,9 +17,9 @@ from dataclasses import dataclass
 
 from fleetsim.enums import JointKind, TurnCapability
 from fleetsim.layout.layout import Layout
-from fleetsim.layout.reachability import State, next_steps, state_key
+from fleetsim.layout.reachability import State, state_key
 from fleetsim.planners.fleet_index import FleetIndex
-from fleetsim.planners.routing import rebuild_path
+from fleetsim.planners.routing import StepTable, rebuild_path
 
 __all__ = ["WayOut", "ways_out"]
 
@@ -49,8 +49,30 @@ def ways_out(
     turnaround: float,
     limit: int,
     wanted: int = 6,
+    table: StepTable | None = None,
 ) -> list[WayOut]:
-    """Up to ``wanted`` ways out for ``vehicle`` from ``start`` to a segment outside ``avoid``, best first."""
+    """Up to ``wanted`` ways out for ``vehicle`` from ``start`` to a segment outside ``avoid``, best first.
+
+    ``table``: the layout's steps for ``capability``, kept between searches (else worked out for this one).
+    Nothing changes during a search, so each segment's holders and each vehicle's ``movable`` are asked
+    once per search.
+    """
+    steps = (table if table is not None else StepTable(layout, capability)).steps
+    held: dict[int, list[int]] = {}  # segment -> its holders (other than the vehicle)
+    free_to_cross: dict[int, bool] = {}  # segment -> whether every holder is movable
+
+    def holders(segment: int) -> list[int]:
+        found = held.get(segment)
+        if found is None:
+            found = held[segment] = index.holders(vehicle, segment)
+        return found
+
+    def crossable(segment: int) -> bool:
+        verdict = free_to_cross.get(segment)
+        if verdict is None:
+            verdict = free_to_cross[segment] = all(movable(other) for other in holders(segment))
+        return verdict
+
     best: dict[State, float] = {start: 0.0}
     came_from: dict[State, State] = {}
     heap: list[tuple[float, tuple[int, int, int], State]] = [(0.0, state_key(start), start)]
@@ -61,20 +83,19 @@ def ways_out(
         if spent > best.get(state, math.inf):
             continue
         looked += 1
-        if state != start and state[0] not in avoid and not index.holders(vehicle, state[0]):
+        if state != start and state[0] not in avoid and not holders(state[0]):
             path = rebuild_path(came_from, state)
-            crossing = sorted({other for s, _, _ in path for other in index.holders(vehicle, s)})
+            crossing = sorted({other for s, _, _ in path for other in holders(s)})
             found.append(WayOut(tuple(path), tuple(crossing), index.routes_near(vehicle, state[0]), spent))
             continue  # a place to wait: no need to drive on through it
-        for following, joint in next_steps(layout, capability, state):
+        for following, joint, key in steps(state):
             segment = following[0]
-            holders = index.holders(vehicle, segment)
-            if not all(movable(other) for other in holders):
+            if not crossable(segment):
                 continue  # held by a vehicle that will not make way
             total = spent + lengths[segment] + (turnaround if joint is JointKind.OPPOSITE else 0.0)
-            total += _CROSSING_PENALTY * len(holders)
+            total += _CROSSING_PENALTY * len(holders(segment))
             if total < best.get(following, math.inf):
                 best[following] = total
                 came_from[following] = state
-                heapq.heappush(heap, (total, state_key(following), following))
+                heapq.heappush(heap, (total, key, following))
     return sorted(found, key=lambda way: (bool(way.crossing), way.routes_near, way.cost, state_key(way.path[-1])))

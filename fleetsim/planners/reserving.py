@@ -512,9 +512,11 @@ class ReservingPlanner:
         start: State = (current.segment, current.traverse, current.progress)
         capability = fleet.vehicles[vehicle_id].type.turn_capability
         lengths, turnaround, limit = self._lengths, self.turnaround_penalty, self.search_limit
+        table = self._table(layout, capability)
         for way in ways_out(
-            vehicle_id, start, capability, avoid, layout, index, lengths, movable, turnaround=turnaround, limit=limit
-        ):
+            vehicle_id, start, capability, avoid, layout, index, lengths, movable,
+            turnaround=turnaround, limit=limit, table=table,
+        ):  # fmt: skip
             others: list[FleetPlan] = []
             replaced: list[tuple[int, FleetPlan | None]] = []  # what the index counted before, to undo
             region = avoid | {near for segment, _, _ in (start, *way.path) for near in layout.conflicts(segment)}
@@ -550,7 +552,7 @@ class ReservingPlanner:
         capability = fleet.vehicles[vehicle_id].type.turn_capability
         ways = ways_out(
             vehicle_id, start, capability, avoid, layout, index, self._lengths, lambda other: other == past,
-            turnaround=self.turnaround_penalty, limit=self.search_limit, wanted=1,
+            turnaround=self.turnaround_penalty, limit=self.search_limit, wanted=1, table=self._table(layout, capability),
         )  # fmt: skip
         return {near for segment, _, _ in ways[0].path for near in layout.conflicts(segment)} if ways else set()
 
@@ -723,9 +725,7 @@ class ReservingPlanner:
             return total
 
         capability = fleet.vehicles[vehicle_id].type.turn_capability
-        table = self._tables.get(capability)
-        if table is None:
-            table = self._tables[capability] = StepTable(layout, capability)
+        table = self._table(layout, capability)
         start = (last.segment, last.traverse, last.progress)
         estimate = straight_line_estimate(layout, task.goal_segment, table)
         limit = self.detour_limit if avoid_held else None
@@ -733,6 +733,13 @@ class ReservingPlanner:
             layout, capability, start, task.goal_segment, task.goal_progress, cost, estimate, limit, within, table
         )
         return None if path is None else legs_along(path, task, task.goal_progress)
+
+    def _table(self, layout: Layout, capability: TurnCapability) -> StepTable:
+        """The layout's steps for ``capability``, shared by every search of this planner's."""
+        table = self._tables.get(capability)
+        if table is None:
+            table = self._tables[capability] = StepTable(layout, capability)
+        return table
 
     def _should_look_around(self, vehicle_id: int, fleet: FleetSnapshot) -> bool:
         """Only a vehicle standing at the end of what it may drive, and less often the longer it waits.
