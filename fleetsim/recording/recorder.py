@@ -56,7 +56,7 @@ from fleetsim.recording import messages as m
 from fleetsim.recording.cdr import pack_clock
 from fleetsim.recording.colours import vehicle_colours
 from fleetsim.recording.orders import OrderChanges, OrderTracker
-from fleetsim.recording.replay import Frame, replay
+from fleetsim.recording.replay import Frame, collector_paused, replay
 from fleetsim.recording.scene import Scene, frame_name
 from fleetsim.scenario import Scenario
 from fleetsim.version import __version__
@@ -359,7 +359,8 @@ def record_mcap(
         with partial.open("wb") as stream:
             bag = _Bag(stream)
             orders = OrderTracker.of_trace(trace_lines)
-            frames = _write_frames(bag, scenario, replay(scenario, trace_lines), every, stuck, contacts, orders)
+            with collector_paused():  # hundreds of thousands of markers, points and bytes, no cycles
+                frames = _write_frames(bag, scenario, replay(scenario, trace_lines), every, stuck, contacts, orders)
             bag.writer.finish()  # type: ignore[no-untyped-call]  # mcap's Writer.finish has no annotations
         os.replace(partial, path)
     finally:

@@ -10,6 +10,8 @@ so they show exactly what the hashed trace says happened.
 
 from __future__ import annotations
 
+import contextlib
+import gc
 import json
 import math
 from collections.abc import Iterable, Iterator, Mapping, Sequence
@@ -27,7 +29,7 @@ from fleetsim.planning.snapshot import initial_plan, initial_state
 from fleetsim.scenario import Scenario
 from fleetsim.sim.trace import TRACE_FORMAT
 
-__all__ = ["Frame", "Pose", "TraceError", "frame_at", "replay"]
+__all__ = ["Frame", "Pose", "TraceError", "collector_paused", "frame_at", "replay"]
 
 _TRAVERSE = {"f": Traverse.FORWARD, "b": Traverse.BACKWARD}
 _PROGRESS = {"f": Progress.FORWARD, "r": Progress.REVERSE}
@@ -223,3 +225,17 @@ def frame_at(scenario: Scenario, lines: Iterable[str], step: int) -> Frame:
         return last
     msg = f"step={step!r} must be between 0 and {last.step} (the run's last step)"
     raise TraceError(msg)
+
+
+@contextlib.contextmanager
+def collector_paused() -> Iterator[None]:
+    """The cyclic garbage collector paused, for a reader that makes a great many small objects from the
+    frames and keeps many of them (a recording, a view document): they hold no cycles, and the collector
+    would otherwise walk them, and the whole run still in memory, again and again as they pile up."""
+    paused = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if paused:
+            gc.enable()
