@@ -157,12 +157,23 @@ def _pack_marker(buffer: bytearray, marker: Marker) -> None:
     # len(buffer)'s, and the padding to 8 is (4 - len(buffer)) % 8.
     (stamp, frame_id, ns, marker_id, kind, action, position, scale, color, frame_locked, points, text) = marker
     buffer += _ZEROS[: -len(buffer) % 4]
-    buffer += _STAMP.pack(*stamp)
-    buffer += _names(frame_id, ns)
-    buffer += _IDS.pack(marker_id, kind, action)
-    buffer += _ZEROS[: (4 - len(buffer)) % 8]
-    buffer += _BODY.pack(*position, 0.0, 0.0, 0.0, 1.0, *scale, *color, 0, 0, frame_locked)
-    buffer += _tail(points, text, len(buffer) % 8)
+    head, names, offset = _head(frame_id, ns, len(buffer) % 8)
+    buffer += head.pack(
+        *stamp, names, marker_id, kind, action, *position, 0.0, 0.0, 0.0, 1.0, *scale, *color, 0, 0, frame_locked
+    )
+    buffer += _tail(points, text, offset)
+
+
+@lru_cache(maxsize=4096)  # a few hundred name pairs at most, each at two offsets
+def _head(frame_id: str, ns: str, offset: int) -> tuple[struct.Struct, bytes, int]:
+    """A marker from its stamp to its ``frame_locked``, starting at ``offset`` mod 8 (0 or 4): its layout
+    (stamp, names, id, type, action, padding, pose, scale, colour, lifetime, frame_locked), the names'
+    bytes, and the offset mod 8 after it."""
+    names = _names(frame_id, ns)
+    after_ids = offset + _STAMP.size + len(names) + _IDS.size
+    padding = (4 - after_ids) % 8
+    layout = struct.Struct(f"<iI{len(names)}siii{padding}x10d4fiI?")
+    return layout, names, (after_ids + padding + _BODY.size) % 8
 
 
 # Keyed by bytes and text only: floats would make 0.0 and -0.0 one key, and they differ in CDR.
