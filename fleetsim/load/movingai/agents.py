@@ -20,13 +20,13 @@ of a MAPF plan.
 
 from __future__ import annotations
 
-import re
 from collections.abc import Sequence
 from pathlib import Path
 
-from fleetsim.enums import Progress, Traverse, TurnCapability
-from fleetsim.errors import Location, ScenarioFileError
+from fleetsim.enums import Progress, TurnCapability
+from fleetsim.errors import Location
 from fleetsim.layout.segment import Segment
+from fleetsim.load.movingai.cells import Cell, GridCells, neighbour_toward
 from fleetsim.load.movingai.grid import Grid
 from fleetsim.load.movingai.scen import ScenAgent
 from fleetsim.scenario import Task, Vehicle, VehicleType
@@ -34,8 +34,6 @@ from fleetsim.scenario import Task, Vehicle, VehicleType
 __all__ = ["MOVINGAI_TYPE_NAME", "agent_vehicles", "movingai_vehicle_type"]
 
 MOVINGAI_TYPE_NAME = "movingai"
-Cell = tuple[int, int]
-_CELL_NAME = re.compile(r"r([0-9]+)c([0-9]+)")
 
 
 def movingai_vehicle_type(cell_size: float) -> VehicleType:
@@ -56,49 +54,17 @@ def movingai_vehicle_type(cell_size: float) -> VehicleType:
     )
 
 
-class _Cells:
-    """Which segment joins two neighbouring cells, from the segments' end names (``r3c4``)."""
-
-    def __init__(self, grid: Grid, segments: Sequence[Segment]) -> None:
-        self.grid = grid
-        self.between: dict[tuple[Cell, Cell], int] = {}
-        for segment in segments:
-            if segment.ends is not None:
-                first, second = (_cell(name) for name in segment.ends)
-                self.between[(first, second)] = segment.id
-
-    def leaving(self, cell: Cell, neighbour: Cell) -> tuple[int, Traverse]:
-        if (cell, neighbour) in self.between:
-            return self.between[(cell, neighbour)], Traverse.FORWARD
-        return self.between[(neighbour, cell)], Traverse.BACKWARD
-
-    def neighbours(self, cell: Cell) -> tuple[Cell, ...]:
-        row, column = cell
-        around = ((row, column + 1), (row + 1, column), (row, column - 1), (row - 1, column))
-        return tuple(other for other in around if self.grid.free(*other))
-
-
-def _cell(name: str) -> Cell:
-    found = _CELL_NAME.fullmatch(name)
-    assert found is not None  # the reader names every end so
-    return int(found.group(1)), int(found.group(2))
-
-
-def _distance(a: Cell, b: Cell) -> int:
-    return abs(a[0] - b[0]) + abs(a[1] - b[1])
-
-
 def agent_vehicles(
     agents: Sequence[ScenAgent], grid: Grid, segments: Sequence[Segment], vehicle_type: VehicleType, path: Path
 ) -> tuple[tuple[tuple[Vehicle, int], ...], tuple[tuple[Task, int], ...]]:
     """The agents' vehicles and tasks (see the module docstring), each with its line in ``path``.
 
     An agent on a cell without a free neighbour has no segment to stand on: a located error."""
-    cells = _Cells(grid, segments)
+    cells = GridCells(grid, segments)
     taken: set[Cell] = set()
     vehicles, tasks = [], []
     for number, agent in enumerate(agents, start=1):
-        goal_next = _around(cells, agent.goal, agent.start, taken=None, path=path, line=agent.line, what="goal")
+        goal_next = _around(cells, agent.goal, agent.start, None, path, agent.line, "goal")
         goal_segment, _ = cells.leaving(agent.goal, goal_next)
         if agent.start == agent.goal:
             start_next = goal_next
@@ -111,16 +77,10 @@ def agent_vehicles(
     return tuple(vehicles), tuple(tasks)
 
 
-def _around(cells: _Cells, cell: Cell, toward: Cell, taken: set[Cell] | None, path: Path, line: int, what: str) -> Cell:
-    """The neighbour of ``cell`` its segment leads to: not ``taken`` if possible, then nearest ``toward``."""
-    options = cells.neighbours(cell)
-    if not options:
-        row, column = cell
-        msg = (
-            f"the {what} (x={column}, y={row}) is a free cell without a free neighbour: "
-            "no segment reaches it, so no vehicle can stand or arrive there"
-        )
-        raise ScenarioFileError(msg, Location(path, line=line, field=f"{what}_x"))
-    blocked = taken or set()
-    ranked = sorted(enumerate(options), key=lambda item: (item[1] in blocked, _distance(item[1], toward), item[0]))
-    return ranked[0][1]
+def _around(
+    cells: GridCells, cell: Cell, toward: Cell, taken: set[Cell] | None, path: Path, line: int, what: str
+) -> Cell:
+    """The neighbour of ``cell`` its segment leads to (:func:`neighbour_toward`), errors at the agent's row."""
+    row, column = cell
+    where = Location(path, line=line, field=f"{what}_x")
+    return neighbour_toward(cells, cell, toward, taken, f"the {what} (x={column}, y={row})", where)
