@@ -20,6 +20,7 @@ from fleetsim.enums import Progress
 __all__ = [
     "MEASURES",
     "Arrivals",
+    "LorrSetup",
     "MeasureBound",
     "Order",
     "OrderStream",
@@ -174,6 +175,30 @@ class Shift:
     dispatch_period: float | None = None
     stall_after: float = 300.0
     on_stall: Literal["count", "end"] = "count"
+
+
+@dataclass(frozen=True, slots=True)
+class LorrSetup:
+    """The League of Robot Runners problem a scenario was loaded from (``fleetsim.load.lorr``): a run of
+    it also gives the competition's own counts (the result's ``lorr``).
+
+    Attributes:
+        problem: The problem file's name.
+        edition: ``"2023"``, ``"2024"`` or ``"2026"``.
+        team_size: How many robots run (``teamSize``, or the suite entry's ``agents``).
+        task_pool: How many tasks are kept revealed (``numTasksReveal × teamSize``, at least 1).
+        horizon: Timesteps the run lasts (its shift's duration, at ``timestep`` seconds each).
+        timestep: Seconds per League timestep (1: one cell per second).
+        not_mapped: What of the problem fleetsim has no counterpart for, or maps with a difference, in words.
+    """
+
+    problem: str
+    edition: str
+    team_size: int
+    task_pool: int
+    horizon: int
+    timestep: float = 1.0
+    not_mapped: tuple[str, ...] = ()
 
 
 # The measures of a run with orders that a suite's ``expect`` may bound (``min_<name>``, ``max_<name>``):

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 from fleetsim.enums import ConflictModel, Progress, Traverse, TurnCapability
 from fleetsim.errors import ScenarioError
-from fleetsim.orders import MeasureBound, Order, OrderStream, Shift, Station
+from fleetsim.orders import LorrSetup, MeasureBound, Order, OrderStream, Shift, Station
 
 if TYPE_CHECKING:
     from fleetsim.layout.layout import Layout
@@ -316,6 +316,8 @@ class Scenario:
         shift: The run as a shift (its length, warm-up, stalls), or ``None``: a run of fixed tasks.
         orders_path: The ``orders.csv`` it was loaded from, if any.
         dispatcher: The dispatcher spec (``module:attr``) its suite entry names, or ``None``.
+        lorr: The League of Robot Runners problem it was loaded from, or ``None``: its runs' results
+            also give the competition's counts.
     """
 
     name: str
@@ -339,6 +341,7 @@ class Scenario:
     shift: Shift | None = None
     orders_path: Path | None = None
     dispatcher: str | None = None
+    lorr: LorrSetup | None = None
 
     def __post_init__(self) -> None:
         # A scenario built in code (not loaded from files, whose rows are checked) is refused here,

@@ -108,12 +108,20 @@ def _check_scenario(name: str, load: Callable[[], Scenario], tally: _Tally) -> N
     else:
         tally.loaded += 1
         layout = scenario.layout
-        orders = f", {len(scenario.orders)} orders" if scenario.orders_path is not None else ""
+        orders = f", {len(scenario.orders)} orders" if scenario.orders_path is not None or scenario.orders else ""
         stream = ", an order stream" if scenario.order_stream is not None else ""
+        lorr = scenario.lorr
+        league = (
+            f" (League {lorr.edition} problem: {lorr.task_pool} tasks revealed at a time, {lorr.horizon} timesteps)"
+            if lorr is not None
+            else ""
+        )
         print(
             f"  ok   {name}: {len(layout.segments)} segments, {len(layout.connections)} connections, "
-            f"{len(scenario.vehicles)} vehicles, {len(scenario.tasks)} tasks{orders}{stream}"
+            f"{len(scenario.vehicles)} vehicles, {len(scenario.tasks)} tasks{orders}{stream}{league}"
         )
+        for note in lorr.not_mapped if lorr is not None else ():
+            print(f"       note: {note}")
         notes = [*scenario.warnings, *_lint_notes(layout, scenario.vehicle_length)]
     tally.warnings += len(notes)
     for note in notes:

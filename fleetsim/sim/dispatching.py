@@ -17,7 +17,7 @@ the orders' source: a run with orders is as deterministic as any, and a run with
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 from fleetsim.dispatch.book import OrderBook
@@ -30,6 +30,7 @@ from fleetsim.planning.checks import Rejection
 from fleetsim.planning.controller import FleetController
 from fleetsim.planning.snapshot import FleetSnapshot
 from fleetsim.scenario import Scenario
+from fleetsim.sim.lorr_counts import HoldClock, lorr_counts
 from fleetsim.sim.measures import BACKLOG_EVERY, FleetTimes, OrderMeasures, Stall, measure_orders
 
 __all__ = ["Dispatching"]
@@ -94,6 +95,9 @@ class Dispatching:
         self.blocked_time = 0.0
         self.loaded_distance = 0.0
         self._dt = dt
+        # A League problem's run: who holds orders, and since when (its sumOfCost and makespan).
+        self._lorr = scenario.lorr
+        self._holds = HoldClock() if scenario.lorr is not None else None
 
     def header(self) -> dict[str, Any]:
         """What the trace header holds of the orders: their source, canonically, and the dispatcher's period."""
@@ -165,6 +169,8 @@ class Dispatching:
         for change in self.book.apply(assignments, now):
             self.controller.requeue(change.vehicle_id, change.withdraw, change.append)
             events.append(["assign", change.vehicle_id, list(change.sequence)])
+        if self._holds is not None:
+            self._holds.update(self.book.holding(), now)
         self._set_idle(self._idle_vehicles(), now)
         return []
 
@@ -236,6 +242,8 @@ class Dispatching:
             events.append(["order-done", order_id])
             self.source.completed(order_id)
             self._unload(vehicle)
+            if self._holds is not None:
+                self._holds.update(self.book.holding(), time)
 
     def _unload(self, vehicle: int) -> None:
         since = self._loaded_since.pop(vehicle, None)
@@ -261,4 +269,10 @@ class Dispatching:
             distance=sum(odometers[v] - opened.get(v, 0.0) for v in odometers),
             loaded_distance=self.loaded_distance,
         )
-        return measure_orders(self.book.records, (min(self.warmup, end), end), times, self.backlog, stalls)
+        measures = measure_orders(self.book.records, (min(self.warmup, end), end), times, self.backlog, stalls)
+        if self._lorr is None or self._holds is None:
+            return measures
+        records = self.book.records.values()
+        finished = sum(1 for record in records if record.completed is not None)
+        counts = lorr_counts(self._lorr, self._vehicles, self._holds.totals(end), len(records), finished)
+        return replace(measures, lorr=counts)

@@ -33,6 +33,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from fleetsim.dispatch.book import OrderRecord
+from fleetsim.sim.lorr_counts import LorrCounts
 
 __all__ = ["BACKLOG_EVERY", "OrderMeasures", "Stall", "Stats", "measure_orders", "measure_value"]
 
@@ -125,6 +126,7 @@ class OrderMeasures:
     overloaded: bool
     stalls: int = 0
     first_stall: float | None = None
+    lorr: LorrCounts | None = None  # a League problem's run: the competition's counts (the result's ``lorr``)
 
     def value(self, measure: str) -> float | None:
         """One of ``fleetsim.orders.MEASURES`` (``service_time_p95``: that figure of the service times) as the

@@ -287,7 +287,9 @@ class RunResult:
             ``vehicle``, ``assigned``, ``started``, ``served``, ``completed``, ``reassigned``,
             ``deadline_missed``.
         measures: What a run with transport orders delivered: throughput, service times, utilisation,
-            backlog ([`OrderMeasures`][fleetsim.sim.measures.OrderMeasures]); ``None`` without orders.
+            backlog ([`OrderMeasures`][fleetsim.sim.measures.OrderMeasures]); ``None`` without orders. A
+            run of a League of Robot Runners problem also has the competition's counts in its ``lorr``
+            ([`LorrCounts`][fleetsim.sim.lorr_counts.LorrCounts]), which the JSON document gives as ``lorr``.
         stalls: A shift's vehicles found with work and not moving for its ``stall_after`` seconds, each with
             its reason and the orders held up ([`Stall`][fleetsim.sim.measures.Stall]), in the order found.
         contact: What the contact check found (contacts, clearance, near misses:
@@ -386,6 +388,7 @@ class RunResult:
             | ({"orders": list(self.orders)} if self.orders else {})
             | ({} if self.measures is None else {"measures": self.measures.to_dict()})
             | ({"stalls": [s.to_dict() for s in self.stalls]} if self.measures is not None else {})
+            | ({} if self.measures is None or self.measures.lorr is None else {"lorr": self.measures.lorr.to_dict()})
         )
 
 

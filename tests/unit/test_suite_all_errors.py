@@ -187,9 +187,9 @@ def test_a_misspelt_required_key_is_one_message_not_also_the_missing_key(tmp_pat
 
 
 def test_two_unknown_keys_of_one_mapping_are_both_reported(tmp_path: Path) -> None:
-    text = CLEAN.replace("    dir: crossing\n", "    dir: crossing\n    colour: red\n    tag: [x]\n", 1)
+    text = CLEAN.replace("    dir: crossing\n", "    dir: crossing\n    paint: red\n    tag: [x]\n", 1)
     assert [problem for _, problem in located(errors_of(write_suite(tmp_path, text)))] == [
-        "scenarios[0]: unknown key 'colour'",
+        "scenarios[0]: unknown key 'paint'",
         "scenarios[0]: unknown key 'tag'; did you mean 'tags'?",
     ]
 

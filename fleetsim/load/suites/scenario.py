@@ -26,8 +26,10 @@ from fleetsim.errors import Location, ScenarioFileError, SuiteError, Unreachable
 from fleetsim.layout.layout import Layout, build_layout
 from fleetsim.load.common.collect import ErrorCollector
 from fleetsim.load.common.map_options import MapOptions, SiteMap
+from fleetsim.load.lorr.fleet import LorrFleet
 from fleetsim.load.maps.site_map import load_site_map
 from fleetsim.load.suites.disturbances import check_disturbances
+from fleetsim.load.suites.lorr_entry import LorrEntry, apply_lorr, lorr_problem_fleet, lorr_settings
 from fleetsim.load.suites.order_checks import apply_order_setup, order_reach_errors
 from fleetsim.load.suites.scen_entry import ScenSetup, scen_agents
 from fleetsim.load.suites.suite import ScenarioSpec, Suite
@@ -75,12 +77,16 @@ def load_scenario(spec: ScenarioSpec, suite: Suite) -> Scenario:
         spec.map_options,
         spec.order_setup.orders_path,
         spec.scen,
+        spec.lorr,
     )
     scenario = replace(scenario, planner_setup=spec.planner_setup)
     scenario = apply_order_setup(scenario, spec.order_setup)
+    scenario = apply_lorr(scenario, spec.order_setup.shift, spec.order_setup.dispatcher)
     if not spec.disturbances and spec.random_disturbances is None:
         return scenario
-    scenario = replace(scenario, disturbances=spec.disturbances, random_disturbances=spec.random_disturbances)
+    # The entry's random stops replace a League problem's delays.
+    drawn = spec.random_disturbances or scenario.random_disturbances
+    scenario = replace(scenario, disturbances=spec.disturbances, random_disturbances=drawn)
     check_disturbances(scenario, spec.suite_path)
     return scenario
 
@@ -145,12 +151,14 @@ def _assemble(
     map_options: MapOptions,
     orders_path: Path | None = None,
     scen: ScenSetup | None = None,
+    lorr: LorrEntry | None = None,
 ) -> Scenario:
     map_path, vehicles_path, tasks_path = paths
     errors = ErrorCollector()
     site: SiteMap | None = None
-    with errors.collecting():
-        site = load_site_map(map_path, map_options)
+    if lorr is None:  # a League problem names its map: it is read with the problem
+        with errors.collecting():
+            site = load_site_map(map_path, map_options)
     typed = False  # the default vehicle type is known (None is a valid answer: there is none)
     default_type: VehicleType | None = None
     with errors.collecting():
@@ -162,7 +170,17 @@ def _assemble(
     segments = {segment.id: segment for segment in site.segments} if site is not None else None
     vehicle_rows = VehicleRows((), None)
     located_tasks: tuple[tuple[Task, int], ...] = ()
-    if scen is not None:  # a MovingAI scenario: vehicles and tasks from its agents, once the map is loaded
+    fleet: LorrFleet | None = None
+    if lorr is not None:  # a League problem: vehicles and orders from its agent and task files
+        if typed:
+            with errors.collecting():
+                given_type = default_type if default_type is not DEFAULT_VEHICLE_TYPE else None
+                problem, site, fleet = lorr_problem_fleet(lorr, map_options, given_type)
+                map_path, vehicles_path, tasks_path = problem.map_path, problem.agent_path, problem.task_path
+                vehicle_rows = VehicleRows(fleet.vehicles, frozenset(vehicle.id for vehicle, _ in fleet.vehicles))
+                vehicle_types = MappingProxyType({**vehicle_types, fleet.vehicle_type.name: fleet.vehicle_type})
+                settings = lorr_settings(settings, lorr.horizon)
+    elif scen is not None:  # a MovingAI scenario: vehicles and tasks from its agents, once the map is loaded
         if site is not None and typed:
             with errors.collecting():
                 # A suite that declares no vehicle types gets the MovingAI type, not the built-in default.
@@ -176,12 +194,16 @@ def _assemble(
         )
     else:
         check_table(vehicles_path, VEHICLE_COLUMNS, errors)
-    if scen is None:  # tasks are checked against every vehicle id vehicles.csv names, bad rows' included
+    if (
+        scen is None and lorr is None
+    ):  # tasks are checked against every vehicle id vehicles.csv names, bad rows' included
         located_tasks = collect_tasks(
             tasks_path, segments, vehicle_rows.ids, errors, map_name=map_path.name, vehicles_name=vehicles_path.name
         )
     orders = collect_orders(orders_path, segments, tuple(vehicle_types), errors) if orders_path is not None else ()
     errors.raise_if_any()
+    if fleet is not None:
+        orders = fleet.orders
     assert site is not None and typed  # raise_if_any raised the error that left them unset
     located = vehicle_rows.located
     vehicles = tuple(vehicle for vehicle, _ in located)
@@ -205,9 +227,9 @@ def _assemble(
         length = longest_vehicle(vehicles, vehicle_types.values())
         error.notes = (*site.warnings, *(f"{f.severity} {f.code}: {f.message}" for f in layout.lint(length)))
         raise
-    if orders_path is not None:
-        for problem in order_reach_errors(layout, vehicles, orders, orders_path):
-            errors.add(problem)
+    if orders_path is not None or fleet is not None:
+        for unserved in order_reach_errors(layout, vehicles, orders, orders_path or tasks_path):
+            errors.add(unserved)
         errors.raise_if_any()
     _check_expected_collisions(name, expect, layout, map_path, origin)
     return Scenario(
@@ -225,6 +247,9 @@ def _assemble(
         orders=orders,
         stations=site.stations,
         orders_path=orders_path,
+        order_pool=fleet.pool if fleet is not None else None,
+        random_disturbances=fleet.disturbances if fleet is not None else None,
+        lorr=fleet.setup if fleet is not None else None,
     )
 
 

@@ -23,6 +23,7 @@ from fleetsim.load.common.map_options import MapOptions
 from fleetsim.load.common.yaml_source import Locate, load_yaml_with_marks
 from fleetsim.load.suites.disturbances import HuntDisturbances, declared_disturbances, hunt_block, random_block
 from fleetsim.load.suites.entry_tables import check_entry_tables
+from fleetsim.load.suites.lorr_entry import LorrEntry, lorr_files
 from fleetsim.load.suites.orders_entry import DEFAULT_ORDER_KEYS, ORDER_KEYS, OrderSetup, order_setup
 from fleetsim.load.suites.planner_setup import PLANNER_KEYS, planner_setup
 from fleetsim.load.suites.scen_entry import ScenSetup, scen_files
@@ -109,6 +110,9 @@ class ScenarioSpec:
             ``expect`` bounds on measures; no hash is recorded or compared) or ``both``.
         scen: A MovingAI scenario file that gives the vehicles and tasks (``scen`` and ``agents``), or
             ``None``; then ``vehicles_path`` and ``tasks_path`` are that file.
+        lorr: A League of Robot Runners problem that gives the map, vehicles and orders (``lorr``,
+            ``horizon`` and ``agents``), or ``None``; then ``vehicles_path`` and ``tasks_path`` are the
+            problem file, and ``map_path`` the map it names (the problem file when it names none that exists).
     """
 
     name: str
@@ -131,6 +135,7 @@ class ScenarioSpec:
     order_setup: OrderSetup = field(default_factory=OrderSetup)
     gate: Gate = "hash"
     scen: ScenSetup | None = None
+    lorr: LorrEntry | None = None
 
     @property
     def hunts(self) -> bool:
@@ -514,6 +519,7 @@ def _scenario_entry(
     generate = None
     paths: tuple[Path, Path, Path] | None = None
     scen: ScenSetup | None = None
+    lorr: LorrEntry | None = None
     files_missing = False
     if "generate" in entry:
         paths = (suite_path.parent,) * 3
@@ -525,6 +531,10 @@ def _scenario_entry(
         if check.intact(where) and all(check.clean((*where, key)) for key in ("scen", "map", "agents")):
             with errors.collecting():
                 paths, scen = scen_files(suite_path.parent, entry, locate, where)
+    elif "lorr" in entry:
+        if check.intact(where) and all(check.clean((*where, key)) for key in ("lorr", "horizon", "agents")):
+            with errors.collecting():
+                paths, lorr = lorr_files(suite_path.parent, entry, locate, where)
     elif check.intact(where) and all(check.clean((*where, key)) for key in ("dir", "map", "vehicles", "tasks")):
         with errors.collecting():
             paths = _scenario_files(suite_path.parent, entry, locate, where)
@@ -582,6 +592,7 @@ def _scenario_entry(
         planner_setup=setup,
         order_setup=orders,
         scen=scen,
+        lorr=lorr,
         **disturbances,
     )
 
