@@ -4,7 +4,7 @@ Workers get no paths into the machine that planned the sweep (they may be elsewh
 only the scenario folder's contents (``map.json``, ``vehicles.csv``, ``tasks.csv`` as written by
 :func:`fleetsim.strategies.save_scenario`) with the vehicle types, settings and expectations (bounds on
 measures included), the transport orders (and their pool), order stream, station sets, shift and dispatcher spec of a
-scenario with orders, and what the suite entry gives its planner: its ``planner_options`` and the bytes of
+scenario with orders (and the League problem it came from), and what the suite entry gives its planner: its ``planner_options`` and the bytes of
 its data ``files`` (a folder listed there sends every file below it), which a worker puts at the same
 relative paths in the folder its planner gets as ``scenario_dir``. A scenario sent this way runs exactly as
 the loaded one does (the same trace hash).
@@ -23,7 +23,7 @@ from typing import Any
 
 from fleetsim.enums import ConflictModel, Progress, TurnCapability
 from fleetsim.load.suites.scenario import load_scenario_dir
-from fleetsim.orders import Arrivals, MeasureBound, Order, OrderStream, Shift, Station, Stop, StopDraw
+from fleetsim.orders import Arrivals, LorrSetup, MeasureBound, Order, OrderStream, Shift, Station, Stop, StopDraw
 from fleetsim.scenario import (
     Checks,
     Disturbance,
@@ -77,6 +77,7 @@ def scenario_payload(scenario: Scenario) -> dict[str, Any]:
         "stations": _plain(scenario.stations),
         "shift": _plain(scenario.shift),
         "dispatcher": scenario.dispatcher,
+        "lorr": _plain(scenario.lorr),
     }
 
 
@@ -132,7 +133,12 @@ def scenario_from_payload(payload: dict[str, Any], scenario_dir: Path | None = N
         }),
         shift=None if payload.get("shift") is None else Shift(**payload["shift"]),
         dispatcher=payload.get("dispatcher"),
+        lorr=_lorr(payload.get("lorr")),
     )  # fmt: skip
+
+
+def _lorr(sent: dict[str, Any] | None) -> LorrSetup | None:
+    return None if sent is None else LorrSetup(**{**sent, "not_mapped": tuple(sent["not_mapped"])})
 
 
 def _progress(value: str | None) -> Progress | None:
