@@ -59,7 +59,8 @@ def ways_out(
     """
     steps = (table if table is not None else StepTable(layout, capability)).steps
     held: dict[int, list[int]] = {}  # segment -> its holders (other than the vehicle)
-    free_to_cross: dict[int, bool] = {}  # segment -> whether every holder is movable
+    # segment -> what crossing it adds (for the movable vehicles holding it), None: held by one that is not
+    crossing_cost: dict[int, float | None] = {}
 
     def holders(segment: int) -> list[int]:
         found = held.get(segment)
@@ -67,11 +68,12 @@ def ways_out(
             found = held[segment] = index.holders(vehicle, segment)
         return found
 
-    def crossable(segment: int) -> bool:
-        verdict = free_to_cross.get(segment)
-        if verdict is None:
-            verdict = free_to_cross[segment] = all(movable(other) for other in holders(segment))
-        return verdict
+    def extra(segment: int) -> float | None:
+        others = holders(segment)
+        cost = crossing_cost[segment] = (
+            _CROSSING_PENALTY * len(others) if all(movable(other) for other in others) else None
+        )
+        return cost
 
     best: dict[State, float] = {start: 0.0}
     came_from: dict[State, State] = {}
@@ -90,10 +92,11 @@ def ways_out(
             continue  # a place to wait: no need to drive on through it
         for following, joint, key in steps(state):
             segment = following[0]
-            if not crossable(segment):
+            added = crossing_cost[segment] if segment in crossing_cost else extra(segment)
+            if added is None:
                 continue  # held by a vehicle that will not make way
             total = spent + lengths[segment] + (turnaround if joint is JointKind.OPPOSITE else 0.0)
-            total += _CROSSING_PENALTY * len(holders(segment))
+            total += added
             if total < best.get(following, math.inf):
                 best[following] = total
                 came_from[following] = state

@@ -519,7 +519,11 @@ class ReservingPlanner:
         ):  # fmt: skip
             others: list[FleetPlan] = []
             replaced: list[tuple[int, FleetPlan | None]] = []  # what the index counted before, to undo
-            region = avoid | {near for segment, _, _ in (start, *way.path) for near in layout.conflicts(segment)}
+            region = (
+                avoid | {near for segment, _, _ in (start, *way.path) for near in layout.conflicts(segment)}
+                if way.crossing
+                else avoid  # (no one to move out of it)
+            )
             for other in way.crossing:
                 plans = self._evacuate(other, region, above, fleet, layout, index, taken, depth=depth - 1)
                 if plans is None:
