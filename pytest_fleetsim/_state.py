@@ -40,10 +40,12 @@ from fleetsim.scenario import Scenario
 from fleetsim.sim.interrupt import StopSignals
 from fleetsim.sim.record import RunOrigin
 from fleetsim.sim.report import (
+    LORR_COLUMNS,
     ORDER_COLUMNS,
     SUMMARY_COLUMNS,
     failure_report,
     format_table,
+    lorr_cells,
     order_cells,
     outcome_cell,
     outcome_notes,
@@ -411,6 +413,7 @@ class FleetsimState:
             "metrics": ScenarioMetrics.from_result(item.nodeid, "failed", result).to_dict(),  # outcome: see _metrics
             "cells": cells,
             "order_cells": order_cells(label or item.spec.name, result, item.spec.gate),
+            "lorr_cells": lorr_cells(label or item.spec.name, result),
             "outcome_notes": outcome_notes(item.spec.expect, result),  # by the word the report gives
             "generated": generated,
             "interrupted": result.ended == "interrupted",
@@ -617,6 +620,14 @@ class FleetsimState:
                 shifts.append([label, *delivered[1:]])
         if shifts:
             lines += ["", "orders:", *format_table(shifts, ORDER_COLUMNS)]
+        league = []
+        for outcome in ordered:
+            counted = outcome.payload.get("lorr_cells")
+            if counted:
+                label = f"{Path(outcome.suite).name}::{counted[0]}" if several else counted[0]
+                league.append([label, *counted[1:]])
+        if league:
+            lines += ["", "League of Robot Runners counts (timesteps):", *format_table(league, LORR_COLUMNS)]
         lines += self._unrecorded_lines(ordered)
         paced = [o for o in ordered if o.payload["cells"][SUMMARY_COLUMNS.index("hash")] == NOT_GATED]
         if paced:

@@ -42,9 +42,11 @@ from fleetsim.sim.interrupt import StopSignals, signal_name
 from fleetsim.sim.loop import RunProgress, run_scenario
 from fleetsim.sim.record import RunOrigin, run_record
 from fleetsim.sim.report import (
+    LORR_COLUMNS,
     ORDER_COLUMNS,
     failure_lines,
     format_table,
+    lorr_cells,
     order_cells,
     outcome_cell,
     outcome_notes,
@@ -442,6 +444,11 @@ def _print_summary(outcomes: list[_Outcome], stream: TextIO) -> None:
     shifts = [cells for o in outcomes if o.loaded and (cells := order_cells(o.label, o.result, _gate(o))) is not None]
     if shifts:
         print("\norders:", *format_table(shifts, ORDER_COLUMNS), sep="\n", file=stream)
+    league = [cells for o in outcomes if o.loaded and (cells := lorr_cells(o.label, o.result)) is not None]
+    if league:
+        print(
+            "\nLeague of Robot Runners counts (timesteps):", *format_table(league, LORR_COLUMNS), sep="\n", file=stream
+        )
     words = [o.word for o in outcomes]
     counts = ", ".join(
         f"{words.count(w)} {w}"

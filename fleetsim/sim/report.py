@@ -14,6 +14,7 @@ from fleetsim.scenario import Expectations
 from fleetsim.sim.result import MOMENTLESS, Failure, RunResult
 
 __all__ = [
+    "LORR_COLUMNS",
     "ORDER_COLUMNS",
     "SUMMARY_COLUMNS",
     "broken_expectation",
@@ -23,6 +24,7 @@ __all__ = [
     "failure_text",
     "first_line",
     "format_table",
+    "lorr_cells",
     "order_cells",
     "outcome_cell",
     "outcome_notes",
@@ -77,6 +79,28 @@ ORDER_COLUMNS = (
     "backlog",
     "gate",
 )
+
+
+# A third, for the runs of League of Robot Runners problems: the competition's own counts, in timesteps.
+LORR_COLUMNS = ("scenario", "edition", "robots", "task pool", "horizon", "tasks finished", "sum of cost", "makespan")
+
+
+def lorr_cells(label: str, result: RunResult) -> tuple[str, ...] | None:
+    """One row of the League table, or ``None`` for a run that is not of a League problem."""
+    counts = None if result.measures is None else result.measures.lorr
+    if counts is None:
+        return None
+    setup = counts.setup
+    return (
+        label,
+        setup.edition,
+        str(setup.team_size),
+        str(setup.task_pool),
+        str(setup.horizon),
+        f"{counts.tasks_finished}/{counts.tasks_revealed}",
+        str(counts.sum_of_cost),
+        str(counts.makespan),
+    )
 
 
 def order_cells(label: str, result: RunResult, gate: str = "-") -> tuple[str, ...] | None:

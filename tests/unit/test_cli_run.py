@@ -102,7 +102,7 @@ def test_the_shipped_suites_pass_with_the_reserving_planner(
         tmp_path / "fleetsim-results" / "caught-bugs" / "generated-layouts" / "counterexample" / "map.json"
     ).is_file()
     # The caught-bugs suite is pinned to BFSPlanner, whatever --planner says.
-    assert f"20 scenario(s) with fleetsim.planners:BFSPlanner, {RESERVING}: 18 passed, 2 xfailed" in out
+    assert f"24 scenario(s) with fleetsim.planners:BFSPlanner, {RESERVING}: 22 passed, 2 xfailed" in out
     assert "FAILED" not in out
 
 

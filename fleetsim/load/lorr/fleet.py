@@ -11,7 +11,9 @@
   when the vehicle enters that segment, one cell before the errand's cell (the League counts the errand
   when the robot stands on the cell).
 - **The pool.** ``max(1, floor(numTasksReveal × teamSize))`` tasks revealed at 0, one more for each
-  finished, in file order (Start-Kit ``TaskManager::reveal_tasks``).
+  finished, in file order (Start-Kit ``TaskManager::reveal_tasks``). The Start-Kit starts over at the
+  file's first task when the file runs out; fleetsim reveals the file ``rounds`` times over (default
+  once), so that every order is known before the run, as a trace header holds them.
 - **Vehicle type.** The MovingAI type (one cell per second, a quarter turn per second, half a cell
   square) unless the suite declares types; ``agentSize`` scales its footprint (``agentSize × ½`` cell).
 """
@@ -70,10 +72,13 @@ def lorr_fleet(
     agents_where: Location | None,
     horizon: int,
     given_type: VehicleType | None,
+    rounds: int = 1,
 ) -> LorrFleet:
     """The fleet and orders of ``problem`` on ``grid`` (see the module docstring). ``agents``: the suite
     entry's robot count (``None``: ``teamSize``); ``given_type``: the suite's default vehicle type, if it
-    declares types. Every problem of the agent and task files is raised at its line."""
+    declares types; ``rounds``: the task file this many times over (ids go on counting, as the
+    Start-Kit's task ids do when it starts over). Every problem of the agent and task files is raised at
+    its line."""
     robots = agents if agents is not None else problem.team_size
     cells = GridCells(grid, segments)
     errors = ErrorCollector()
@@ -100,7 +105,12 @@ def lorr_fleet(
             side = kind.length * problem.agent_size
             kind = replace(kind, length=side, width=side, height=side)
     vehicles = _vehicles(starts[:robots], cells, kind, problem)
-    orders = tuple(_order(number, task, cells, problem) for number, task in enumerate(tasks))
+    once = [_order(number, task, cells, problem) for number, task in enumerate(tasks)]
+    orders = tuple(
+        replace(order, id=f"t{round_ * len(once) + number}")
+        for round_ in range(rounds)
+        for number, order in enumerate(once)
+    )
     if problem.strategy is not None:
         notes.append(_STRATEGY_NOTE.format(problem.strategy))
     if problem.agent_counter is not None:

@@ -1,6 +1,6 @@
 """A suite entry that runs a League of Robot Runners problem: ``lorr: PROBLEM.json``, with ``horizon`` (the
-timesteps to simulate, one second each; default 5000, the Start-Kit's) and ``agents`` (robots to run
-instead of the problem's ``teamSize``).
+timesteps to simulate, one second each; default 5000, the Start-Kit's), ``agents`` (robots to run
+instead of the problem's ``teamSize``) and ``task_rounds`` (the task file this many times over; default 1).
 
 The problem file is read when the scenario loads (its mistakes are the scenario's, not the suite's); the
 suite only looks into it for the map it names, so that ``fleetsim inspect`` and friends find the map.
@@ -9,6 +9,7 @@ suite only looks into it for the map it names, so that ``fleetsim inspect`` and 
 from __future__ import annotations
 
 import json
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -31,9 +32,12 @@ __all__ = [
     "DEFAULT_HORIZON",
     "LorrEntry",
     "apply_lorr",
+    "is_lorr_problem",
     "lorr_files",
     "lorr_problem_fleet",
     "lorr_settings",
+    "problem_map",
+    "problem_name",
 ]
 
 DEFAULT_HORIZON = 5000  # timesteps: the Start-Kit's default simulationTime
@@ -43,12 +47,14 @@ DEFAULT_DISPATCHER = "fleetsim.dispatchers:NearestVehicleDispatcher"
 @dataclass(frozen=True, slots=True)
 class LorrEntry:
     """A suite entry's League problem: the file, the horizon in timesteps, how many robots (``None``: the
-    problem's ``teamSize``) and where the entry's ``agents`` is (for an error when the file has fewer)."""
+    problem's ``teamSize``), where the entry's ``agents`` is (for an error when the file has fewer) and
+    how many times over its tasks are revealed (the Start-Kit starts over when they run out)."""
 
     path: Path
     horizon: int = DEFAULT_HORIZON
     agents: int | None = None
     where: Location | None = None
+    task_rounds: int = 1
 
 
 def lorr_files(
@@ -67,11 +73,31 @@ def lorr_files(
         entry.get("horizon", DEFAULT_HORIZON),
         agents,
         locate((*where, "agents")) if agents is not None else None,
+        entry.get("task_rounds", 1),
     )
-    return (_named_map(problem), problem, problem), setup
+    return (problem_map(problem), problem, problem), setup
 
 
-def _named_map(problem: Path) -> Path:
+def is_lorr_problem(path: Path) -> bool:
+    """Whether ``path`` is a League problem file rather than a suite: a ``.json`` file holding an object
+    with ``teamSize`` and no ``scenarios``."""
+    if path.suffix.lower() != ".json" or not path.is_file():
+        return False
+    try:
+        raw = json.loads(path.read_text(encoding="utf-8-sig"))
+    except (OSError, ValueError):
+        return False
+    return isinstance(raw, dict) and "teamSize" in raw and "scenarios" not in raw
+
+
+def problem_name(path: Path) -> str:
+    """A scenario name for a problem file run on its own: its stem, in the characters names may hold."""
+    name = re.sub(r"[^A-Za-z0-9_.-]+", "-", path.stem).strip("-.")
+    return name or "lorr"
+
+
+def problem_map(problem: Path) -> Path:
+    """The map a problem file names when it can be found (else the problem file: its load says why)."""
     try:
         raw = json.loads(problem.read_text(encoding="utf-8-sig"))
     except (OSError, ValueError):
@@ -103,6 +129,7 @@ def lorr_problem_fleet(
         agents_where=entry.where,
         horizon=entry.horizon,
         given_type=given_type,
+        rounds=entry.task_rounds,
     )
     return problem, site, fleet
 

@@ -23,7 +23,7 @@ from fleetsim.load.common.map_options import MapOptions
 from fleetsim.load.common.yaml_source import Locate, load_yaml_with_marks
 from fleetsim.load.suites.disturbances import HuntDisturbances, declared_disturbances, hunt_block, random_block
 from fleetsim.load.suites.entry_tables import check_entry_tables
-from fleetsim.load.suites.lorr_entry import LorrEntry, lorr_files
+from fleetsim.load.suites.lorr_entry import LorrEntry, is_lorr_problem, lorr_files, problem_map, problem_name
 from fleetsim.load.suites.orders_entry import DEFAULT_ORDER_KEYS, ORDER_KEYS, OrderSetup, order_setup
 from fleetsim.load.suites.planner_setup import PLANNER_KEYS, planner_setup
 from fleetsim.load.suites.scen_entry import ScenSetup, scen_files
@@ -111,7 +111,7 @@ class ScenarioSpec:
         scen: A MovingAI scenario file that gives the vehicles and tasks (``scen`` and ``agents``), or
             ``None``; then ``vehicles_path`` and ``tasks_path`` are that file.
         lorr: A League of Robot Runners problem that gives the map, vehicles and orders (``lorr``,
-            ``horizon`` and ``agents``), or ``None``; then ``vehicles_path`` and ``tasks_path`` are the
+            ``horizon``, ``agents`` and ``task_rounds``), or ``None``; then ``vehicles_path`` and ``tasks_path`` are the
             problem file, and ``map_path`` the map it names (the problem file when it names none that exists).
     """
 
@@ -202,6 +202,8 @@ def load_suite(path: Path | str) -> Suite:
     more"). A suite with any problem is not loaded.
     """
     path = Path(path)
+    if is_lorr_problem(path):
+        return _problem_suite(path)
     data, locate = load_yaml_with_marks(path, error_type=SuiteError)
     if data is None:
         msg = "empty file: a suite needs at least 'fleetsim: 1', 'name' and 'scenarios'"
@@ -220,6 +222,19 @@ def load_suite(path: Path | str) -> Suite:
     raise_suite_errors(errors)
     assert suite is not None  # no error, so every part was read
     return suite
+
+
+def _problem_suite(path: Path) -> Suite:
+    """A League problem file run on its own (``fleetsim run PROBLEM.json``): a suite of one scenario named
+    after the file, with the default horizon, settings and expectations."""
+    name = problem_name(path)
+    map_path = problem_map(path)
+    spec = ScenarioSpec(
+        name=name, suite_path=path, line=1, map_path=map_path, vehicles_path=path, tasks_path=path,
+        settings=ScenarioSettings(), expect=Expectations(), tags=(), xfail=None,
+        description=f"the League of Robot Runners problem {path.name}", lorr=LorrEntry(path),
+    )  # fmt: skip
+    return Suite(path, name, spec.description, MappingProxyType({}), (spec,))
 
 
 def _position(error: SuiteError | Exception, suite: Path) -> tuple[int, int, int]:
@@ -532,7 +547,9 @@ def _scenario_entry(
             with errors.collecting():
                 paths, scen = scen_files(suite_path.parent, entry, locate, where)
     elif "lorr" in entry:
-        if check.intact(where) and all(check.clean((*where, key)) for key in ("lorr", "horizon", "agents")):
+        if check.intact(where) and all(
+            check.clean((*where, key)) for key in ("lorr", "horizon", "agents", "task_rounds")
+        ):
             with errors.collecting():
                 paths, lorr = lorr_files(suite_path.parent, entry, locate, where)
     elif check.intact(where) and all(check.clean((*where, key)) for key in ("dir", "map", "vehicles", "tasks")):
