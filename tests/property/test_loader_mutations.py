@@ -2,14 +2,14 @@
 
 Each test copies the shipped suites once, then for every example mutates one kind of file (a Tiled JSON
 map, a TMX map, a Tiled template, a LIF file, an Open-RMF building, a vehicles.csv or tasks.csv, a
-MovingAI map or scenario file, a suite)
+MovingAI map or scenario file, a League of Robot Runners problem, agent or task file, a suite)
 and loads what a user would load: the suite and each of its scenarios. The outcome must be a loaded
 scenario or a :class:`~fleetsim.errors.LoadError` that says where (every error of a
 :class:`~fleetsim.errors.LoadErrors` too); any other exception, or a load that takes longer than
 :data:`HANG_SECONDS`, fails the test. Structured files (JSON, YAML) are mutated as trees (a value replaced
 by a value of another kind, a key or list item deleted, an item duplicated), XML files by their elements'
-attributes, CSV files and MovingAI scenario files by their cells, MovingAI maps by their characters and
-lines, and every kind also by cutting the file short.
+attributes, CSV files, MovingAI scenario files and League agent and task files by their cells, MovingAI
+maps by their characters and lines, and every kind also by cutting the file short.
 """
 
 from __future__ import annotations
@@ -277,6 +277,7 @@ SUITE_OF = {
     "caught-bugs": "caught-bugs.fleetsim.yaml",
     "sites": "sites.fleetsim.yaml",
     "movingai": "movingai.fleetsim.yaml",
+    "lorr": "lorr.fleetsim.yaml",
 }
 CSV_FILES = [
     f"{folder}/{name}"
@@ -345,7 +346,16 @@ def test_mutated_vehicle_and_task_files(suites: Path, relative: str) -> None:
     run()
 
 
-@pytest.mark.parametrize(("relative", "separator"), [("movingai/depot.map", ""), ("movingai/depot.scen", "\t")])
+@pytest.mark.parametrize(
+    ("relative", "separator"),
+    [
+        ("movingai/depot.map", ""),
+        ("movingai/depot.scen", "\t"),
+        ("lorr/sorting-hall.map", ""),
+        ("lorr/sorting-hall.agents", ","),
+        ("lorr/sorting-hall.tasks", ","),
+    ],
+)
 def test_mutated_movingai_maps_and_scenario_files(suites: Path, relative: str, separator: str) -> None:
     text = shipped(relative)
 
@@ -353,6 +363,16 @@ def test_mutated_movingai_maps_and_scenario_files(suites: Path, relative: str, s
     @given(st.one_of(mutated_lines(text, separator), cut_short(text)))
     def run(mutation: str) -> None:
         check(suites, relative, suite_of(relative))(mutation)
+
+    run()
+
+
+@pytest.mark.parametrize("relative", ["lorr/sorting-hall-2024.json", "lorr/sorting-hall-2026.json"])
+def test_mutated_league_problems(suites: Path, relative: str) -> None:
+    @mutation_settings
+    @given(tree_texts(shipped(relative), json.loads, json.dumps))
+    def run(text: str) -> None:
+        check(suites, relative, suite_of(relative))(text)
 
     run()
 

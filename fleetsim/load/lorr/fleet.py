@@ -39,6 +39,7 @@ from fleetsim.scenario import RandomDisturbances, Vehicle, VehicleType
 
 __all__ = ["LorrFleet", "lorr_fleet", "task_pool"]
 
+_MOST_REVEALED = 2.0**31  # a pool larger than any task file (and than a float can floor into an int)
 _STRATEGY_NOTE = (
     "taskAssignmentStrategy {0!r} has no counterpart: the tasks are revealed as the pool and the "
     "dispatcher assigns them (the reference dispatcher gives each to the idle robot with the least travel time)"
@@ -59,7 +60,7 @@ class LorrFleet:
 
 def task_pool(reveal: float, team_size: int) -> int:
     """How many tasks the League keeps revealed: ``max(1, floor(numTasksReveal × teamSize))``."""
-    return max(1, math.floor(reveal * team_size + 1e-9))
+    return max(1, math.floor(min(reveal * team_size, _MOST_REVEALED) + 1e-9))
 
 
 def lorr_fleet(
