@@ -95,7 +95,8 @@ def _item(path: Path, number: int, line: str, grid: Grid, what: str, multi: bool
         hint = (
             " (2024 tasks may have several; this problem has no version, so it is a 2023 one)" if what == "task" else ""
         )
-        msg = f"the line {line.strip()[:40]!r} has {len(parts)} locations; an {what} has one{hint}"
+        one = "an agent starts at one" if what == "agent" else "a task has one"
+        msg = f"the line {line.strip()[:40]!r} has {len(parts)} locations; {one}{hint}"
         raise ScenarioFileError(msg, Location(path, line=number, column=line.find(",") + 1))
     cells, locations = [], []
     position = 0

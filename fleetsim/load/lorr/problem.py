@@ -126,7 +126,7 @@ def read_problem(path: Path) -> LorrProblem:
             known = ", ".join(k for k in PROBLEM_KEYS if k != "robotFile")
             msg = f"unknown key {key!r}{did_you_mean(key, PROBLEM_KEYS)} (a problem's keys: {known})"
             errors.add(ScenarioFileError(msg, places.at(key)))
-    edition = "2023"
+    edition: str | None = None  # a version the reader does not know: no edition's rules apply
     with errors.collecting():
         edition = _edition(raw, places)
     files: dict[str, Path] = {}
@@ -149,7 +149,7 @@ def read_problem(path: Path) -> LorrProblem:
         with errors.collecting():
             delays = parse_delays(raw["delayConfig"], places)
     errors.raise_if_any()
-    assert team is not None and reveal is not None
+    assert team is not None and reveal is not None and edition is not None
     return LorrProblem(
         path, edition, files["mapFile"], files["agentFile"], files["taskFile"], team, reveal, strategy,
         agent_size, counter, delays, places,
@@ -218,7 +218,7 @@ def _positive(raw: dict[str, object], key: str, places: KeyPlaces) -> float | No
     return float(value)
 
 
-def _reveal(raw: dict[str, object], edition: str, places: KeyPlaces) -> float:
+def _reveal(raw: dict[str, object], edition: str | None, places: KeyPlaces) -> float:
     if "numTasksReveal" not in raw:
         return 1.0
     if edition == "2023":

@@ -42,6 +42,7 @@ __all__ = [
 
 DEFAULT_HORIZON = 5000  # timesteps: the Start-Kit's default simulationTime
 DEFAULT_DISPATCHER = "fleetsim.dispatchers:NearestVehicleDispatcher"
+_PROBLEM_KEYS = {"mapFile", "agentFile", "robotFile", "taskFile", "teamSize"}
 
 
 @dataclass(frozen=True, slots=True)
@@ -80,14 +81,14 @@ def lorr_files(
 
 def is_lorr_problem(path: Path) -> bool:
     """Whether ``path`` is a League problem file rather than a suite: a ``.json`` file holding an object
-    with ``teamSize`` and no ``scenarios``."""
+    with a key of a problem (``teamSize``, ``mapFile``, ...) and none of a suite (``fleetsim``, ``scenarios``)."""
     if path.suffix.lower() != ".json" or not path.is_file():
         return False
     try:
         raw = json.loads(path.read_text(encoding="utf-8-sig"))
     except (OSError, ValueError):
         return False
-    return isinstance(raw, dict) and "teamSize" in raw and "scenarios" not in raw
+    return isinstance(raw, dict) and not {"fleetsim", "scenarios"} & raw.keys() and bool(_PROBLEM_KEYS & raw.keys())
 
 
 def problem_name(path: Path) -> str:
