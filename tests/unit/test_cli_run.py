@@ -175,7 +175,8 @@ def test_a_scenario_named_twice_runs_once_in_the_order_given(capsys: pytest.Capt
     assert names == [
         "mixed-shapes", "crossing-collides", "corridor-head-on", "generated-layouts", "late-crossing-stop", "late-crossing-hunt",
         *(spec.name for spec in fleetsim.load_suite(SUITES / "disturbances.fleetsim.yaml").scenarios),
-        "crossing", "loop-one-way", "corridor-passing-bay", "packing-hall-lif", "clinic-rmf",
+        "crossing", "loop-one-way", "corridor-passing-bay", "sorting-hall-2024", "sorting-hall-2026", "depot-4",
+        "depot-all", "packing-hall-lif", "clinic-rmf",
         *(spec.name for spec in fleetsim.load_suite(SUITES / "warehouse.fleetsim.yaml").scenarios),
     ]  # fmt: skip
 

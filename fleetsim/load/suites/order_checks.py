@@ -113,6 +113,9 @@ def order_reach_errors(
     """An error at its row for each order no vehicle it allows can serve (stop after stop, from its start)."""
     reacher = _Reach(layout)
     errors: list[LoadError] = []
+    # The start states of each set of vehicles orders allow, made once: the same frozensets each time are
+    # hashed once and found in the memo by identity (a League problem has thousands of orders for one fleet).
+    starts_of: dict[tuple[str, ...] | None, dict[TurnCapability, frozenset[State]]] = {}
     for order in orders:
         allowed = [v for v in vehicles if order.vehicle_types is None or v.type.name in order.vehicle_types]
         where = Location(orders_path, line=order.line, field="stops")
@@ -121,16 +124,26 @@ def order_reach_errors(
             msg = f"order {order.id!r}: no vehicle is of a type it allows ({', '.join(order.vehicle_types or ())}; the vehicles' types: {types})"
             errors.append(ScenarioFileError(msg, where))
             continue
-        problem = _unserved(layout, reacher, order, allowed)
+        starts = starts_of.get(order.vehicle_types)
+        if starts is None:
+            starts = starts_of[order.vehicle_types] = _starts(allowed)
+        problem = _unserved(layout, reacher, order, allowed, starts)
         if problem is not None:
             errors.append(ScenarioFileError(problem, where))
     return errors
 
 
-def _unserved(layout: Layout, reacher: _Reach, order: Order, allowed: list[Vehicle]) -> str | None:
-    """Why no vehicle of ``allowed`` can serve ``order``, or ``None`` when one can."""
+def _unserved(
+    layout: Layout,
+    reacher: _Reach,
+    order: Order,
+    allowed: list[Vehicle],
+    start_states: Mapping[TurnCapability, frozenset[State]],
+) -> str | None:
+    """Why no vehicle of ``allowed`` (whose start states by capability are ``start_states``) can serve
+    ``order``, or ``None`` when one can."""
     furthest: tuple[int, TurnCapability, frozenset[State]] | None = None  # the stop a group fails at
-    for capability, starts in _starts(allowed).items():
+    for capability, starts in start_states.items():
         here = starts
         for number, stop in enumerate(order.stops):
             arrived = reacher.arrived(capability, here, stop.segment, stop.progress)
