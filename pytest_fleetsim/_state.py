@@ -612,22 +612,19 @@ class FleetsimState:
             cells[1] = outcome_cell(outcome.outcome, notes.get(outcome.outcome, ""))
             rows.append(cells)
         lines = format_table(rows) if rows else []
-        shifts: list[list[str]] = []
-        for outcome in ordered:
-            delivered = outcome.payload.get("order_cells")
-            if delivered:
-                label = f"{Path(outcome.suite).name}::{delivered[0]}" if several else delivered[0]
-                shifts.append([label, *delivered[1:]])
-        if shifts:
-            lines += ["", "orders:", *format_table(shifts, ORDER_COLUMNS)]
-        league = []
-        for outcome in ordered:
-            counted = outcome.payload.get("lorr_cells")
-            if counted:
-                label = f"{Path(outcome.suite).name}::{counted[0]}" if several else counted[0]
-                league.append([label, *counted[1:]])
-        if league:
-            lines += ["", "League of Robot Runners counts (timesteps):", *format_table(league, LORR_COLUMNS)]
+        # Beside the scenarios: what the runs with orders delivered, and the League problems' own counts.
+        for key, title, columns in (
+            ("order_cells", "orders:", ORDER_COLUMNS),
+            ("lorr_cells", "League of Robot Runners counts (timesteps):", LORR_COLUMNS),
+        ):
+            table = []
+            for outcome in ordered:
+                found = outcome.payload.get(key)
+                if found:
+                    label = f"{Path(outcome.suite).name}::{found[0]}" if several else found[0]
+                    table.append([label, *found[1:]])
+            if table:
+                lines += ["", title, *format_table(table, columns)]
         lines += self._unrecorded_lines(ordered)
         paced = [o for o in ordered if o.payload["cells"][SUMMARY_COLUMNS.index("hash")] == NOT_GATED]
         if paced:
