@@ -33,7 +33,8 @@ def validate(args: argparse.Namespace) -> int:
 
     A folder that holds no suite but is a scenario folder (a map, ``vehicles.csv``, ``tasks.csv``) is
     validated as one, every vehicle of the default type; a folder that is neither is a usage error, so
-    a mistyped path is never a silent pass. Exit status 1 when any suite or scenario fails to load;
+    a mistyped path is never a silent pass. A League of Robot Runners problem file (.json) is validated
+    as a suite of one scenario. Exit status 1 when any suite or scenario fails to load;
     each failure is printed with its location.
     """
     paths, folders = _validation_targets(args.suites)

@@ -166,7 +166,12 @@ def build_parser() -> argparse.ArgumentParser:
     validate = sub.add_parser(
         "validate", help="load suites completely and print layout lint", command="fleetsim.cli.commands:validate"
     )
-    validate.add_argument("suites", nargs="+", metavar="SUITE", help="*.fleetsim.yaml files or folders holding them")
+    validate.add_argument(
+        "suites",
+        nargs="+",
+        metavar="SUITE",
+        help="*.fleetsim.yaml files or folders holding them, or League of Robot Runners problem files (.json)",
+    )
 
     inspect = sub.add_parser(
         "inspect", help="segments, connections and conflicts of a map", command="fleetsim.cli.commands:inspect"
@@ -294,7 +299,7 @@ def build_parser() -> argparse.ArgumentParser:
         "suites",
         nargs="+",
         metavar="SUITE[::SCENARIO]",
-        help="*.fleetsim.yaml files or folders; FILE::NAME runs one scenario",
+        help="*.fleetsim.yaml files or folders, or League of Robot Runners problem files (.json); FILE::NAME runs one scenario",
     )
     run_parser.add_argument(
         "--planner",

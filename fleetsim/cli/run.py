@@ -127,8 +127,9 @@ class _Outcome:
 def run(args: argparse.Namespace) -> int:
     """Run every scenario of the given suites with a fresh planner each and print a summary table.
 
-    SUITE is a *.fleetsim.yaml file or a folder holding them; SUITE::NAME selects one scenario of a
-    file. Exit status 0 when every scenario passed (an xfail scenario may fail), 1 when any failed;
+    SUITE is a *.fleetsim.yaml file or a folder holding them, or a League of Robot Runners problem file
+    (.json: one scenario named after it, 5000 timesteps); SUITE::NAME selects one scenario of a file.
+    Exit status 0 when every scenario passed (an xfail scenario may fail), 1 when any failed;
     after Ctrl-C or SIGTERM (the running scenario ends at the end of its step and is written like any
     failed run; no further scenario runs) 130 or 143.
     """
