@@ -181,7 +181,7 @@ def run_once(scenario: Scenario) -> dict[str, Any]:
 
 def report(label: str, imports: list[float], runs: list[dict[str, Any]]) -> None:
     def median(key: str) -> float:
-        return statistics.median(run[key] for run in runs)
+        return float(statistics.median(run[key] for run in runs))
 
     walls = ", ".join(f"{run['wall']:.1f}" for run in runs)
     endings = ", ".join(f"{run['ended']} at {run['sim_time']:.1f} s" for run in runs)

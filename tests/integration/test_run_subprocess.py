@@ -41,5 +41,7 @@ def test_trace_hashes_are_the_same_under_different_hash_seeds(tmp_path: Path) ->
         "loop-one-way", "mixed-shapes", "packing-hall-lif", "late-crossing-stop", "late-crossing-hunt",
         *(spec.name for spec in load_suite(ROOT / "scenario_suites" / "disturbances.fleetsim.yaml").scenarios),
         *(spec.name for spec in load_suite(ROOT / "scenario_suites" / "warehouse.fleetsim.yaml").scenarios),
+        *(spec.name for spec in load_suite(ROOT / "scenario_suites" / "movingai.fleetsim.yaml").scenarios),
+        *(spec.name for spec in load_suite(ROOT / "scenario_suites" / "lorr.fleetsim.yaml").scenarios),
     ])  # fmt: skip
     assert first == second

@@ -152,5 +152,5 @@ def test_a_map_of_another_file_type_is_named_in_words(tmp_path: Path, capsys: py
     err = capsys.readouterr().err
     assert (
         err
-        == f"fleetsim: error: {path}: this is not a map file: a map is a Tiled map (.json, .tmj, .tmx), a LIF file (.lif.json) or an RMF building map (.building.yaml), and this file ends in '.csv'\n"
+        == f"fleetsim: error: {path}: this is not a map file: a map is a Tiled map (.json, .tmj, .tmx), a LIF file (.lif.json), an RMF building map (.building.yaml) or a MovingAI grid map (.map), and this file ends in '.csv'\n"
     )

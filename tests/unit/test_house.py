@@ -18,8 +18,10 @@ LOAD_ROOMS = {
     "lif": {"common"},
     "rmf": {"common"},
     "tables": {"common"},
-    "maps": {"common", "tiled", "lif", "rmf"},
-    "suites": {"common", "tables", "maps"},
+    "movingai": {"common"},
+    "lorr": {"common", "movingai"},  # a League problem's map is a MovingAI map, its robots placed as .scen agents
+    "maps": {"common", "tiled", "lif", "rmf", "movingai"},
+    "suites": {"common", "tables", "maps", "movingai", "lorr"},
 }
 
 
