@@ -8,6 +8,8 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import pytest
+from browser import chromium_run, requested
+from tooling import required_tool
 
 pytest.importorskip("distributed")
 
@@ -63,6 +65,21 @@ def test_the_report_page_is_well_formed_and_holds_the_throughput_and_service_tim
         start = end
     assert [plot.get("data-plot") for plot in plots] == ["capacity-throughput", "capacity-service-time"]
     assert plots[0].find("{http://www.w3.org/2000/svg}title").text == "throughput against offered rate"  # type: ignore[union-attr]
+
+
+def test_the_report_page_renders_in_headless_chromium_and_fetches_nothing(searched: tuple[Path, str]) -> None:
+    chromium = required_tool("chromium", "Chromium 'chromium'", "apt install chromium")
+    page = searched[0].with_suffix(".html")
+    work = page.parent
+    shot, netlog = work / "shot.png", work / "net.json"
+    done = chromium_run(
+        chromium, page, work, f"--screenshot={shot}", "--window-size=1100,1400", f"--log-net-log={netlog}"
+    )
+    assert shot.is_file() and shot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", done.stderr[-2000:]
+    dom = chromium_run(chromium, page, work, "--dump-dom").stdout
+    assert 'data-plot="capacity-throughput"' in dom and 'data-plot="capacity-service-time"' in dom
+    assert "orders/h" in dom
+    assert requested(netlog) <= {page.as_uri()}, requested(netlog)
 
 
 def test_a_resumed_search_reruns_nothing_gives_the_same_results_and_gates_them(
