@@ -28,7 +28,7 @@ from fleetsim.load.common.collect import ErrorCollector
 from fleetsim.scenario import RandomDisturbances
 
 if TYPE_CHECKING:
-    from fleetsim.load.lorr.problem import KeyPlaces
+    from fleetsim.load.lorr.places import KeyPlaces
 
 __all__ = ["DELAY_KEYS", "DelayConfig", "delay_disturbances", "parse_delays"]
 

@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import json
 import math
-import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -30,8 +29,9 @@ from fleetsim.load.common.closest import did_you_mean
 from fleetsim.load.common.collect import ErrorCollector
 from fleetsim.load.common.text import json_problem, read_text_file
 from fleetsim.load.lorr.delays import DelayConfig, parse_delays
+from fleetsim.load.lorr.places import KeyPlaces
 
-__all__ = ["EDITIONS", "PROBLEM_KEYS", "KeyPlaces", "LorrProblem", "read_problem"]
+__all__ = ["EDITIONS", "PROBLEM_KEYS", "LorrProblem", "read_problem"]
 
 EDITIONS = {"2023 lorr": "2023", "2024 lorr": "2024", "2026 lorr": "2026"}
 PROBLEM_KEYS = (
@@ -48,34 +48,6 @@ PROBLEM_KEYS = (
     "delayConfig",
 )
 STRATEGIES = ("greedy", "roundrobin", "roundrobin_fixed")
-_KEY = re.compile(r'"((?:[^"\\]|\\.)*)"\s*:')
-
-
-class KeyPlaces:
-    """Where each key of the problem file is written (line and column of its quotes), for errors: a
-    top-level key's first occurrence, a ``delayConfig`` member's first after ``delayConfig``."""
-
-    def __init__(self, path: Path, text: str) -> None:
-        self.path = path
-        self._found: list[tuple[str, int, int, int]] = []  # key, offset, line, column
-        for match in _KEY.finditer(text):
-            offset = match.start()
-            line = text.count("\n", 0, offset) + 1
-            column = offset - (text.rfind("\n", 0, offset) + 1) + 1
-            self._found.append((match.group(1), offset, line, column))
-
-    def at(self, key: str, within: str | None = None) -> Location:
-        """The location of ``key`` (inside the object member ``within``), with its JSON pointer."""
-        pointer = f"/{within}/{key}" if within else f"/{key}"
-        after = -1
-        if within is not None:
-            after = next((offset for name, offset, _, _ in self._found if name == within), -1)
-            if after < 0:
-                return Location(self.path, field=pointer)
-        for name, offset, line, column in self._found:
-            if name == key and offset > after:
-                return Location(self.path, line=line, column=column, field=pointer)
-        return Location(self.path, field=pointer)
 
 
 @dataclass(frozen=True, slots=True)
