@@ -127,6 +127,29 @@ def test_header_errors_are_reported_with_the_object_errors(tmp_path: Path) -> No
     ]
 
 
+@pytest.mark.parametrize(
+    ("size", "refused"), [(2**31 - 1, False), (2**31, True), (10**400, True)], ids=["2^31-1", "2^31", "10^400"]
+)
+def test_a_map_size_beyond_tileds_32_bits_is_a_located_error_not_an_overflow(
+    tmp_path: Path, size: int, refused: bool
+) -> None:
+    # (Found by the loader mutation test: a size this large made the header's float overflow.)
+    path, tree = loop_tmx(tmp_path)
+    root = tree.getroot()
+    root.set("height", str(size))
+    root.set("tileheight", str(size))
+    tree.write(path)
+    if refused:
+        found = located(failure(path))
+        largest = "it must be at most 2147483647 (Tiled keeps it in 32 bits)"
+        assert [problem for _, _, problem in found] == [
+            f"height is {str(size)!r}; {largest}",
+            f"tileheight is {str(size)!r}; {largest}",
+        ]
+    else:
+        load_map(path)  # the largest Tiled can hold loads (the objects lie far inside it)
+
+
 def test_a_map_that_is_not_a_map_still_stops_at_that_one_error(tmp_path: Path) -> None:
     path, tree = loop_tmx(tmp_path)
     tree.getroot().tag = "tileset"

@@ -26,12 +26,17 @@ class MapHeader:
     meters_per_pixel: float
 
 
+_LARGEST = 2**31 - 1  # Tiled keeps a map's and a tile's sizes in signed 32-bit integers
+
+
 def _positive_int(raw: object, name: str, where: Location) -> int:
     if raw is None:
         raise MapError(f"map attribute {name!r} is missing", where)
     value = as_int(raw, name, where)
     if value <= 0:
         raise MapError(f"{name} is {raw!r}; it must be a positive integer", where)
+    if value > _LARGEST:
+        raise MapError(f"{name} is {raw!r}; it must be at most {_LARGEST} (Tiled keeps it in 32 bits)", where)
     return value
 
 
