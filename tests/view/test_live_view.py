@@ -185,7 +185,15 @@ def test_a_live_run_from_the_command_line_gives_the_headless_result(page: Any, t
     assert match is not None, line
     assert float(match.group(2)) == float(speed)
     started = time.monotonic()
-    page.goto(match.group(1))
+    from playwright.sync_api import Error as PageError
+
+    try:
+        page.goto(match.group(1))
+    except PageError:
+        if speed == "1":
+            raise
+        # At 20x the 2.5 s run lasts an eighth of a second: it may be over, and its server gone, before the
+        # page connects (a loaded machine). What is judged here is the run's result, below.
     out, err = process.communicate(timeout=60)
     elapsed = time.monotonic() - started
     assert process.returncode == headless.returncode == 1  # the time limit, with tasks pending
