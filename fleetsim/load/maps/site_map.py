@@ -63,28 +63,27 @@ def load_site_map(path: str | os.PathLike[str], options: MapOptions | None = Non
     if kind == "movingai":
         return load_movingai(map_path, options)
     if kind == "rmf":
-        return _noting_cell_size(load_building(map_path, options), options)
+        return _noting(load_building(map_path, options), options, ("cell_size",))
     if map_path.suffix.lower() == ".json":
         text = read_text_file(map_path, MapError)
         if kind == "lif" or _LIF_MARK in text:
             document = parse_json(text, map_path)
             if is_lif_document(document):
-                return _noting_cell_size(load_lif(map_path, document, options), options)
+                return _noting(load_lif(map_path, document, options), options, ("cell_size",))
             if kind == "lif":
                 msg = "this .lif.json file is not LIF: its top level needs 'metaInformation' and 'layouts' (1.0) or 'origins' (2.0)"
                 raise MapError(msg, Location(map_path))
     tiled = load_map(map_path)
-    notes = ImportNotes(map_path)
-    for name in options.given():
-        notes.note("option-ignored", f"map option {name!r} (for {_OPTION_FORMAT[name]} maps)", "map_options")
-    warnings = (*tiled.warnings, *notes.warnings())
-    return SiteMap(tiled.path, "tiled", tiled.segments, warnings, tiled.meters_per_pixel, stations=tiled.stations)
+    site = SiteMap(tiled.path, "tiled", tiled.segments, tiled.warnings, tiled.meters_per_pixel, stations=tiled.stations)
+    return _noting(site, options, tuple(_OPTION_FORMAT))
 
 
-def _noting_cell_size(site: SiteMap, options: MapOptions) -> SiteMap:
-    """A LIF or RMF map, with a note when a MovingAI map's ``cell_size`` was given for it."""
-    if options.cell_size is None:
+def _noting(site: SiteMap, options: MapOptions, names: tuple[str, ...]) -> SiteMap:
+    """``site``, with a note for each map option of ``names`` given: one for maps of another format."""
+    given = [name for name in options.given() if name in names]
+    if not given:
         return site
     notes = ImportNotes(site.path)
-    notes.note("option-ignored", "map option 'cell_size' (for MovingAI maps)", "map_options")
+    for name in given:
+        notes.note("option-ignored", f"map option {name!r} (for {_OPTION_FORMAT[name]} maps)", "map_options")
     return replace(site, warnings=(*site.warnings, *notes.warnings()))
