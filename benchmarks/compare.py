@@ -2,6 +2,7 @@
 
     python benchmarks/compare.py REF [--rounds 4] [--vehicles 100] [--planner ReservingPlanner]
                                      [--seconds 60] [--seed 1] [--site warehouse|congestion] [--best-of 3]
+                                     [--compiled]
 
 A shared machine's speed drifts by tens of per cent within minutes, so two figures taken at different
 times cannot tell a change of a few per cent from the drift. This script checks ``REF`` out into a
@@ -14,6 +15,9 @@ many times faster this tree simulates than REF (the ratio of the median real-tim
 the two trees' trace hashes agree (a pure speed-up leaves behaviour, and so the hash, unchanged). The
 scenario is generated once, by this tree's ``warehouse.py`` (``--site``: the lattice with tasks a few
 junctions away, or the congestion site where the fleet queues at a dozen stations), and loaded by both.
+
+``--compiled`` adds a third tree: this tree's optional compiled build (``scripts/compiled_copy.py``, mypyc),
+built in a temporary folder first, so one invocation shows REF, this tree and its compiled build.
 
 ``benchmarks/simulation.py --vs REF`` and ``benchmarks/scale.py --vs REF`` run the same comparison for
 each of their fleet sizes (:func:`side_by_side`).
@@ -34,8 +38,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from warehouse import write_congestion_scenario, write_fleet_scenario
+
+from scripts.compiled_copy import build_compiled_copy
 
 # Site generators: (folder, vehicles, seed=...) -> the folder written.
 SITES: dict[str, Callable[..., Path]] = {"warehouse": write_fleet_scenario, "congestion": write_congestion_scenario}
@@ -95,8 +102,9 @@ class Case:
 
 
 @contextmanager
-def trees(ref: str) -> Iterator[dict[str, Path]]:
-    """``REF`` checked out in a temporary worktree, beside this tree: name -> folder."""
+def trees(ref: str, compiled: bool = False) -> Iterator[dict[str, Path]]:
+    """``REF`` checked out in a temporary worktree, beside this tree (and with ``compiled`` this tree's
+    compiled build, ``scripts/compiled_copy.py``): name -> folder."""
     commit = subprocess.run(
         ["git", "rev-parse", "--verify", f"{ref}^{{commit}}"], cwd=HERE, capture_output=True, text=True
     )
@@ -107,7 +115,11 @@ def trees(ref: str) -> Iterator[dict[str, Path]]:
         worktree = Path(tmp) / "ref"
         subprocess.run(["git", "worktree", "add", "--detach", "-q", str(worktree), sha], cwd=HERE, check=True)
         try:
-            yield {f"{ref} ({sha[:10]})": worktree, "this tree": HERE}
+            both = {f"{ref} ({sha[:10]})": worktree, "this tree": HERE}
+            if compiled:
+                print("building this tree's compiled build (mypyc, about a minute) ...", flush=True)
+                both["this tree, compiled"] = build_compiled_copy(Path(tmp) / "compiled")
+            yield both
         finally:
             subprocess.run(["git", "worktree", "remove", "--force", str(worktree)], cwd=HERE, check=False)
 
@@ -136,9 +148,10 @@ def side_by_side(both: dict[str, Path], case: Case, rounds: int) -> Results:
     return results
 
 
-def compare_cases(ref: str, cases: Iterable[Case], rounds: int) -> None:
-    """Each of ``cases`` side by side in ``ref`` and this tree, reported one after the other."""
-    with trees(ref) as both:
+def compare_cases(ref: str, cases: Iterable[Case], rounds: int, compiled: bool = False) -> None:
+    """Each of ``cases`` side by side in ``ref`` and this tree (and its compiled build), reported one after
+    the other."""
+    with trees(ref, compiled) as both:
         for case in cases:
             report(side_by_side(both, case, rounds), case, rounds)
             print()
@@ -152,6 +165,7 @@ def column(results: list[dict[str, float | str]], key: str, form: str) -> str:
 
 def report(results: Results, case: Case, rounds: int) -> float:
     """Print the comparison; returns how many times faster the last tree simulates than the first."""
+    # The ratio of the median real-time factors of each later tree against the first (REF).
     print(
         f"{case.site} site, {case.vehicles} vehicles, {case.planner}, {case.seconds:g} s simulated; "
         f"{rounds} alternating rounds, fastest of {case.best_of} runs each"
@@ -160,12 +174,13 @@ def report(results: Results, case: Case, rounds: int) -> float:
         print(f"  {name}")
         for label, key, form in FIGURES:
             print(f"    {label:<22} {column(figures, key, form)}")
-    before, after = (statistics.median(float(r["realtime"]) for r in figures) for figures in results.values())
-    first = next(iter(results))
-    print(f"  this tree simulates {after / before:.2f}x as fast as {first}")
+    medians = {name: statistics.median(float(r["realtime"]) for r in figures) for name, figures in results.items()}
+    first, *later = medians
+    for name in later:
+        print(f"  {name} simulates {medians[name] / medians[first]:.2f}x as fast as {first}")
     hashes = {str(r["hash"]) for figures in results.values() for r in figures}
     print("  trace hashes agree" if len(hashes) == 1 else f"  trace hashes DIFFER: {sorted(h[:12] for h in hashes)}")
-    return after / before
+    return medians[later[-1]] / medians[first]
 
 
 def main() -> int:
@@ -180,9 +195,10 @@ def main() -> int:
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--site", choices=SITES, default="warehouse")
     parser.add_argument("--best-of", type=int, default=3)
+    parser.add_argument("--compiled", action="store_true", help="also run this tree's compiled build (mypyc)")
     args = parser.parse_args()
     case = Case(args.vehicles, args.seconds, args.planner, args.site, args.seed, args.best_of)
-    compare_cases(args.ref, [case], args.rounds)
+    compare_cases(args.ref, [case], args.rounds, args.compiled)
     return 0
 
 

@@ -1,7 +1,7 @@
 """Does the harness cost the same per vehicle whatever the fleet size? 100, 1,000 and 10,000 vehicles.
 
     python benchmarks/scale.py [--sizes 100,1000,10000] [--seconds 60] [--repeat 3] [--planner BFSPlanner]
-                               [--vs REF]
+                               [--vs REF [--compiled]]
 
 Each size gets a generated warehouse sized to the fleet (``warehouse.write_fleet_scenario``: about four
 aisles per vehicle, 2-3 tasks each, seeded), written once in a process of its own. Each repeat loads it
@@ -17,6 +17,7 @@ trace hash of every repeat of a size must be the same (the script fails otherwis
 ``--vs REF`` compares this tree with commit REF instead, side by side in one invocation: each size in
 both trees in alternating fresh processes, ``--repeat`` rounds (``benchmarks/compare.py``): harness and
 planner time per vehicle-step, peak memory, the speed-up and whether the hashes agree.
+``--compiled`` adds this tree's optional compiled build (mypyc) as a third tree.
 
 Targets (issue 18): harness µs per vehicle-step at 1,000 vehicles <= 1.2x the figure at 100, at
 10,000 <= 1.5x; a 10,000-vehicle scenario simulates 60 s to the end in under 4 GiB.
@@ -95,10 +96,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--child", type=int, help=argparse.SUPPRESS)
     parser.add_argument("--folder", type=Path, help=argparse.SUPPRESS)
     parser.add_argument("--vs", metavar="REF", help="compare with commit REF side by side instead")
+    parser.add_argument(
+        "--compiled", action="store_true", help="with --vs: also run this tree's compiled build (mypyc)"
+    )
     args = parser.parse_args(argv)
     if args.vs is not None:
         cases = [Case(int(part), args.seconds, args.planner, best_of=1) for part in args.sizes.split(",")]
-        compare_cases(args.vs, cases, args.repeat)
+        compare_cases(args.vs, cases, args.repeat, args.compiled)
         return 0
     if args.write is not None:
         print(json.dumps(write_one(args.write, args.folder)))

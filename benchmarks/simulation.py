@@ -3,7 +3,7 @@
     python benchmarks/simulation.py [--sizes 10,100,1000] [--time-limit 60] [--large-time-limit 5]
                                     [--planning-period 0.1] [--seed 1] [--repeat 1] [--phases]
                                     [--profile 100:ReservingPlanner] [--top 30] [--site warehouse]
-                                    [--vs REF [--rounds 3]]
+                                    [--vs REF [--rounds 3] [--compiled]]
 
 Targets (issue): 100 vehicles with ReservingPlanner run at >= 20x realtime with the harness's own share
 of wall time <= 25 %, and 1000 vehicles run at all.
@@ -34,6 +34,7 @@ loop itself.
 ReservingPlanner on the chosen site in both trees in alternating fresh processes, ``--rounds`` rounds of
 the fastest of ``--repeat`` runs (``benchmarks/compare.py``): real-time factor, planner and harness time
 per vehicle-step, planner time per call, calls, peak memory, the speed-up and whether the hashes agree.
+``--compiled`` adds this tree's optional compiled build (mypyc) as a third tree.
 
 ``--profile SIZE:PLANNER`` runs that case once more under cProfile and prints its own time by module
 and the functions with the most own time (cProfile slows pure-Python code about 2x; read shares, not
@@ -234,6 +235,9 @@ def main() -> int:
     parser.add_argument("--top", type=int, default=30, help="functions listed with --profile")
     parser.add_argument("--site", choices=SITES, default="warehouse")
     parser.add_argument("--vs", metavar="REF", help="compare with commit REF side by side instead")
+    parser.add_argument(
+        "--compiled", action="store_true", help="with --vs: also run this tree's compiled build (mypyc)"
+    )
     parser.add_argument("--rounds", type=int, default=3, help="alternating rounds per size with --vs")
     args = parser.parse_args()
     if args.repeat < 1:
@@ -244,7 +248,7 @@ def main() -> int:
                  args.site, args.seed, args.repeat)
             for size in args.sizes
         ]  # fmt: skip
-        compare_cases(args.vs, cases, args.rounds)
+        compare_cases(args.vs, cases, args.rounds, args.compiled)
         return 0
 
     def settings(size: int) -> ScenarioSettings:

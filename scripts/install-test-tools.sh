@@ -2,7 +2,7 @@
 # Installs everything fleetsim's tests drive, so that a run of `python -m pytest -n 2` skips nothing:
 # Debian's Tiled (the integration tests drive the real editor headless), Node.js (a planner in another
 # language), Chromium (the reports and the viewer in a real headless browser), mosquitto (the VDA 5050
-# tests against a real MQTT broker); fleetsim with its test extras; the npm packages of the independent
+# tests against a real MQTT broker), a C compiler (the optional compiled build, built with mypyc); fleetsim with its test extras; the npm packages of the independent
 # VDA 5050 master control and schema validators (tests/vda5050/node), exactly as locked.
 # Used by the README's test command and by .ci/run. Needs root (or sudo) for apt-get on Debian/Ubuntu.
 set -euo pipefail
@@ -14,6 +14,7 @@ command -v tiled >/dev/null 2>&1 || packages+=(tiled)
 command -v node >/dev/null 2>&1 || packages+=(nodejs)
 command -v npm >/dev/null 2>&1 || packages+=(npm)
 command -v chromium >/dev/null 2>&1 || packages+=(chromium)
+command -v gcc >/dev/null 2>&1 || packages+=(gcc)
 { command -v mosquitto >/dev/null 2>&1 || [ -x /usr/sbin/mosquitto ]; } || packages+=(mosquitto)
 if [ ${#packages[@]} -gt 0 ]; then
     sudo=""

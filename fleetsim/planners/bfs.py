@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import ClassVar
+
+from mypy_extensions import mypyc_attr
 
 from fleetsim.layout.layout import Layout
 from fleetsim.planners.routing import breadth_first_route, legs_along, mark_goal_on_fixed
@@ -13,6 +16,8 @@ from fleetsim.scenario import Task
 __all__ = ["BFSPlanner"]
 
 
+# Users subclass the reference planners; the compiled build (fleetsim/compiled.py) must let them.
+@mypyc_attr(allow_interpreted_subclasses=True)
 class BFSPlanner:
     """Breadth-first route over the connection graph, honouring segment direction and progress rules.
 
@@ -21,7 +26,7 @@ class BFSPlanner:
     so that suites can show what a caught planner bug looks like.
     """
 
-    fix_horizon = 3
+    fix_horizon: ClassVar[int] = 3  # a class variable, so that a subclass may change it (compiled too)
 
     def plan_routes(self, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
         vehicle_id = task.vehicle_id

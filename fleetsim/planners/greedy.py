@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+from mypy_extensions import mypyc_attr
+
 from fleetsim.layout.layout import Layout
 from fleetsim.planners.bfs import BFSPlanner
 from fleetsim.planning.plans import FleetPlan, Response
@@ -13,6 +15,8 @@ from fleetsim.scenario import Task
 __all__ = ["GreedyPlanner"]
 
 
+# Users subclass the reference planners; the compiled build (fleetsim/compiled.py) must let them.
+@mypyc_attr(allow_interpreted_subclasses=True)
 class GreedyPlanner(BFSPlanner):
     """BFSPlanner's routes (fewest legs), each next leg fixed as soon as no other vehicle's fixed legs
     conflict with it: never an alert, and helpless when vehicles wait for each other (head-on in a
