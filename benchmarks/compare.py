@@ -38,11 +38,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent))
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from warehouse import write_congestion_scenario, write_fleet_scenario
-
-from scripts.compiled_copy import build_compiled_copy
 
 # Site generators: (folder, vehicles, seed=...) -> the folder written.
 SITES: dict[str, Callable[..., Path]] = {"warehouse": write_fleet_scenario, "congestion": write_congestion_scenario}
@@ -117,6 +114,9 @@ def trees(ref: str, compiled: bool = False) -> Iterator[dict[str, Path]]:
         try:
             both = {f"{ref} ({sha[:10]})": worktree, "this tree": HERE}
             if compiled:
+                sys.path.append(str(HERE))  # scripts/, after any fleetsim on PYTHONPATH
+                from scripts.compiled_copy import build_compiled_copy
+
                 print("building this tree's compiled build (mypyc, about a minute) ...", flush=True)
                 both["this tree, compiled"] = build_compiled_copy(Path(tmp) / "compiled")
             yield both

@@ -32,7 +32,14 @@ COMPILED_MODULES = (
     "fleetsim.planners.making_way",
     "fleetsim.planners.reserving",
     "fleetsim.planners.routing",
+    "fleetsim.planning.checks",
+    "fleetsim.planning.controller",
+    "fleetsim.planning.quiet",
     "fleetsim.planning.reservations",
+    "fleetsim.planning.snapshot",
+    "fleetsim.planning.tasks",
+    "fleetsim.planning.views",
+    "fleetsim.sim.loop",
     "fleetsim.sim.trace",
 )
 

@@ -29,7 +29,7 @@ from itertools import chain
 from operator import attrgetter
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any, Literal, cast
+from typing import Any, ClassVar, Literal, cast
 
 import numpy as np
 
@@ -86,10 +86,11 @@ class _Run:
     """The mutable state of one run; everything a result is built from."""
 
     # Cruising vehicles stepped together in arrays (FleetCruise): None, when the fleet is large enough
-    # for that to pay; True or False always or never (for tests that compare the two).
-    batched: bool | None = None
+    # for that to pay; True or False always or never (for tests that compare the two). Class variables,
+    # so that setting them on the class reaches the compiled build too (fleetsim/compiled.py).
+    batched: ClassVar[bool | None] = None
     # A planner's quiet hint honoured (fleetsim.planning.quiet); False for tests that compare the two.
-    quiet = True
+    quiet: ClassVar[bool] = True
 
     def __init__(
         self,

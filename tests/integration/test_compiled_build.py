@@ -28,13 +28,17 @@ END_TO_END = (
     "tests/contact",
     "tests/property/test_batched_motion.py",
     "tests/property/test_quiet_runs.py",
+    "tests/unit/test_checks.py",
+    "tests/unit/test_controller.py",
     "tests/unit/test_loop.py",
     "tests/unit/test_motion.py",
+    "tests/unit/test_planner_faults.py",
     "tests/unit/test_planners.py",
     "tests/unit/test_profile.py",
     "tests/unit/test_reachability.py",
     "tests/unit/test_reference_planner_regressions.py",
     "tests/unit/test_reservations.py",
+    "tests/unit/test_verify.py",
 )
 
 
