@@ -67,6 +67,7 @@ from pathlib import Path
 from typing import Any
 
 from fleetsim import load_scenario, load_suite
+from fleetsim.compiled import compiled_modules
 from fleetsim.dispatch.protocol import Assignment, OrderBoard
 from fleetsim.dispatchers import NearestVehicleDispatcher
 from fleetsim.generate import WarehouseOptions, generate_warehouse
@@ -217,7 +218,7 @@ def run_orders(scenario: Scenario) -> Run:
     dispatcher = TimedDispatcher()
     with bookkeeping_clocks(spent):
         result = run_scenario(scenario, ReservingPlanner(), keep_trace=False, dispatcher=dispatcher)
-    stalls = spent.pop("check_stalls")
+    stalls = spent.pop("check_stalls", 0.0)  # (none with the compiled loop, which the clocks do not reach)
     return Run(result, dispatcher.seconds, sum(spent.values()) - dispatcher.seconds, stalls)
 
 
@@ -240,6 +241,9 @@ def show_measures(result: RunResult) -> None:
     )
 
 
+SHIFT_TARGET = 180.0  # seconds of wall time for the 8-hour shift of 100 vehicles (issue 46)
+
+
 def wall_only(case: Case, seconds: float, repeat: int, folder: Path) -> bool:
     """Run ``case`` with its orders ``repeat`` times; print the wall time (the shift-in-minutes target)."""
     scenario = orders_scenario(case, folder, seconds)
@@ -256,10 +260,13 @@ def wall_only(case: Case, seconds: float, repeat: int, folder: Path) -> bool:
         )
     show_measures(runs[0].result)
     wall = statistics.median(run.result.metrics.wall_time for run in runs)
+    judged = case.name == "shift100" and seconds == 8 * 3600.0  # the target is the whole 8-hour shift
+    verdict = ("met" if wall <= SHIFT_TARGET else "MISSED") if judged else "not judged: not the 8-hour shift100"
     print(
-        f"  wall time: {wall:.1f} s, median of {repeat} ({seconds / wall:.0f}x realtime) [target <= 180 s for 8 h of 100]"
+        f"  wall time: {wall:.1f} s, median of {repeat} ({seconds / wall:.0f}x realtime) "
+        f"[target <= {SHIFT_TARGET:.0f} s for 8 h of 100: {verdict}]"
     )
-    return len({run.result.trace_hash for run in runs}) == 1
+    return len({run.result.trace_hash for run in runs}) == 1 and (not judged or wall <= SHIFT_TARGET)
 
 
 def measure(case: Case, seconds: float, repeat: int, folder: Path) -> bool:
@@ -353,6 +360,9 @@ def main() -> int:
         parser.error(f"--repeat={args.repeat} must be at least 1")
     if not args.hours > 0 or not args.minutes > 0:
         parser.error(f"--hours={args.hours} and --minutes={args.minutes} must be > 0")
+    if not args.orders_only and "fleetsim.sim.loop" in compiled_modules():
+        parser.error("the bookkeeping figures time the loop's methods from outside, which the compiled build's loop "
+                     "does not let them: with it, use --orders-only (the wall time)")  # fmt: skip
     seconds = {"shift": args.hours * 3600.0, "shift100": args.hours * 3600.0, "stretch": args.minutes * 60.0}
     ok = True
     with tempfile.TemporaryDirectory() as tmp:

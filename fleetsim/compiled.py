@@ -10,10 +10,10 @@ answers: every trace hash is the same either way (docs/performance.md, "The comp
 
 from __future__ import annotations
 
-import importlib
-import importlib.machinery
+import importlib.util
+from importlib.machinery import EXTENSION_SUFFIXES
 
-__all__ = ["COMPILED_MODULES", "compiled_modules"]
+__all__ = ["COMPILED_MODULES", "build_note", "compiled_modules"]
 
 # A plain tuple of string literals: setup.py reads it without importing fleetsim.
 COMPILED_MODULES = (
@@ -46,10 +46,18 @@ COMPILED_MODULES = (
 
 def compiled_modules() -> list[str]:
     """The modules of :data:`COMPILED_MODULES` this installation loads from compiled extension modules
-    (empty for the pure-Python install)."""
+    (empty for the pure-Python install). Found without running them."""
     compiled = []
     for name in COMPILED_MODULES:
-        origin = getattr(importlib.import_module(name), "__file__", None) or ""
-        if origin.endswith(tuple(importlib.machinery.EXTENSION_SUFFIXES)):
+        spec = importlib.util.find_spec(name)
+        if spec is not None and (spec.origin or "").endswith(tuple(EXTENSION_SUFFIXES)):
             compiled.append(name)
     return compiled
+
+
+def build_note() -> str:
+    """How this installation runs, for ``fleetsim --version``."""
+    compiled = compiled_modules()
+    if not compiled:
+        return "pure Python"
+    return f"compiled: {len(compiled)} of {len(COMPILED_MODULES)} hot-path modules"

@@ -17,7 +17,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-__all__ = ["build_compiled_copy"]
+__all__ = ["build_compiled_copy", "is_compiled_copy_of"]
 
 HERE = Path(__file__).resolve().parent.parent
 
@@ -52,6 +52,27 @@ def build_compiled_copy(dest: Path, tree: Path = HERE) -> Path:
         raise RuntimeError(f"the compiled build in {dest} failed:\n{built.stdout[-4000:]}\n{built.stderr[-4000:]}")
     shutil.rmtree(dest / "build", ignore_errors=True)  # mypyc's C sources and object files
     return dest
+
+
+def is_compiled_copy_of(dest: Path, tree: Path = HERE) -> bool:
+    """Whether ``dest`` is a compiled build of ``tree`` as it is now: every file the same, and every module
+    of ``fleetsim/compiled.py`` compiled beside its source."""
+    names = _files(tree)
+    if any(not (dest / name).is_file() or (dest / name).read_bytes() != (tree / name).read_bytes() for name in names):
+        return False
+    listed = subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            "from fleetsim.compiled import *; print(len(compiled_modules()) == len(COMPILED_MODULES))",
+        ],
+        cwd=dest,
+        env={**os.environ, "PYTHONPATH": str(dest)},
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    return listed.stdout.strip() == "True"
 
 
 def main() -> int:

@@ -155,12 +155,26 @@ class _CommandParser(argparse.ArgumentParser):
         return super().format_help()
 
 
+class _Version(argparse.Action):
+    """``--version``: the version, and whether the hot paths run compiled (fleetsim/compiled.py), found
+    only when asked."""
+
+    def __init__(self, option_strings: list[str], dest: str, help: str | None = None) -> None:
+        super().__init__(option_strings, dest, nargs=0, default=argparse.SUPPRESS, help=help)
+
+    def __call__(self, parser: argparse.ArgumentParser, *_: object) -> None:
+        from fleetsim.compiled import build_note
+
+        print(f"fleetsim {__version__} ({build_note()})")
+        parser.exit()
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="fleetsim",
         description="Check fleet route planners against scenarios drawn in Tiled.",
     )
-    parser.add_argument("--version", action="version", version=f"fleetsim {__version__}")
+    parser.add_argument("--version", action=_Version, help="show fleetsim's version and build, and exit")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=_CommandParser)
 
     validate = sub.add_parser(

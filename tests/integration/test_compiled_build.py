@@ -2,7 +2,8 @@
 tree, it must give every recorded trace hash and pass the tests that judge runs end to end.
 
 The test suite runs pure Python; this test builds the compiled build (``scripts/compiled_copy.py``, about a
-minute) and runs, with it first on the path, the main job over every shipped suite (each run gated by its
+minute; ``FLEETSIM_COMPILED_TREE`` may name one built beforehand from this same tree, as .ci/run does) and
+runs, with it first on the path, the main job over every shipped suite (each run gated by its
 lock file's hash) and the test modules below, in processes of their own.
 """
 
@@ -18,7 +19,8 @@ from pathlib import Path
 import pytest
 
 from fleetsim.compiled import COMPILED_MODULES, compiled_modules
-from scripts.compiled_copy import build_compiled_copy
+from fleetsim.version import __version__
+from scripts.compiled_copy import build_compiled_copy, is_compiled_copy_of
 from tests.tooling import missing
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -50,6 +52,9 @@ def compiled(tmp_path_factory: pytest.TempPathFactory) -> Path:
         import mypyc  # noqa: F401
     except ImportError:
         missing("the compiled build needs mypyc, which comes with mypy (pip install mypy)")
+    ready = os.environ.get("FLEETSIM_COMPILED_TREE")
+    if ready and is_compiled_copy_of(Path(ready), ROOT):
+        return Path(ready)  # built beforehand from this very tree (.ci/run builds it beside its other steps)
     return build_compiled_copy(tmp_path_factory.mktemp("compiled") / "tree", ROOT)
 
 
@@ -63,6 +68,10 @@ def _python(tree: Path, *arguments: str, timeout: float) -> subprocess.Completed
 
 def test_the_pure_python_install_compiles_nothing() -> None:
     assert compiled_modules() == []
+    version = subprocess.run(
+        [sys.executable, "-m", "fleetsim", "--version"], capture_output=True, text=True, timeout=60, check=True
+    )
+    assert version.stdout.strip() == f"fleetsim {__version__} (pure Python)"
 
 
 def test_every_listed_module_is_compiled_in_the_compiled_build(compiled: Path) -> None:
@@ -77,6 +86,11 @@ def test_every_listed_module_is_compiled_in_the_compiled_build(compiled: Path) -
     assert all(
         Path(origin).is_relative_to(compiled) and origin.endswith(tuple(EXTENSION_SUFFIXES))
         for origin in found.values()
+    )
+    version = _python(compiled, "-m", "fleetsim", "--version", timeout=60)
+    assert (
+        version.stdout.strip()
+        == f"fleetsim {__version__} (compiled: {len(COMPILED_MODULES)} of {len(COMPILED_MODULES)} hot-path modules)"
     )
 
 
