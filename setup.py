@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import ast
 import os
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -35,6 +36,12 @@ def compiled_modules() -> list[str]:
 def extensions() -> list[Any]:
     if os.environ.get("FLEETSIM_COMPILE", "") in ("", "0"):
         return []
+    if "editable_wheel" in sys.argv:
+        raise SystemExit(
+            "FLEETSIM_COMPILE=1 does not make an editable install: the compiled modules would be imported instead "
+            "of the sources you edit. Install without -e, or build a compiled copy of the checkout with "
+            "python -m scripts.compiled_copy DEST and run it with PYTHONPATH=DEST"
+        )
     try:
         from mypyc.build import mypycify
     except ImportError:

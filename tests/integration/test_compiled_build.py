@@ -113,3 +113,19 @@ def test_the_compiled_build_passes_the_end_to_end_tests(compiled: Path) -> None:
     )  # fmt: skip
     assert done.returncode == 0, done.stdout[-6000:] + done.stderr[-2000:]
     assert " passed" in done.stdout and "skipped" not in done.stdout
+
+
+def test_the_compiled_build_refuses_an_editable_install() -> None:
+    """Its compiled modules would be imported instead of the sources a developer edits."""
+    done = subprocess.run(
+        [sys.executable, "setup.py", "editable_wheel"],
+        cwd=ROOT,
+        env={**os.environ, "FLEETSIM_COMPILE": "1"},
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
+    assert done.returncode != 0
+    assert "does not make an editable install" in done.stderr
+    assert "python -m scripts.compiled_copy DEST" in done.stderr
