@@ -72,36 +72,48 @@ _EARLY = 1e-6
 class ReservingPlanner:
     """Shortest routes, fixed to a place where waiting blocks no higher-ranked vehicle; blockers make way."""
 
-    turnaround_penalty: ClassVar[float] = 10.0  # metres added for a cusp: stopping to reverse or turn round takes time
-    oncoming_penalty: ClassVar[float] = (
-        50.0  # metres added for driving a segment that another plan drives the other way
-    )
-    parked_penalty: ClassVar[float] = 1_000.0  # metres added near a vehicle with no tasks left
-    ahead_legs: ClassVar[int] = 6  # how many of a vehicle's next legs others keep clear of when they stop
-    push_after: ClassVar[float] = 1.0  # seconds a vehicle stands blocked before it moves a lower-ranked blocker away
-    stall_after: ClassVar[float] = (
-        5.0  # seconds a vehicle with a free way but nowhere to stop waits before it moves on anyway
-    )
-    push_cooldown: ClassVar[float] = 5.0  # seconds before a vehicle that was moved away is moved again
-    aside_for: ClassVar[float] = (
-        30.0  # seconds a vehicle that stepped aside keeps off the way of those it stepped aside for
-    )
-    replan_interval: ClassVar[float] = (
-        3.0  # seconds a blocked, standing vehicle first waits before looking for another route
-    )
-    max_replan_interval: ClassVar[float] = 16.0  # the longest wait between looks
-    search_limit: ClassVar[int] = 4_000  # states a search for a place to make way in looks at, at most
-    dance_after: ClassVar[float] = (
-        6.0  # seconds a vehicle stands blocked before a few stuck vehicles are moved leg by leg
-    )
-    dance_group: ClassVar[int] = 4  # vehicles moved together at most
-    dance_limit: ClassVar[int] = 20_000  # joint positions the search for their moves looks at, at most
-    dance_retry: ClassVar[float] = 30.0  # seconds before a vehicle whose dance could not be found looks for one again
-    detour_limit: ClassVar[int] = 4_000  # states a search for a way round looks at, at most
-    detour_stretch: ClassVar[float] = 1.1  # a way round at most this much longer (x) is taken ...
-    detour_slack: ClassVar[float] = 2.0  # ... and at most this much longer (+ m)
-    fix_ahead: ClassVar[float] = 4.0  # metres beyond its braking distance a vehicle fixes its way, at most
-    dance_patience: ClassVar[float] = 20.0  # seconds without a move done before a dance is given up
+    # Tunables: class variables, so that a subclass may change them (in the compiled build too).
+
+    # Metres added for a cusp: stopping to reverse or turn round takes time.
+    turnaround_penalty: ClassVar[float] = 10.0
+    # Metres added for driving a segment that another plan drives the other way.
+    oncoming_penalty: ClassVar[float] = 50.0
+    # Metres added near a vehicle with no tasks left.
+    parked_penalty: ClassVar[float] = 1_000.0
+    # How many of a vehicle's next legs others keep clear of when they stop.
+    ahead_legs: ClassVar[int] = 6
+    # Seconds a vehicle stands blocked before it moves a lower-ranked blocker away.
+    push_after: ClassVar[float] = 1.0
+    # Seconds a vehicle with a free way but nowhere to stop waits before it moves on anyway.
+    stall_after: ClassVar[float] = 5.0
+    # Seconds before a vehicle that was moved away is moved again.
+    push_cooldown: ClassVar[float] = 5.0
+    # Seconds a vehicle that stepped aside keeps off the way of those it stepped aside for.
+    aside_for: ClassVar[float] = 30.0
+    # Seconds a blocked, standing vehicle first waits before looking for another route.
+    replan_interval: ClassVar[float] = 3.0
+    # The longest wait between looks.
+    max_replan_interval: ClassVar[float] = 16.0
+    # States a search for a place to make way in looks at, at most.
+    search_limit: ClassVar[int] = 4_000
+    # Seconds a vehicle stands blocked before a few stuck vehicles are moved leg by leg.
+    dance_after: ClassVar[float] = 6.0
+    # Vehicles moved together at most.
+    dance_group: ClassVar[int] = 4
+    # Joint positions the search for their moves looks at, at most.
+    dance_limit: ClassVar[int] = 20_000
+    # Seconds before a vehicle whose dance could not be found looks for one again.
+    dance_retry: ClassVar[float] = 30.0
+    # States a search for a way round looks at, at most.
+    detour_limit: ClassVar[int] = 4_000
+    # A way round at most this much longer (x) is taken ...
+    detour_stretch: ClassVar[float] = 1.1
+    # ... and at most this much longer (+ m).
+    detour_slack: ClassVar[float] = 2.0
+    # Metres beyond its braking distance a vehicle fixes its way, at most.
+    fix_ahead: ClassVar[float] = 4.0
+    # Seconds without a move done before a dance is given up.
+    dance_patience: ClassVar[float] = 20.0
 
     def __init__(self) -> None:
         self._index: FleetIndex | None = None
