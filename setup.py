@@ -24,7 +24,7 @@ from setuptools import setup
 HERE = Path(__file__).resolve().parent
 
 
-def compiled_modules() -> list[str]:
+def listed_modules() -> list[str]:
     """COMPILED_MODULES from fleetsim/compiled.py, read without importing fleetsim."""
     source = HERE / "fleetsim" / "compiled.py"
     for node in ast.parse(source.read_text(encoding="utf-8")).body:
@@ -49,7 +49,7 @@ def extensions() -> list[Any]:
             "FLEETSIM_COMPILE=1 needs mypyc, which comes with mypy: pip install mypy==2.4.1, then build with "
             "pip install --no-build-isolation"
         ) from None
-    paths = [str(Path(*name.split(".")).with_suffix(".py")) for name in compiled_modules()]
+    paths = [str(Path(*name.split(".")).with_suffix(".py")) for name in listed_modules()]
     built = list(mypycify(paths, opt_level=os.environ.get("MYPYC_OPT_LEVEL", "3")))
     for extension in built:
         # The same floating-point results as the interpreter, operation by operation: never fuse a

@@ -164,8 +164,8 @@ def column(results: list[dict[str, float | str]], key: str, form: str) -> str:
 
 
 def report(results: Results, case: Case, rounds: int) -> float:
-    """Print the comparison; returns how many times faster the last tree simulates than the first."""
-    # The ratio of the median real-time factors of each later tree against the first (REF).
+    """Print the comparison: each later tree's median real-time factor against the first's (REF); returns
+    that ratio for the last tree."""
     print(
         f"{case.site} site, {case.vehicles} vehicles, {case.planner}, {case.seconds:g} s simulated; "
         f"{rounds} alternating rounds, fastest of {case.best_of} runs each"
