@@ -85,6 +85,10 @@ class FleetIndex:
         self.ahead_near: dict[int, Counts] = {}
         self.route_near: dict[int, Counts] = {}
         self.drives: dict[Drive, Counts] = {}
+        # When each segment's fixed holders or routes near last changed, in changes counted (``tick``): what
+        # a search read of them still holds while its segments' stamps are no later than when it read them.
+        self.tick = 0
+        self.stamps: dict[int, int] = {}
 
     def refresh(self, fleet: FleetSnapshot) -> None:
         """Count the plans of a snapshot that changed since the last refresh: those the snapshot says changed
@@ -186,12 +190,17 @@ class FleetIndex:
         """Add each ``(key, amount)``: to the segments near the key's segment, or (drives) to the key itself."""
         conflicts = self._conflicts
         near = table is not self.drives
+        stamps = self.stamps if table is self.fixed_near or table is self.route_near else None
+        self.tick += 1
+        tick = self.tick
         for key, amount in changes:
             if not amount:
                 continue
             if near:
                 for segment in conflicts[key]:  # type: ignore[index]
                     _add(table, segment, vehicle, amount)
+                    if stamps is not None:
+                        stamps[segment] = tick
             else:
                 _add(table, key, vehicle, amount)
 

@@ -14,6 +14,7 @@ import math
 from collections.abc import Callable
 from collections.abc import Set as AbstractSet
 from dataclasses import dataclass
+from typing import ClassVar
 
 from fleetsim.enums import JointKind, TurnCapability
 from fleetsim.layout.layout import Layout
@@ -21,7 +22,7 @@ from fleetsim.layout.reachability import State, state_key
 from fleetsim.planners.fleet_index import FleetIndex
 from fleetsim.planners.routing import StepTable, rebuild_path
 
-__all__ = ["WayOut", "ways_out"]
+__all__ = ["WayOut", "WaysOutMemo", "ways_out"]
 
 _CROSSING_PENALTY = 30.0  # metres added for driving where a movable vehicle stands
 
@@ -57,10 +58,56 @@ def ways_out(
     Nothing changes during a search, so each segment's holders and each vehicle's ``movable`` are asked
     once per search.
     """
-    steps = (table if table is not None else StepTable(layout, capability)).steps
+    steps = table if table is not None else StepTable(layout, capability)
+    return _search(vehicle, start, avoid, index, lengths, movable, turnaround, limit, wanted, steps).ways
+
+
+@dataclass(slots=True)
+class _Found:
+    """A search's ways out and everything it read, as it was at the index's ``tick``: each segment's holders
+    and each place's count of routes near, and the vehicles it asked whether they may be moved, with the
+    answers in the order asked."""
+
+    ways: list[WayOut]
+    tick: int
+    held: tuple[tuple[int, list[int]], ...]
+    routes: tuple[tuple[int, int], ...]
+    asked: tuple[tuple[int, bool], ...]
+
+    def holds(self, vehicle: int, index: FleetIndex, movable: Callable[[int], bool]) -> bool:
+        """Whether the search would read the same now (and so find the same ways). A segment stamped later
+        than the search may hold what it held then (a plan counted and taken back, say): it is read again."""
+        stamps, tick = index.stamps, self.tick
+        for segment, holders in self.held:
+            if stamps.get(segment, 0) > tick and index.holders(vehicle, segment) != holders:
+                return False
+        for segment, count in self.routes:
+            if stamps.get(segment, 0) > tick and index.routes_near(vehicle, segment) != count:
+                return False
+        if not all(movable(other) == answer for other, answer in self.asked):
+            return False
+        self.tick = index.tick  # read again: as it is now
+        return True
+
+
+def _search(
+    vehicle: int,
+    start: State,
+    avoid: AbstractSet[int],
+    index: FleetIndex,
+    lengths: dict[int, float],
+    movable: Callable[[int], bool],
+    turnaround: float,
+    limit: int,
+    wanted: int,
+    table: StepTable,
+) -> _Found:
+    steps = table.steps
     held: dict[int, list[int]] = {}  # segment -> its holders (other than the vehicle)
     # segment -> what crossing it adds (for the movable vehicles holding it), None: held by one that is not
     crossing_cost: dict[int, float | None] = {}
+    asked: dict[int, bool] = {}  # vehicle -> whether it may be moved
+    routes: list[tuple[int, int]] = []  # the places found, and how many routes come near each
 
     def holders(segment: int) -> list[int]:
         found = held.get(segment)
@@ -68,10 +115,16 @@ def ways_out(
             found = held[segment] = index.holders(vehicle, segment)
         return found
 
+    def may_move(other: int) -> bool:
+        answer = asked.get(other)
+        if answer is None:
+            answer = asked[other] = movable(other)
+        return answer
+
     def extra(segment: int) -> float | None:
         others = holders(segment)
         cost = crossing_cost[segment] = (
-            _CROSSING_PENALTY * len(others) if all(movable(other) for other in others) else None
+            _CROSSING_PENALTY * len(others) if all(may_move(other) for other in others) else None
         )
         return cost
 
@@ -88,7 +141,9 @@ def ways_out(
         if state != start and state[0] not in avoid and not holders(state[0]):
             path = rebuild_path(came_from, state)
             crossing = sorted({other for s, _, _ in path for other in holders(s)})
-            found.append(WayOut(tuple(path), tuple(crossing), index.routes_near(vehicle, state[0]), spent))
+            near = index.routes_near(vehicle, state[0])
+            routes.append((state[0], near))
+            found.append(WayOut(tuple(path), tuple(crossing), near, spent))
             continue  # a place to wait: no need to drive on through it
         for following, joint, key in steps(state):
             segment = following[0]
@@ -101,4 +156,50 @@ def ways_out(
                 best[following] = total
                 came_from[following] = state
                 heapq.heappush(heap, (total, key, following))
-    return sorted(found, key=lambda way: (bool(way.crossing), way.routes_near, way.cost, state_key(way.path[-1])))
+    ways = sorted(found, key=lambda way: (bool(way.crossing), way.routes_near, way.cost, state_key(way.path[-1])))
+    return _Found(ways, index.tick, tuple(held.items()), tuple(routes), tuple(asked.items()))
+
+
+class WaysOutMemo:
+    """Ways out found, given again while nothing the search read has changed.
+
+    A vehicle that stands blocked is asked about on every planning round, and looks for the same ways out
+    for itself and its blockers each time, in a fleet that has mostly not changed where the search looked
+    (in a congested shift nearly every search repeats one of the step before). A search reads the holders
+    of the segments it reached and the routes near the places it found (the fleet index stamps each
+    segment when those change) and asks some vehicles whether they may be moved. A search with the same
+    arguments whose segments are unchanged and whose vehicles answer the same again (asked again, in the
+    same order, as the search would) would find the same ways: those are given, and the search is not
+    made. The answers are exactly the searches'.
+    """
+
+    # Searches kept at most; when full, all are forgotten (a shift makes a few thousand distinct ones a
+    # minute, nearly all of them repeated minutes on end).
+    capacity: ClassVar[int] = 50_000
+
+    def __init__(self) -> None:
+        self._found: dict[tuple[object, ...], _Found] = {}
+
+    def ways_out(
+        self,
+        vehicle: int,
+        start: State,
+        avoid: AbstractSet[int],
+        index: FleetIndex,
+        lengths: dict[int, float],
+        movable: Callable[[int], bool],
+        *,
+        turnaround: float,
+        limit: int,
+        table: StepTable,
+        wanted: int = 6,
+    ) -> list[WayOut]:
+        """As :func:`ways_out`, the layout's steps (``table``, for the vehicle's turn capability) given."""
+        key = (vehicle, start, frozenset(avoid), table.capability, turnaround, limit, wanted)
+        found = self._found.get(key)
+        if found is None or not found.holds(vehicle, index, movable):
+            found = _search(vehicle, start, avoid, index, lengths, movable, turnaround, limit, wanted, table)
+            if len(self._found) >= self.capacity:
+                self._found.clear()
+            self._found[key] = found
+        return found.ways

@@ -45,7 +45,7 @@ from fleetsim.layout.layout import Layout
 from fleetsim.layout.reachability import State, next_states
 from fleetsim.planners.choreography import Dance, choreograph
 from fleetsim.planners.fleet_index import FleetIndex
-from fleetsim.planners.making_way import WayOut, ways_out
+from fleetsim.planners.making_way import WayOut, WaysOutMemo
 from fleetsim.planners.routing import (
     StepTable,
     legs_along,
@@ -120,6 +120,7 @@ class ReservingPlanner:
         self._layout: Layout | None = None
         self._lengths: dict[int, float] = {}
         self._tables: dict[TurnCapability, StepTable] = {}  # the layout's steps, per turn capability
+        self._ways_out = WaysOutMemo()  # the searches for ways out, made again only when what they read changed
         self._near_cache: dict[int, tuple[FleetPlan, frozenset[int]]] = {}  # vehicle -> (plan, its _near)
         self._since: dict[int, tuple[int, float]] = {}  # vehicle -> (head task, when it became the head)
         self._blocked: dict[int, float] = {}  # vehicle -> since when it stands unable to fix a leg
@@ -541,10 +542,9 @@ class ReservingPlanner:
         capability = fleet.vehicles[vehicle_id].type.turn_capability
         lengths, turnaround, limit = self._lengths, self.turnaround_penalty, self.search_limit
         table = self._table(layout, capability)
-        for way in ways_out(
-            vehicle_id, start, capability, avoid, layout, index, lengths, movable,
-            turnaround=turnaround, limit=limit, table=table,
-        ):  # fmt: skip
+        for way in self._ways_out.ways_out(
+            vehicle_id, start, avoid, index, lengths, movable, turnaround=turnaround, limit=limit, table=table
+        ):
             others: list[FleetPlan] = []
             replaced: list[tuple[int, FleetPlan | None]] = []  # what the index counted before, to undo
             region = (
@@ -582,8 +582,8 @@ class ReservingPlanner:
         current = fleet.plans[vehicle_id].legs[0]
         start: State = (current.segment, current.traverse, current.progress)
         capability = fleet.vehicles[vehicle_id].type.turn_capability
-        ways = ways_out(
-            vehicle_id, start, capability, avoid, layout, index, self._lengths, lambda other: other == past,
+        ways = self._ways_out.ways_out(
+            vehicle_id, start, avoid, index, self._lengths, lambda other: other == past,
             turnaround=self.turnaround_penalty, limit=self.search_limit, wanted=1, table=self._table(layout, capability),
         )  # fmt: skip
         return {near for segment, _, _ in ways[0].path for near in layout.conflicts(segment)} if ways else set()
