@@ -174,11 +174,13 @@ class WaysOutMemo:
     """
 
     # Searches kept at most; when full, all are forgotten (a shift makes a few thousand distinct ones a
-    # minute, nearly all of them repeated minutes on end).
+    # minute, nearly all of them repeated minutes on end). 0: none kept (every search made).
     capacity: ClassVar[int] = 50_000
 
     def __init__(self) -> None:
         self._found: dict[tuple[object, ...], _Found] = {}
+        self.asked = 0  # ways out asked for
+        self.searched = 0  # searches made for them
 
     def ways_out(
         self,
@@ -195,11 +197,14 @@ class WaysOutMemo:
         wanted: int = 6,
     ) -> list[WayOut]:
         """As :func:`ways_out`, the layout's steps (``table``, for the vehicle's turn capability) given."""
+        self.asked += 1
         key = (vehicle, start, frozenset(avoid), table.capability, turnaround, limit, wanted)
         found = self._found.get(key)
         if found is None or not found.holds(vehicle, index, movable):
+            self.searched += 1
             found = _search(vehicle, start, avoid, index, lengths, movable, turnaround, limit, wanted, table)
             if len(self._found) >= self.capacity:
                 self._found.clear()
-            self._found[key] = found
+            if self.capacity:
+                self._found[key] = found
         return found.ways
