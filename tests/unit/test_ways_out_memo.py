@@ -42,8 +42,9 @@ def _standing_on(vehicle: int, segment: int) -> FleetPlan:
 def _ask(memo: WaysOutMemo, index: FleetIndex, movable: Callable[[int], bool], avoid: AbstractSet[int]) -> list[WayOut]:
     found = memo.ways_out(1, START, avoid, index, LENGTHS, movable, turnaround=10.0, limit=4_000, table=TABLE)
     fresh = ways_out(
-        1, START, TurnCapability.IN_PLACE, avoid, LAYOUT, index, LENGTHS, movable, turnaround=10.0, limit=4_000, table=TABLE
-    )
+        1, START, TurnCapability.IN_PLACE, avoid, LAYOUT, index, LENGTHS, movable,
+        turnaround=10.0, limit=4_000, table=TABLE,
+    )  # fmt: skip
     assert found == fresh
     return found
 
@@ -138,8 +139,9 @@ class _Checking(WaysOutMemo):
         wanted: int = 6,
     ) -> list[WayOut]:
         found = super().ways_out(
-            vehicle, start, avoid, index, lengths, movable, turnaround=turnaround, limit=limit, table=table, wanted=wanted
-        )
+            vehicle, start, avoid, index, lengths, movable,
+            turnaround=turnaround, limit=limit, table=table, wanted=wanted,
+        )  # fmt: skip
         fresh = ways_out(
             vehicle, start, table.capability, avoid, table.layout, index, lengths, movable,
             turnaround=turnaround, limit=limit, wanted=wanted, table=table,
