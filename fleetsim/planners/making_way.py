@@ -171,14 +171,19 @@ class WaysOutMemo:
     arguments whose segments are unchanged and whose vehicles answer the same again (asked again, in the
     same order, as the search would) would find the same ways: those are given, and the search is not
     made. The answers are exactly the searches'.
+
+    The last ``variants`` searches with the same arguments are kept: a blocked vehicle's helpers are
+    searched for with and without the plans of those moved before them, in turn, on every round.
     """
 
     # Searches kept at most; when full, all are forgotten (a shift makes a few thousand distinct ones a
     # minute, nearly all of them repeated minutes on end). 0: none kept (every search made).
     capacity: ClassVar[int] = 50_000
+    # Searches kept per arguments, the latest first.
+    variants: ClassVar[int] = 2
 
     def __init__(self) -> None:
-        self._found: dict[tuple[object, ...], _Found] = {}
+        self._found: dict[tuple[object, ...], list[_Found]] = {}
         self.asked = 0  # ways out asked for
         self.searched = 0  # searches made for them
 
@@ -199,12 +204,19 @@ class WaysOutMemo:
         """As :func:`ways_out`, the layout's steps (``table``, for the vehicle's turn capability) given."""
         self.asked += 1
         key = (vehicle, start, frozenset(avoid), table.capability, turnaround, limit, wanted)
-        found = self._found.get(key)
-        if found is None or not found.holds(vehicle, index, movable):
-            self.searched += 1
-            found = _search(vehicle, start, avoid, index, lengths, movable, turnaround, limit, wanted, table)
-            if len(self._found) >= self.capacity:
-                self._found.clear()
-            if self.capacity:
-                self._found[key] = found
+        kept = self._found.get(key)
+        if kept is not None:
+            for found in kept:
+                if found.holds(vehicle, index, movable):
+                    return found.ways
+        self.searched += 1
+        found = _search(vehicle, start, avoid, index, lengths, movable, turnaround, limit, wanted, table)
+        if len(self._found) >= self.capacity:
+            self._found.clear()
+        if self.capacity:
+            if kept is None:
+                self._found[key] = [found]
+            else:
+                kept.insert(0, found)
+                del kept[self.variants :]
         return found.ways

@@ -73,12 +73,26 @@ def test_a_change_where_the_search_looked_makes_it_again_and_one_taken_back_does
     first = _ask(memo, index, _nobody, {1, 2})
     index.assume(2, _standing_on(2, 4))  # now next to segment 3, where the way ended
     assert _ask(memo, index, _nobody, {1, 2}) == [] and memo.searched == 2  # 3 is held, and 4 and 5 past it
-    index.assume(2, _standing_on(2, 6))
-    assert _ask(memo, index, _nobody, {1, 2}) == first and memo.searched == 3
     # Moved and moved back between two questions: the segments are stamped later, their holders the same.
-    index.assume(2, _standing_on(2, 4))
     index.assume(2, _standing_on(2, 6))
-    assert _ask(memo, index, _nobody, {1, 2}) == first and memo.searched == 3
+    index.assume(2, _standing_on(2, 3))
+    index.assume(2, _standing_on(2, 4))
+    assert _ask(memo, index, _nobody, {1, 2}) == [] and memo.searched == 2
+
+
+def test_the_last_two_fleets_a_search_was_made_in_are_kept() -> None:
+    # (A vehicle's way out is searched with and without the plans of the vehicles moved before it, in turn.)
+    index, memo = FleetIndex(LAYOUT, 6), WaysOutMemo()
+    index.assume(2, _standing_on(2, 6))
+    first = _ask(memo, index, _nobody, {1, 2})
+    index.assume(2, _standing_on(2, 4))
+    assert _ask(memo, index, _nobody, {1, 2}) == []
+    index.assume(2, _standing_on(2, 6))
+    assert _ask(memo, index, _nobody, {1, 2}) is first and memo.searched == 2
+    index.assume(2, _standing_on(2, 3))  # a third: the first is forgotten
+    assert _ask(memo, index, _nobody, {1, 2}) == [] and memo.searched == 3
+    index.assume(2, _standing_on(2, 6))
+    assert _ask(memo, index, _nobody, {1, 2}) == first and memo.searched == 4
 
 
 def test_a_change_far_from_where_the_search_looked_keeps_its_ways() -> None:
