@@ -70,7 +70,7 @@ def test_an_unchanged_fleet_is_not_searched_again() -> None:
 def test_a_change_where_the_search_looked_makes_it_again_and_one_taken_back_does_not() -> None:
     index, memo = FleetIndex(LAYOUT, 6), WaysOutMemo()
     index.assume(2, _standing_on(2, 6))
-    first = _ask(memo, index, _nobody, {1, 2})
+    assert _places(_ask(memo, index, _nobody, {1, 2})) == [(3, ())]
     index.assume(2, _standing_on(2, 4))  # now next to segment 3, where the way ended
     assert _ask(memo, index, _nobody, {1, 2}) == [] and memo.searched == 2  # 3 is held, and 4 and 5 past it
     # Moved and moved back between two questions: the segments are stamped later, their holders the same.
