@@ -77,15 +77,17 @@ class _Found:
     def holds(self, vehicle: int, index: FleetIndex, movable: Callable[[int], bool]) -> bool:
         """Whether the search would read the same now (and so find the same ways). A segment stamped later
         than the search may hold what it held then (a plan counted and taken back, say): it is read again."""
-        stamps, tick = index.stamps, self.tick
-        for segment, holders in self.held:
-            if stamps.get(segment, 0) > tick and index.holders(vehicle, segment) != holders:
+        if index.tick != self.tick:
+            stamps, tick = index.stamps, self.tick
+            for segment, holders in self.held:
+                if stamps.get(segment, 0) > tick and index.holders(vehicle, segment) != holders:
+                    return False
+            for segment, count in self.routes:
+                if stamps.get(segment, 0) > tick and index.routes_near(vehicle, segment) != count:
+                    return False
+        for other, answer in self.asked:
+            if movable(other) != answer:
                 return False
-        for segment, count in self.routes:
-            if stamps.get(segment, 0) > tick and index.routes_near(vehicle, segment) != count:
-                return False
-        if not all(movable(other) == answer for other, answer in self.asked):
-            return False
         self.tick = index.tick  # read again: as it is now
         return True
 
@@ -184,6 +186,8 @@ class WaysOutMemo:
 
     def __init__(self) -> None:
         self._found: dict[tuple[object, ...], list[_Found]] = {}
+        # (id of the area, id of the way) -> (the area, the way, the area with the segments near the way)
+        self._regions: dict[tuple[int, int], tuple[AbstractSet[int], WayOut, frozenset[int]]] = {}
         self.asked = 0  # ways out asked for
         self.searched = 0  # searches made for them
 
@@ -220,3 +224,20 @@ class WaysOutMemo:
                 kept.insert(0, found)
                 del kept[self.variants :]
         return found.ways
+
+    def widened(self, avoid: AbstractSet[int], start: State, way: WayOut, layout: Layout) -> frozenset[int]:
+        """``avoid`` and the segments near ``start`` and ``way``'s drive (the way out of a search from
+        ``start``): where those the way crosses must go out of. Kept for an ``avoid`` that cannot change (a
+        frozenset), so that the same area is the same object, whose hash is worked out once."""
+        key = (id(avoid), id(way))
+        kept = self._regions.get(key)
+        if kept is not None and kept[0] is avoid and kept[1] is way:
+            return kept[2]
+        region = frozenset(avoid).union(
+            near for segment, _, _ in (start, *way.path) for near in layout.conflicts(segment)
+        )
+        if self.capacity and isinstance(avoid, frozenset):
+            if len(self._regions) >= self.capacity:
+                self._regions.clear()
+            self._regions[key] = (avoid, way, region)
+        return region

@@ -547,11 +547,8 @@ class ReservingPlanner:
         ):
             others: list[FleetPlan] = []
             replaced: list[tuple[int, FleetPlan | None]] = []  # what the index counted before, to undo
-            region = (
-                avoid | {near for segment, _, _ in (start, *way.path) for near in layout.conflicts(segment)}
-                if way.crossing
-                else avoid  # (no one to move out of it)
-            )
+            # (No one to move out of it when it crosses no one.)
+            region = self._ways_out.widened(avoid, start, way, layout) if way.crossing else avoid
             for other in way.crossing:
                 plans = self._evacuate(other, region, above, fleet, layout, index, taken, depth=depth - 1)
                 if plans is None:
