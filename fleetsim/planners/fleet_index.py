@@ -89,6 +89,7 @@ class FleetIndex:
         # a search read of them still holds while its segments' stamps are no later than when it read them.
         self.tick = 0
         self.stamps: dict[int, int] = {}
+        self.drive_stamps: dict[int, int] = {}  # ... and when a plan driving it either way changed
 
     def refresh(self, fleet: FleetSnapshot) -> None:
         """Count the plans of a snapshot that changed since the last refresh: those the snapshot says changed
@@ -203,6 +204,7 @@ class FleetIndex:
                         stamps[segment] = tick
             else:
                 _add(table, key, vehicle, amount)
+                self.drive_stamps[key[0]] = tick  # type: ignore[index]
 
     # -- questions -----------------------------------------------------------------------------------
 

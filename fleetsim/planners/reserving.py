@@ -47,6 +47,9 @@ from fleetsim.planners.choreography import Dance, choreograph
 from fleetsim.planners.fleet_index import FleetIndex
 from fleetsim.planners.making_way import WayOut, WaysOutMemo
 from fleetsim.planners.routing import (
+    RouteFound,
+    RouteRead,
+    RoutesMemo,
     StepTable,
     legs_along,
     mark_goal_on_fixed,
@@ -120,7 +123,8 @@ class ReservingPlanner:
         self._layout: Layout | None = None
         self._lengths: dict[int, float] = {}
         self._tables: dict[TurnCapability, StepTable] = {}  # the layout's steps, per turn capability
-        self._ways_out = WaysOutMemo()  # the searches for ways out, made again only when what they read changed
+        self._ways_out = WaysOutMemo()
+        self._routes = RoutesMemo()  # routes to goals, searched again only when what they read changed  # the searches for ways out, made again only when what they read changed
         self._near_cache: dict[int, tuple[FleetPlan, frozenset[int]]] = {}  # vehicle -> (plan, its _near)
         self._since: dict[int, tuple[int, float]] = {}  # vehicle -> (head task, when it became the head)
         self._blocked: dict[int, float] = {}  # vehicle -> since when it stands unable to fix a leg
@@ -732,36 +736,55 @@ class ReservingPlanner:
         for other, queue in fleet.tasks.items():
             if other != vehicle_id and not queue:
                 parked |= layout.conflicts(fleet.vehicles[other].segment)
+        capability = fleet.vehicles[vehicle_id].type.turn_capability
+        start = (last.segment, last.traverse, last.progress)
+        avoid_held = within is not None
+        # A route to the goal by any segment is remembered (RoutesMemo): the same question asked again while
+        # what the search read is unchanged has the same answer.
+        key = (vehicle_id, task.id, task.goal_segment, task.goal_progress, start, capability)
+        if not avoid_held:
+            remembered = self._routes.get(key, vehicle_id, index, parked)
+            if remembered is not None:
+                return remembered.legs
         lengths = self._lengths
         turnaround, oncoming, near_parked = self.turnaround_penalty, self.oncoming_penalty, self.parked_penalty
-        avoid_held = within is not None
         # (FleetIndex.others_drive and others_fixed_near, read in place: a search asks them at every step.)
         drives, fixed_near = index.drives.get, index.fixed_near.get
+        read: dict[tuple[int, Traverse], RouteRead] = {}
 
         def cost(segment: int, traverse: Traverse, joint: JointKind) -> float:
             total = lengths[segment]
             if joint is JointKind.OPPOSITE:
                 total += turnaround
-            counts = drives((segment, _OPPOSITE[traverse]))
-            if counts is not None and (len(counts) > 1 or vehicle_id not in counts):
+            other_way = _OPPOSITE[traverse]
+            counts = drives((segment, other_way))
+            head_on = counts is not None and (len(counts) > 1 or vehicle_id not in counts)
+            if head_on:
                 total += oncoming
-            if segment in parked:
+            near = segment in parked
+            if near:
                 total += near_parked
             if avoid_held:
                 counts = fixed_near(segment)
                 if counts is not None and (len(counts) > 1 or vehicle_id not in counts):
                     return math.inf
+            else:
+                read[segment, traverse] = (segment, traverse, other_way, head_on, near)
             return total
 
-        capability = fleet.vehicles[vehicle_id].type.turn_capability
         table = self._table(layout, capability)
-        start = (last.segment, last.traverse, last.progress)
         estimate = straight_line_estimate(layout, task.goal_segment, table)
         limit = self.detour_limit if avoid_held else None
         path = shortest_route(
             layout, capability, start, task.goal_segment, task.goal_progress, cost, estimate, limit, within, table
         )
-        return None if path is None else legs_along(path, task, task.goal_progress)
+        legs = None if path is None else legs_along(path, task, task.goal_progress)
+        if not avoid_held:
+            looked = tuple(read.values())
+            near_parked_read = frozenset(segment for segment, _, _, _, near in looked if near)
+            others = frozenset(segment for segment, _, _, _, near in looked if not near)
+            self._routes.keep(key, RouteFound(legs, index.tick, looked, near_parked_read, others))
+        return legs
 
     def _table(self, layout: Layout, capability: TurnCapability) -> StepTable:
         """The layout's steps for ``capability``, shared by every search of this planner's."""

@@ -12,15 +12,20 @@ import heapq
 import math
 from collections import deque
 from collections.abc import Callable, Sequence
-from dataclasses import replace
+from collections.abc import Set as AbstractSet
+from dataclasses import dataclass, replace
+from typing import ClassVar
 
 from fleetsim.enums import JointKind, Progress, Traverse, TurnCapability
 from fleetsim.layout.layout import Layout
 from fleetsim.layout.reachability import State, next_states, next_steps, state_key
+from fleetsim.planners.fleet_index import FleetIndex
 from fleetsim.planning.plans import FleetLeg
 from fleetsim.scenario import Task
 
 __all__ = [
+    "RouteFound",
+    "RoutesMemo",
     "State",
     "StepTable",
     "breadth_first_route",
@@ -198,3 +203,82 @@ def mark_goal_on_fixed(fixed: Sequence[FleetLeg], task: Task, *, check_progress:
             marked[index] = replace(leg, goal_for_task=task.id)
             return tuple(marked)
     return None
+
+
+# What a route search read of one (segment, traverse) it looked at driving on to: whether another plan
+# drives the segment the other way (the other way's traverse given), and whether the segment is near a
+# vehicle without tasks.
+RouteRead = tuple[int, Traverse, Traverse, bool, bool]
+
+
+@dataclass(slots=True)
+class RouteFound:
+    """A route search's answer (legs, or ``None``: no route) and what it read, as it was at the fleet
+    index's ``tick``: each (segment, traverse) it looked at, whether another plan drove that segment the
+    other way, and whether it was near a vehicle without tasks (``parked``, ``unparked``: the segments read
+    that were and were not)."""
+
+    legs: tuple[FleetLeg, ...] | None
+    tick: int
+    read: tuple[RouteRead, ...]
+    parked: frozenset[int]
+    unparked: frozenset[int]
+
+    def holds(self, vehicle: int, index: FleetIndex, parked: AbstractSet[int]) -> bool:
+        """Whether the search would read the same now (and so find the same route)."""
+        if not self.parked <= parked or not parked.isdisjoint(self.unparked):
+            return False
+        if index.tick != self.tick:
+            stamps, tick = index.drive_stamps, self.tick
+            for segment, _, other_way, oncoming, _ in self.read:
+                if stamps.get(segment, 0) > tick and index.others_drive(vehicle, segment, other_way) != oncoming:
+                    return False
+        self.tick = index.tick  # read again: as it is now
+        return True
+
+
+class RoutesMemo:
+    """Routes found, given again while nothing the search read has changed.
+
+    A route's cost reads, besides the layout, whether other plans drive a segment the other way and which
+    segments are near vehicles without tasks. A vehicle making way for another is given a route on to its
+    goal from the place it waits at, and in a congested shift the same is worked out on every planning
+    round. A search with the same arguments whose reads are the same now would find the same route: that
+    is given, and the search is not made. The fleet index stamps a segment when a plan driving it changes,
+    so only stamped segments are read again. The last ``variants`` searches per question are kept.
+    """
+
+    # Searches kept at most; when full, all are forgotten. 0: none kept (every search made).
+    capacity: ClassVar[int] = 20_000
+    # Searches kept per question, the latest first.
+    variants: ClassVar[int] = 2
+
+    def __init__(self) -> None:
+        self._found: dict[tuple[object, ...], list[RouteFound]] = {}
+        self.asked = 0  # routes asked for
+        self.searched = 0  # searches made for them
+
+    def get(
+        self, key: tuple[object, ...], vehicle: int, index: FleetIndex, parked: AbstractSet[int]
+    ) -> RouteFound | None:
+        """The remembered answer to the question ``key`` that holds now, if any."""
+        self.asked += 1
+        kept = self._found.get(key)
+        if kept is not None:
+            for found in kept:
+                if found.holds(vehicle, index, parked):
+                    return found
+        self.searched += 1
+        return None
+
+    def keep(self, key: tuple[object, ...], found: RouteFound) -> None:
+        if not self.capacity:
+            return
+        if len(self._found) >= self.capacity:
+            self._found.clear()
+        kept = self._found.get(key)
+        if kept is None:
+            self._found[key] = [found]
+        else:
+            kept.insert(0, found)
+            del kept[self.variants :]

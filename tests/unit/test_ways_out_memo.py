@@ -16,7 +16,7 @@ from fleetsim.load.suites.suite import load_suite
 from fleetsim.planners import ReservingPlanner
 from fleetsim.planners.fleet_index import FleetIndex
 from fleetsim.planners.making_way import WayOut, WaysOutMemo, ways_out
-from fleetsim.planners.routing import StepTable
+from fleetsim.planners.routing import RoutesMemo, StepTable
 from fleetsim.planning.plans import FleetLeg, FleetPlan
 from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Scenario
 from fleetsim.sim.loop import run_scenario
@@ -185,10 +185,16 @@ def test_a_shift_runs_the_same_with_every_search_made_again() -> None:
     class Forgetful(WaysOutMemo):
         capacity = 0
 
+    class NoRoutes(RoutesMemo):
+        capacity = 0
+
     scenario = _warehouse("shift")
     remembered, forgetful = WaysOutMemo(), Forgetful()
     kept = run_scenario(scenario, _planner(remembered), keep_trace=False)
-    again = run_scenario(scenario, _planner(forgetful), keep_trace=False)
+    again_planner = _planner(forgetful)
+    again_planner._routes = NoRoutes()
+    again = run_scenario(scenario, again_planner, keep_trace=False)
     assert kept.trace_hash == again.trace_hash
     assert kept.metrics.planner_calls == again.metrics.planner_calls
     assert forgetful.searched == forgetful.asked == remembered.asked > remembered.searched
+    assert again_planner._routes.searched == again_planner._routes.asked > 0
