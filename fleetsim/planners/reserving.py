@@ -598,7 +598,7 @@ class ReservingPlanner:
         onward: tuple[FleetLeg, ...] = ()
         queue = self._open_tasks(vehicle_id, current, fleet)
         if queue:
-            route = self._route(queue[0], away[-1], fleet, layout)
+            route = self._route(queue[0], away[-1], fleet, layout, remember=True)
             if route is None:
                 return None  # never strand a vehicle where its task cannot be reached
             onward = route
@@ -726,10 +726,20 @@ class ReservingPlanner:
     # -- routing -------------------------------------------------------------------------------------
 
     def _route(
-        self, task: Task, last: FleetLeg, fleet: FleetSnapshot, layout: Layout, *, within: float | None = None
+        self,
+        task: Task,
+        last: FleetLeg,
+        fleet: FleetSnapshot,
+        layout: Layout,
+        *,
+        within: float | None = None,
+        remember: bool = False,
     ) -> tuple[FleetLeg, ...] | None:
         """The cheapest route to the task's goal; ``within`` a cost, as a way round (off every segment
-        near legs others have fixed), else by any segment."""
+        near legs others have fixed), else by any segment. ``remember``: a question likely asked again (the
+        route on from a place a vehicle is sent to wait at), kept in the routes memo; other routes (to a new
+        task, say) are seldom asked twice, and recording what their searches read would cost more than it
+        saves."""
         vehicle_id = task.vehicle_id
         index = self._refresh(fleet, layout)
         parked: set[int] = set()
@@ -741,8 +751,9 @@ class ReservingPlanner:
         avoid_held = within is not None
         # A route to the goal by any segment is remembered (RoutesMemo): the same question asked again while
         # what the search read is unchanged has the same answer.
+        remember = remember and not avoid_held
         key = (vehicle_id, task.id, task.goal_segment, task.goal_progress, start, capability)
-        if not avoid_held:
+        if remember:
             remembered = self._routes.get(key, vehicle_id, index, parked)
             if remembered is not None:
                 return remembered.legs
@@ -768,7 +779,7 @@ class ReservingPlanner:
                 counts = fixed_near(segment)
                 if counts is not None and (len(counts) > 1 or vehicle_id not in counts):
                     return math.inf
-            else:
+            elif remember:
                 read[segment, traverse] = (segment, traverse, other_way, head_on, near)
             return total
 
@@ -779,7 +790,7 @@ class ReservingPlanner:
             layout, capability, start, task.goal_segment, task.goal_progress, cost, estimate, limit, within, table
         )
         legs = None if path is None else legs_along(path, task, task.goal_progress)
-        if not avoid_held:
+        if remember:
             looked = tuple(read.values())
             near_parked_read = frozenset(segment for segment, _, _, _, near in looked if near)
             others = frozenset(segment for segment, _, _, _, near in looked if not near)

@@ -91,12 +91,23 @@ def test_the_planner_asks_the_same_route_once_until_a_plan_drives_its_way_head_o
     fleet = _fleet(task, Task(2, 2, 7))
     planner = ReservingPlanner()
     last = fleet.plans[1].legs[-1]
-    first = planner._route(task, last, fleet, LAYOUT)
+    first = planner._route(task, last, fleet, LAYOUT, remember=True)
     assert first is not None and [leg.segment for leg in first] == [2, 3, 4, 5, 6]
-    assert planner._route(task, last, fleet, LAYOUT) == first
+    assert planner._route(task, last, fleet, LAYOUT, remember=True) == first
     assert (planner._routes.asked, planner._routes.searched) == (2, 1)
     assert planner._index is not None
     planner._index.assume(2, _driving(2, 4, B))  # (as a plan of the same answer would be counted)
-    assert planner._route(task, last, fleet, LAYOUT) == first  # the only way, dearer now: searched again
+    assert planner._route(task, last, fleet, LAYOUT, remember=True) == first  # the only way, dearer now
     assert planner._routes.searched == 2
-    assert planner._route(task, last, fleet, LAYOUT) == first and planner._routes.searched == 2
+    assert planner._route(task, last, fleet, LAYOUT, remember=True) == first and planner._routes.searched == 2
+
+
+def test_only_routes_likely_asked_again_are_remembered() -> None:
+    # (A route to a new task is seldom asked twice; the route on from a waiting place is, round after round.)
+    task = Task(1, 1, 6)
+    fleet = _fleet(task)
+    planner = ReservingPlanner()
+    last = fleet.plans[1].legs[-1]
+    assert planner._route(task, last, fleet, LAYOUT) == planner._route(task, last, fleet, LAYOUT) is not None
+    assert planner._route(task, last, fleet, LAYOUT, within=100.0, remember=True) is not None  # a way round
+    assert planner._routes.asked == 0
