@@ -20,7 +20,7 @@ from fleetsim.enums import JointKind, TurnCapability
 from fleetsim.layout.layout import Layout
 from fleetsim.layout.reachability import State, state_key
 from fleetsim.planners.fleet_index import FleetIndex
-from fleetsim.planners.routing import StepTable, rebuild_path
+from fleetsim.planners.routing import Recent, StepTable, rebuild_path
 
 __all__ = ["WayOut", "WaysOutMemo", "ways_out"]
 
@@ -185,7 +185,7 @@ class WaysOutMemo:
     variants: ClassVar[int] = 2
 
     def __init__(self) -> None:
-        self._found: dict[tuple[object, ...], list[_Found]] = {}
+        self._found: Recent[_Found] = Recent(self.capacity, self.variants)
         # (id of the area, id of the way) -> (the area, the way, the area with the segments near the way)
         self._regions: dict[tuple[int, int], tuple[AbstractSet[int], WayOut, frozenset[int]]] = {}
         self.asked = 0  # ways out asked for
@@ -208,21 +208,12 @@ class WaysOutMemo:
         """As :func:`ways_out`, the layout's steps (``table``, for the vehicle's turn capability) given."""
         self.asked += 1
         key = (vehicle, start, frozenset(avoid), table.capability, turnaround, limit, wanted)
-        kept = self._found.get(key)
-        if kept is not None:
-            for found in kept:
-                if found.holds(vehicle, index, movable):
-                    return found.ways
+        for found in self._found.get(key):
+            if found.holds(vehicle, index, movable):
+                return found.ways
         self.searched += 1
         found = _search(vehicle, start, avoid, index, lengths, movable, turnaround, limit, wanted, table)
-        if len(self._found) >= self.capacity:
-            self._found.clear()
-        if self.capacity:
-            if kept is None:
-                self._found[key] = [found]
-            else:
-                kept.insert(0, found)
-                del kept[self.variants :]
+        self._found.keep(key, found)
         return found.ways
 
     def widened(self, avoid: AbstractSet[int], start: State, way: WayOut, layout: Layout) -> frozenset[int]:

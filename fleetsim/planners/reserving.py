@@ -123,8 +123,9 @@ class ReservingPlanner:
         self._layout: Layout | None = None
         self._lengths: dict[int, float] = {}
         self._tables: dict[TurnCapability, StepTable] = {}  # the layout's steps, per turn capability
+        # Searches for ways out, and routes on from waiting places: made again only when what they read changed.
         self._ways_out = WaysOutMemo()
-        self._routes = RoutesMemo()  # routes to goals, searched again only when what they read changed  # the searches for ways out, made again only when what they read changed
+        self._routes = RoutesMemo()
         self._near_cache: dict[int, tuple[FleetPlan, frozenset[int]]] = {}  # vehicle -> (plan, its _near)
         self._since: dict[int, tuple[int, float]] = {}  # vehicle -> (head task, when it became the head)
         self._blocked: dict[int, float] = {}  # vehicle -> since when it stands unable to fix a leg
@@ -752,7 +753,7 @@ class ReservingPlanner:
         # A route to the goal by any segment is remembered (RoutesMemo): the same question asked again while
         # what the search read is unchanged has the same answer.
         remember = remember and not avoid_held
-        key = (vehicle_id, task.id, task.goal_segment, task.goal_progress, start, capability)
+        key = (vehicle_id, task.id, task.goal_segment, task.goal_progress, start, capability) if remember else ()
         if remember:
             remembered = self._routes.get(key, vehicle_id, index, parked)
             if remembered is not None:

@@ -14,7 +14,7 @@ from collections import deque
 from collections.abc import Callable, Sequence
 from collections.abc import Set as AbstractSet
 from dataclasses import dataclass, replace
-from typing import ClassVar
+from typing import ClassVar, Generic, TypeVar
 
 from fleetsim.enums import JointKind, Progress, Traverse, TurnCapability
 from fleetsim.layout.layout import Layout
@@ -24,6 +24,7 @@ from fleetsim.planning.plans import FleetLeg
 from fleetsim.scenario import Task
 
 __all__ = [
+    "Recent",
     "RouteFound",
     "RoutesMemo",
     "State",
@@ -205,6 +206,8 @@ def mark_goal_on_fixed(fixed: Sequence[FleetLeg], task: Task, *, check_progress:
     return None
 
 
+Answer = TypeVar("Answer")
+
 # What a route search read of one (segment, traverse) it looked at driving on to: whether another plan
 # drives the segment the other way (the other way's traverse given), and whether the segment is near a
 # vehicle without tasks.
@@ -237,6 +240,30 @@ class RouteFound:
         return True
 
 
+class Recent(Generic[Answer]):
+    """Answers kept per question, the latest ``variants`` first; when ``capacity`` questions are kept, all
+    are forgotten at once (0: nothing is kept). The answers of a memo whose caller checks which still hold."""
+
+    def __init__(self, capacity: int, variants: int) -> None:
+        self.capacity, self.variants = capacity, variants
+        self._kept: dict[tuple[object, ...], list[Answer]] = {}
+
+    def get(self, key: tuple[object, ...]) -> Sequence[Answer]:
+        return self._kept.get(key, ())
+
+    def keep(self, key: tuple[object, ...], answer: Answer) -> None:
+        if not self.capacity:
+            return
+        if len(self._kept) >= self.capacity:
+            self._kept.clear()
+        kept = self._kept.get(key)
+        if kept is None:
+            self._kept[key] = [answer]
+        else:
+            kept.insert(0, answer)
+            del kept[self.variants :]
+
+
 class RoutesMemo:
     """Routes found, given again while nothing the search read has changed.
 
@@ -254,7 +281,7 @@ class RoutesMemo:
     variants: ClassVar[int] = 2
 
     def __init__(self) -> None:
-        self._found: dict[tuple[object, ...], list[RouteFound]] = {}
+        self._found: Recent[RouteFound] = Recent(self.capacity, self.variants)
         self.asked = 0  # routes asked for
         self.searched = 0  # searches made for them
 
@@ -263,22 +290,11 @@ class RoutesMemo:
     ) -> RouteFound | None:
         """The remembered answer to the question ``key`` that holds now, if any."""
         self.asked += 1
-        kept = self._found.get(key)
-        if kept is not None:
-            for found in kept:
-                if found.holds(vehicle, index, parked):
-                    return found
+        for found in self._found.get(key):
+            if found.holds(vehicle, index, parked):
+                return found
         self.searched += 1
         return None
 
     def keep(self, key: tuple[object, ...], found: RouteFound) -> None:
-        if not self.capacity:
-            return
-        if len(self._found) >= self.capacity:
-            self._found.clear()
-        kept = self._found.get(key)
-        if kept is None:
-            self._found[key] = [found]
-        else:
-            kept.insert(0, found)
-            del kept[self.variants :]
+        self._found.keep(key, found)
