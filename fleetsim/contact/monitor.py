@@ -18,7 +18,8 @@ vehicle has drifted so far from where it was then that a pair from outside could
 Of the listed pairs, one is looked at again only when its two vehicles have moved enough to close the
 gap between it and what counts (each vehicle's *spent* distance: the most any point of its footprint can
 have moved, its centre's travel plus its turn times its half diagonal, added up over the steps; the
-gap: the pair's distance when last looked at, less the limit below which a distance counts), and at
+gap: the pair's distance when last looked at, less the limit below which a distance counts, or less
+the pair's own closest approach so far when that is closer: only a closer one would be recorded), and at
 least one of them moved in the step. Their bounding circles sort out most of those (the distance
 between circles never exceeds the distance between the rectangles they hold). The narrow phase takes
 the exact distance (:mod:`.geometry`) of the pairs whose circles come close enough to matter, one pair
@@ -156,9 +157,14 @@ class ContactMonitor:
         self.reach = max(reach, near_miss)
         self.contacts: list[Contact] = []
         self._active: dict[tuple[int, int], int] = {}  # a pair of indices in contact -> its contact
-        self._closest: dict[tuple[int, int], Approach] = {}  # pairs closer than near_miss
+        # Pairs closer than near_miss: their closest approach as (distance, time, x, y), made an Approach
+        # only for the report (most are beaten again many times over a run), and its distance alone.
+        self._closest: dict[tuple[int, int], tuple[float, float, float, float]] = {}
+        self._closest_distance: dict[tuple[int, int], float] = {}
         self._clearance: Approach | None = None
+        self._limit = self.reach  # how close two footprints must come for their distance to count now
         self._sizes = np.array((self.half_length, self.half_width, self.radius))  # per vehicle
+        self._size_rows: list[list[float]] = self._sizes.T.tolist()  # the same, by vehicle
         self._poses: Floats | None = None  # at the last step's end: x, y, heading (3, n)
         self._listed: _Listed | None = None  # the candidate pairs
         # Per vehicle, metres: the farthest any point of its footprint can have moved since the start.
@@ -203,14 +209,20 @@ class ContactMonitor:
         due = due[moved[listed.i[due]] | moved[listed.j[due]]]
         if len(due) == 0:
             return []
+        # The step's few pairs read their two vehicles from plain lists, gathered once for all of them:
+        # x, y, heading at the end and at the start, and the spin, for the pairs' first vehicles and then
+        # their second ones.
         i, j = listed.i[due], listed.j[due]
-        table = np.vstack((end, start, self._sizes, spin))  # per vehicle: x, y, heading at the end, at the start, ...
+        both = np.concatenate((i, j))
+        ends, starts, spins = end[:, both].T.tolist(), start[:, both].T.tolist(), spin[both].tolist()
+        sizes = self._size_rows
+        pairs = len(due)
         fresh: list[Contact] = []
         slack: list[float] = []
-        active = self._active
-        for p, q, a, b in zip(i.tolist(), j.tolist(), table[:, i].T.tolist(), table[:, j].T.tolist(), strict=True):
-            ax, ay, ah, ax0, ay0, ah0, al, aw, ar, a_spin = a
-            bx, by, bh, bx0, by0, bh0, bl, bw, br, b_spin = b
+        active, closest = self._active, self._closest_distance
+        for k, (p, q) in enumerate(zip(i.tolist(), j.tolist(), strict=True)):
+            (ax, ay, ah), (ax0, ay0, ah0), (al, aw, ar) = ends[k], starts[k], sizes[p]
+            (bx, by, bh), (bx0, by0, bh0), (bl, bw, br) = ends[pairs + k], starts[pairs + k], sizes[q]
             a1, b1 = (ax, ay, ah, al, aw), (bx, by, bh, bl, bw)
             distance = gap = math.hypot(bx - ax, by - ay) - ar - br  # the bounding circles' gap at the end
             if (p, q) in active:  # in contact at the step's start: followed, never swept anew
@@ -219,19 +231,21 @@ class ContactMonitor:
                 # Between the steps: they could have touched only if the circles' gaps at both ends add up to
                 # no more than the most their distance can change (relative travel plus both spins).
                 gap0 = math.hypot(bx0 - ax0, by0 - ay0) - ar - br
-                most = math.hypot(bx - bx0 - ax + ax0, by - by0 - ay + ay0) + a_spin + b_spin
+                most = math.hypot(bx - bx0 - ax + ax0, by - by0 - ay + ay0) + spins[k] + spins[pairs + k]
                 if gap0 + gap <= most + TOUCH:
                     a0, b0 = (ax0, ay0, ah0, al, aw), (bx0, by0, bh0, bl, bw)
                     contact = self._sweep(p, q, a0, a1, b0, b1, most, t0, t1)
                     if contact is not None:
                         fresh.append(contact)
-                if gap < self._limit():  # close enough at the step's end to count
+                if gap < self._limit:  # close enough at the step's end to count
                     distance, contact = self._judge(p, q, a1, b1, t1)
                     if contact is not None:
                         fresh.append(contact)
-            # Farther apart than the limit (which only shrinks over a run), the pair need not be looked at
-            # again until the fleet has spent that much.
-            slack.append(distance - self._limit() - TOUCH)
+            # The pair need not be looked at again until the fleet has spent what keeps it farther apart than
+            # anything it could still add to the report: the limit (which only shrinks over a run), or its own
+            # closest approach so far, which only a closer one replaces (the clearance is never farther).
+            floor = closest.get((p, q), self._limit)
+            slack.append(distance - min(floor, self._limit) - TOUCH)
         listed.due[due] = spent[due] + np.array(slack)
         return fresh
 
@@ -239,7 +253,11 @@ class ContactMonitor:
         """What was found; an overlap still in force at the end has ``until`` None."""
         touched = {c.vehicles for c in self.contacts}
         misses = sorted(
-            (a for a in self._closest.values() if a.vehicles not in touched),
+            (
+                Approach((self.ids[p], self.ids[q]), *closest)
+                for (p, q), closest in self._closest.items()
+                if (self.ids[p], self.ids[q]) not in touched
+            ),
             key=lambda a: (a.distance, a.time, a.vehicles),
         )
         return ContactReport(
@@ -320,7 +338,7 @@ class ContactMonitor:
         """The pair ``(p, q)``, not in contact before, at ``time`` (footprints ``a``, ``b``): if they touch
         now they begin a contact (unless the sweep began it already), else their distance is recorded.
         Their signed distance (or a lower bound of it beyond the limit), and the contact begun."""
-        limit = self._limit()
+        limit = self._limit
         distance, x, y = signed_distance(a, b, limit)  # beyond the limit, nothing counts
         if distance > limit:
             return distance, None
@@ -404,12 +422,6 @@ class ContactMonitor:
         self._approach(p, q, 0.0, time, x, y)
         return contact
 
-    def _limit(self) -> float:
-        """How close two footprints must come for their distance to count now: within the near-miss
-        distance, or closer than the clearance so far (within ``reach`` before there is one)."""
-        best = self._clearance
-        return max(self.near_miss, self.reach if best is None else best.distance)
-
     def _end_contact(self, p: int, q: int, t1: float) -> Contact:
         index = self._active.pop((p, q))
         self.contacts[index] = contact = replace(self.contacts[index], until=t1)
@@ -417,14 +429,17 @@ class ContactMonitor:
 
     def _approach(self, p: int, q: int, distance: float, time: float, x: float, y: float) -> None:
         distance = max(distance, 0.0)
-        pair = (self.ids[p], self.ids[q])
         best = self._clearance
         if distance <= self.reach and (best is None or distance < best.distance):
-            self._clearance = Approach(pair, distance, time, x, y)
+            self._clearance = Approach((self.ids[p], self.ids[q]), distance, time, x, y)
+            # How close two footprints must come for their distance to count now: within the near-miss
+            # distance, or closer than the clearance so far (within ``reach`` before there is one).
+            self._limit = max(self.near_miss, distance)
         if distance < self.near_miss:
-            known = self._closest.get((p, q))
-            if known is None or distance < known.distance:
-                self._closest[(p, q)] = Approach(pair, distance, time, x, y)
+            known = self._closest_distance.get((p, q))
+            if known is None or distance < known:
+                self._closest[(p, q)] = (distance, time, x, y)
+                self._closest_distance[(p, q)] = distance
 
 
 class _Listed:
