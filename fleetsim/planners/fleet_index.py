@@ -5,6 +5,12 @@ conflicts with this segment (then fixing a leg there would raise a collision ale
 routes come near it (soon, or at all), and does anyone plan to drive it the other way. The answers are
 counted per segment and per vehicle; plans are immutable, so an unchanged plan is the very same object
 and only the vehicles whose plans changed are counted again.
+
+Fixed legs and the next legs are counted on every segment they come near (their conflicts), where the
+questions about them are asked many times. Whole routes are long and change often (a vehicle sent away
+to wait gets a new route on, tried and taken back while others make way), and whose routes come near a
+place is asked only of the few places a search finds: a route is counted on its own segments, and the
+routes near a segment are gathered from the segments it is near when asked.
 """
 
 from __future__ import annotations
@@ -75,6 +81,12 @@ class FleetIndex:
 
     def __init__(self, layout: Layout, ahead: int) -> None:
         self._conflicts = {sid: tuple(sorted(layout.conflicts(sid))) for sid in layout.segments}
+        # Per segment, the segments whose conflicts hold it: where a leg comes near it from.
+        near_from: dict[int, list[int]] = {sid: [] for sid in layout.segments}
+        for sid, conflicts in self._conflicts.items():
+            for segment in conflicts:
+                near_from.setdefault(segment, []).append(sid)
+        self._near_from = {segment: tuple(sources) for segment, sources in near_from.items()}
         self._ahead = ahead
         self._plans: object = None  # the mapping last refreshed from, when the snapshot has no plans version
         self._version: int | None = None  # else the plans version last refreshed from
@@ -83,12 +95,13 @@ class FleetIndex:
         self._seen: dict[int, FleetPlan] = {}
         self.fixed_near: dict[int, Counts] = {}
         self.ahead_near: dict[int, Counts] = {}
-        self.route_near: dict[int, Counts] = {}
+        self.route_on: dict[int, Counts] = {}  # per segment, the vehicles whose routes drive it
         self.drives: dict[Drive, Counts] = {}
-        # When each segment's fixed holders or routes near last changed, in changes counted (``tick``): what
-        # a search read of them still holds while its segments' stamps are no later than when it read them.
+        # When each segment's fixed holders last changed, in changes counted (``tick``): what a search read
+        # of them still holds while its segments' stamps are no later than when it read them.
         self.tick = 0
         self.stamps: dict[int, int] = {}
+        self.route_stamps: dict[int, int] = {}  # ... and when the routes driving it changed (route_stamp)
         self.drive_stamps: dict[int, int] = {}  # ... and when a plan driving it either way changed
 
     def refresh(self, fleet: FleetSnapshot) -> None:
@@ -185,26 +198,28 @@ class FleetIndex:
                 self._add_all(table, vehicle, _delta(was, now))
 
     def _tables(self) -> tuple[dict[object, Counts], ...]:
-        return (self.fixed_near, self.ahead_near, self.route_near, self.drives)  # type: ignore[return-value]
+        return (self.fixed_near, self.ahead_near, self.route_on, self.drives)  # type: ignore[return-value]
 
     def _add_all(self, table: dict[object, Counts], vehicle: int, changes: Iterable[tuple[object, int]]) -> None:
-        """Add each ``(key, amount)``: to the segments near the key's segment, or (drives) to the key itself."""
-        conflicts = self._conflicts
-        near = table is not self.drives
-        stamps = self.stamps if table is self.fixed_near or table is self.route_near else None
+        """Add each ``(key, amount)``: to the segments near the key's segment (fixed and next legs), or to
+        the key itself (routes, drives)."""
         self.tick += 1
         tick = self.tick
+        if table is self.fixed_near or table is self.ahead_near:
+            conflicts = self._conflicts
+            stamps = self.stamps if table is self.fixed_near else None
+            for key, amount in changes:
+                if amount:
+                    for segment in conflicts[key]:  # type: ignore[index]
+                        _add(table, segment, vehicle, amount)
+                        if stamps is not None:
+                            stamps[segment] = tick
+            return
+        stamps = self.route_stamps if table is self.route_on else self.drive_stamps
         for key, amount in changes:
-            if not amount:
-                continue
-            if near:
-                for segment in conflicts[key]:  # type: ignore[index]
-                    _add(table, segment, vehicle, amount)
-                    if stamps is not None:
-                        stamps[segment] = tick
-            else:
+            if amount:
                 _add(table, key, vehicle, amount)
-                self.drive_stamps[key[0]] = tick  # type: ignore[index]
+                stamps[key if table is self.route_on else key[0]] = tick  # type: ignore[index]
 
     # -- questions -----------------------------------------------------------------------------------
 
@@ -228,8 +243,20 @@ class FleetIndex:
 
     def routes_near(self, vehicle: int, segment: int) -> int:
         """How many other vehicles' routes come near ``segment``."""
-        counts = self.route_near.get(segment, {})
-        return len(counts) - (vehicle in counts)
+        route_on = self.route_on
+        found = [counts for near in self._near_from.get(segment, ()) if (counts := route_on.get(near))]
+        if not found:
+            return 0
+        if len(found) == 1:
+            return len(found[0]) - (vehicle in found[0])
+        others = set().union(*found)
+        others.discard(vehicle)
+        return len(others)
+
+    def route_stamp(self, segment: int) -> int:
+        """When the routes near ``segment`` last changed (a ``tick``; 0: never)."""
+        stamps = self.route_stamps
+        return max([stamps.get(near, 0) for near in self._near_from.get(segment, ())], default=0)
 
     def others_drive(self, vehicle: int, segment: int, traverse: Traverse) -> bool:
         """Another vehicle's plan drives ``segment`` with ``traverse``."""

@@ -83,7 +83,7 @@ class _Found:
                 if stamps.get(segment, 0) > tick and index.holders(vehicle, segment) != holders:
                     return False
             for segment, count in self.routes:
-                if stamps.get(segment, 0) > tick and index.routes_near(vehicle, segment) != count:
+                if index.route_stamp(segment) > tick and index.routes_near(vehicle, segment) != count:
                     return False
         for other, answer in self.asked:
             if movable(other) != answer:

@@ -42,7 +42,7 @@ actions = st.lists(st.tuples(st.sampled_from(["assume", "restore"]), plans), min
 
 
 def tables(index: FleetIndex) -> tuple[object, ...]:
-    return (index.fixed_near, index.ahead_near, index.route_near, index.drives)
+    return (index.fixed_near, index.ahead_near, index.route_on, index.drives)
 
 
 @settings(max_examples=200, deadline=None)
@@ -66,6 +66,14 @@ def test_counts_equal_counting_from_scratch(steps: list[tuple[str, FleetPlan]]) 
         for vehicle, held in sorted(current.items()):
             fresh.assume(vehicle, held)
         assert tables(index) == tables(fresh)
+        for segment in SEGMENTS:  # whose routes come near each segment, gathered when asked
+            for vehicle in range(1, 5):
+                near = {
+                    other
+                    for other, held in current.items()
+                    if other != vehicle and any(segment in LAYOUT.conflicts(leg.segment) for leg in held.legs)
+                }
+                assert index.routes_near(vehicle, segment) == len(near), (vehicle, segment)
 
 
 def test_holders_are_the_others_by_id() -> None:
