@@ -15,9 +15,10 @@ from collections import deque
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
-from fleetsim.enums import Progress, Traverse, TurnCapability
+from fleetsim.enums import Progress, TurnCapability
 from fleetsim.layout.layout import Layout
 from fleetsim.layout.reachability import State, next_states
+from fleetsim.planners.routing import StepTable
 
 __all__ = ["Dance", "choreograph"]
 
@@ -32,10 +33,12 @@ def choreograph(
     blocked: set[int] | frozenset[int],
     goal: tuple[int, int, Progress | None],
     limit: int,
+    table: StepTable | None = None,
 ) -> list[tuple[int, State]] | None:
     """Single-leg moves of ``vehicles`` after which ``goal``'s vehicle stands on its goal segment (with
     its progress, when one is asked of a vehicle that cannot turn in place); None if the search finds
-    none within ``limit`` joint positions. ``blocked`` are segments others hold.
+    none within ``limit`` joint positions. ``blocked`` are segments others hold. ``table``: the layout's
+    steps for the goal's vehicle's turn capability, kept between searches (else worked out for this one).
 
     Best first: fewest moves plus twice the legs the goal's vehicle still has to drive (alone), so the
     search heads for the goal and spends its effort on the moves that clear the way.
@@ -43,7 +46,9 @@ def choreograph(
     who, segment_goal, progress = goal
     mover = vehicles.index(who)
     must_match = progress is not None and capabilities[who] is TurnCapability.CURVE
-    to_go = _legs_to_goal(layout, capabilities[who], segment_goal, progress if must_match else None, blocked)
+    if table is None or table.layout is not layout or table.capability is not capabilities[who]:
+        table = StepTable(layout, capabilities[who])
+    to_go = _legs_to_goal(table, segment_goal, progress if must_match else None, blocked)
     start: Positions = tuple(starts[v] for v in vehicles)
     if start[mover] not in to_go:
         return None
@@ -75,18 +80,10 @@ def choreograph(
 
 
 def _legs_to_goal(
-    layout: Layout, capability: TurnCapability, goal: int, progress: Progress | None, blocked: set[int] | frozenset[int]
+    table: StepTable, goal: int, progress: Progress | None, blocked: set[int] | frozenset[int]
 ) -> dict[State, int]:
     """For each state, the fewest legs to the goal segment, alone (breadth first, backwards)."""
-    before: dict[State, list[State]] = {}
-    for segment, item in layout.segments.items():
-        for traverse in (Traverse.FORWARD, Traverse.BACKWARD):
-            if not item.allows(traverse):
-                continue
-            for state_progress in Progress:
-                state = (segment, traverse, state_progress)
-                for following in next_states(layout, capability, state):
-                    before.setdefault(following, []).append(state)
+    before = table.predecessors()
     ends = [state for state in before if state[0] == goal and (progress is None or state[2] is progress)]
     distance = dict.fromkeys(ends, 0)
     frontier = deque(ends)

@@ -660,6 +660,7 @@ class ReservingPlanner:
             blocked,
             (vehicle_id, task.goal_segment, task.goal_progress),
             self.dance_limit,
+            self._table(layout, capabilities[vehicle_id]),
         )
         if not moves:
             return []

@@ -82,6 +82,7 @@ class StepTable:
         self.layout, self.capability = layout, capability
         self._steps: dict[State, tuple[Step, ...]] = {}
         self._exits: dict[tuple[int, Traverse], tuple[float, float]] = {}
+        self._before: dict[State, list[State]] | None = None  # predecessors()
         # Per goal segment: the straight-line estimate of each (segment, traverse) asked so far.
         self.estimates: dict[int, dict[tuple[int, Traverse], float]] = {}
 
@@ -91,6 +92,23 @@ class StepTable:
             found = next_steps(self.layout, self.capability, state)
             steps = self._steps[state] = tuple((following, joint, state_key(following)) for following, joint in found)
         return steps
+
+    def predecessors(self) -> dict[State, list[State]]:
+        """Per state, the states from which a vehicle drives on to it (the layout's every state, worked out
+        at the first call; read only)."""
+        if self._before is None:
+            before: dict[State, list[State]] = {}
+            layout, capability = self.layout, self.capability
+            for segment, item in layout.segments.items():
+                for traverse in (Traverse.FORWARD, Traverse.BACKWARD):
+                    if not item.allows(traverse):
+                        continue
+                    for progress in Progress:
+                        state = (segment, traverse, progress)
+                        for following in next_states(layout, capability, state):
+                            before.setdefault(following, []).append(state)
+            self._before = before
+        return self._before
 
     def exit(self, segment: int, traverse: Traverse) -> tuple[float, float]:
         point = self._exits.get((segment, traverse))
