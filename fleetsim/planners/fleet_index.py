@@ -9,8 +9,9 @@ and only the vehicles whose plans changed are counted again.
 Fixed legs and the next legs are counted on every segment they come near (their conflicts), where the
 questions about them are asked many times. Whole routes are long and change often (a vehicle sent away
 to wait gets a new route on, tried and taken back while others make way), and whose routes come near a
-place is asked only of the few places a search finds: a route is counted on its own segments, and the
-routes near a segment are gathered from the segments it is near when asked.
+place is asked only of the few places a search finds: a route is counted once, as the drives
+(segment, traverse) of its legs, and the routes near a segment are gathered from the drives of the
+segments it is near when asked.
 """
 
 from __future__ import annotations
@@ -47,9 +48,9 @@ def _add(table: dict[object, Counts], key: object, vehicle: int, amount: int) ->
 
 
 def _parts(plan: FleetPlan, ahead: int) -> tuple[Sequence[object], ...]:
-    """What a plan counts: its fixed legs', its next ``ahead`` legs' and all its legs' segments, and its
-    drives (segment, traverse)."""
-    return (*_short_parts(plan, ahead), *_route_parts(plan))
+    """What a plan counts: its fixed legs' and its next ``ahead`` legs' segments, and its drives (segment,
+    traverse)."""
+    return (*_short_parts(plan, ahead), _drives(plan))
 
 
 def _short_parts(plan: FleetPlan, ahead: int) -> tuple[list[int], list[int]]:
@@ -57,10 +58,9 @@ def _short_parts(plan: FleetPlan, ahead: int) -> tuple[list[int], list[int]]:
     return fixed_segments(plan), [leg.segment for leg in plan.legs[:ahead]]
 
 
-def _route_parts(plan: FleetPlan) -> tuple[list[int], list[tuple[int, Traverse]]]:
-    """All its legs' segments, and its drives (segment, traverse)."""
-    legs = plan.legs
-    return [leg.segment for leg in legs], [(leg.segment, leg.traverse) for leg in legs]
+def _drives(plan: FleetPlan) -> list[Drive]:
+    """Its legs' drives (segment, traverse)."""
+    return [(leg.segment, leg.traverse) for leg in plan.legs]
 
 
 def _delta(before: Sequence[object], after: Sequence[object]) -> Iterable[tuple[object, int]]:
@@ -95,13 +95,11 @@ class FleetIndex:
         self._seen: dict[int, FleetPlan] = {}
         self.fixed_near: dict[int, Counts] = {}
         self.ahead_near: dict[int, Counts] = {}
-        self.route_on: dict[int, Counts] = {}  # per segment, the vehicles whose routes drive it
-        self.drives: dict[Drive, Counts] = {}
+        self.drives: dict[Drive, Counts] = {}  # per (segment, traverse), the vehicles whose routes drive it
         # When each segment's fixed holders last changed, in changes counted (``tick``): what a search read
         # of them still holds while its segments' stamps are no later than when it read them.
         self.tick = 0
         self.stamps: dict[int, int] = {}
-        self.route_stamps: dict[int, int] = {}  # ... and when the routes driving it changed (route_stamp)
         self.drive_stamps: dict[int, int] = {}  # ... and when a plan driving it either way changed
 
     def refresh(self, fleet: FleetSnapshot) -> None:
@@ -174,7 +172,7 @@ class FleetIndex:
         """Count ``new`` instead of ``old``: only the legs that differ (a plan mostly changes by a leg
         fixed or a leg driven).
 
-        The whole route's tables (routes near, drives) need no walk through a long route in the two
+        The whole route's table (drives) needs no walk through a long route in the two
         commonest changes: legs fixed (the same drives, only legs' flags changed) and the first leg driven
         past (the same leg objects but the first). Either way the changes are those the general way
         finds, in the same order (the order of a vehicle's entries in the tables depends on it)."""
@@ -189,20 +187,18 @@ class FleetIndex:
             return  # the same route, driven the same way
         if len(n) == len(o) - 1 and not any(map(is_not, islice(o, 1, None), n)):
             first = o[0]
-            self._add_all(tables[2], vehicle, ((first.segment, -1),))
-            self._add_all(tables[3], vehicle, (((first.segment, first.traverse), -1),))
+            self._add_all(tables[2], vehicle, (((first.segment, first.traverse), -1),))
             return
-        old_parts, new_parts = _route_parts(old), _route_parts(new)
-        for table, was, now in ((tables[2], old_parts[0], new_parts[0]), (tables[3], old_parts[1], new_parts[1])):
-            if was != now:
-                self._add_all(table, vehicle, _delta(was, now))
+        was, now = _drives(old), _drives(new)
+        if was != now:
+            self._add_all(tables[2], vehicle, _delta(was, now))
 
     def _tables(self) -> tuple[dict[object, Counts], ...]:
-        return (self.fixed_near, self.ahead_near, self.route_on, self.drives)  # type: ignore[return-value]
+        return (self.fixed_near, self.ahead_near, self.drives)  # type: ignore[return-value]
 
     def _add_all(self, table: dict[object, Counts], vehicle: int, changes: Iterable[tuple[object, int]]) -> None:
         """Add each ``(key, amount)``: to the segments near the key's segment (fixed and next legs), or to
-        the key itself (routes, drives)."""
+        the key itself (drives)."""
         self.tick += 1
         tick = self.tick
         if table is self.fixed_near or table is self.ahead_near:
@@ -215,11 +211,11 @@ class FleetIndex:
                         if stamps is not None:
                             stamps[segment] = tick
             return
-        stamps = self.route_stamps if table is self.route_on else self.drive_stamps
+        stamps = self.drive_stamps
         for key, amount in changes:
             if amount:
                 _add(table, key, vehicle, amount)
-                stamps[key if table is self.route_on else key[0]] = tick  # type: ignore[index]
+                stamps[key[0]] = tick  # type: ignore[index]
 
     # -- questions -----------------------------------------------------------------------------------
 
@@ -243,8 +239,13 @@ class FleetIndex:
 
     def routes_near(self, vehicle: int, segment: int) -> int:
         """How many other vehicles' routes come near ``segment``."""
-        route_on = self.route_on
-        found = [counts for near in self._near_from.get(segment, ()) if (counts := route_on.get(near))]
+        drives = self.drives
+        found = [
+            counts
+            for near in self._near_from.get(segment, ())
+            for drive in ((near, Traverse.FORWARD), (near, Traverse.BACKWARD))
+            if (counts := drives.get(drive))
+        ]
         if not found:
             return 0
         if len(found) == 1:
@@ -255,7 +256,7 @@ class FleetIndex:
 
     def route_stamp(self, segment: int) -> int:
         """When the routes near ``segment`` last changed (a ``tick``; 0: never)."""
-        stamps = self.route_stamps
+        stamps = self.drive_stamps
         return max([stamps.get(near, 0) for near in self._near_from.get(segment, ())], default=0)
 
     def others_drive(self, vehicle: int, segment: int, traverse: Traverse) -> bool:
