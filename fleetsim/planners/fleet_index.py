@@ -103,6 +103,7 @@ class FleetIndex:
         self._touched: set[int] = set()  # vehicles assumed or restored since the last refresh
         self._order: dict[int, int] = {}  # vehicle -> its place in the plans mapping (the order counted in)
         self._seen: dict[int, FleetPlan] = {}
+        self._drives_only: dict[int, FleetPlan] = {}  # vehicle -> the plan assume_drives counts the drives of
         self.fixed_near: dict[int, Counts] = {}
         self.ahead_near: dict[int, Counts] = {}
         self.drives: dict[Drive, Counts] = {}  # per (segment, traverse), the vehicles whose routes drive it
@@ -147,6 +148,7 @@ class FleetIndex:
     def assume(self, vehicle: int, plan: FleetPlan) -> FleetPlan | None:
         """Count ``plan`` as the vehicle's from now on (a plan about to be returned, so that what else the
         same response decides sees it); the plan it replaces, for :meth:`restore`."""
+        assert not self._drives_only, "restore_drives first"
         old = self._seen.get(vehicle)
         if old is not plan:
             self._touched.add(vehicle)
@@ -159,6 +161,7 @@ class FleetIndex:
 
     def restore(self, vehicle: int, old: FleetPlan | None) -> None:
         """Undo :meth:`assume`."""
+        assert not self._drives_only, "restore_drives first"
         current = self._seen.get(vehicle)
         if current is old:
             return
@@ -174,6 +177,23 @@ class FleetIndex:
             self._seen.pop(vehicle, None)
         else:
             self._seen[vehicle] = old
+
+    def assume_drives(self, vehicle: int, plan: FleetPlan) -> FleetPlan | None:
+        """Count only the drives of ``plan`` as the vehicle's, until :meth:`restore_drives` (which must
+        come before any other change of this index): for a question that reads nothing else, such as a
+        route search's costs. The plan counted, whose drives :meth:`restore_drives` counts again."""
+        assert vehicle not in self._drives_only, f"vehicle {vehicle}'s drives are assumed already"
+        old = self._seen.get(vehicle)
+        if old is not plan:
+            self._drives_only[vehicle] = plan
+            self._add_all(self._tables()[2], vehicle, _delta(_drives(old) if old is not None else [], _drives(plan)))
+        return old
+
+    def restore_drives(self, vehicle: int, old: FleetPlan | None) -> None:
+        """Undo :meth:`assume_drives`."""
+        plan = self._drives_only.pop(vehicle, None)
+        if plan is not None:
+            self._add_all(self._tables()[2], vehicle, _delta(_drives(plan), _drives(old) if old is not None else []))
 
     def _count(self, vehicle: int, plan: FleetPlan, amount: int) -> None:
         for table, keys in zip(self._tables(), _parts(plan, self._ahead), strict=True):

@@ -552,24 +552,37 @@ class ReservingPlanner:
         ):
             others: list[FleetPlan] = []
             replaced: list[tuple[int, FleetPlan | None]] = []  # what the index counted before, to undo
+            last: list[tuple[int, FleetPlan | None]] = []  # ... of the last vehicle moved, its drives alone
             # (No one to move out of it when it crosses no one.)
             region = self._ways_out.widened(avoid, start, way, layout) if way.crossing else avoid
-            for other in way.crossing:
+            for place, other in enumerate(way.crossing, start=1):
                 plans = self._evacuate(other, region, above, fleet, layout, index, taken, depth=depth - 1)
                 if plans is None:
                     break
                 others += plans
-                replaced += [(p.vehicle_id, index.assume(p.vehicle_id, p)) for p in plans]
+                if place < len(way.crossing):  # the next one's search reads them whole
+                    replaced += [(p.vehicle_id, index.assume(p.vehicle_id, p)) for p in plans]
+                else:  # the way on from the waiting place reads only the drives (_away_plan, _route)
+                    last = [(p.vehicle_id, index.assume_drives(p.vehicle_id, p)) for p in plans]
                 taken |= {p.vehicle_id for p in plans}
             else:
                 plan = self._away_plan(vehicle_id, current, way, fleet, layout)
+                self._undo(index, replaced, last)
                 if plan is not None:
-                    for other, old in reversed(replaced):  # the caller counts the whole set at once
-                        index.restore(other, old)
-                    return [plan, *others]
-            for other, old in reversed(replaced):
-                index.restore(other, old)
+                    return [plan, *others]  # the caller counts the whole set at once
+                continue
+            self._undo(index, replaced, last)
         return None
+
+    @staticmethod
+    def _undo(
+        index: FleetIndex, replaced: list[tuple[int, FleetPlan | None]], last: list[tuple[int, FleetPlan | None]]
+    ) -> None:
+        """Count again what the index counted before the plans of vehicles moved were assumed."""
+        for other, old in reversed(last):
+            index.restore_drives(other, old)
+        for other, old in reversed(replaced):
+            index.restore(other, old)
 
     def _way_out_past(
         self,

@@ -231,3 +231,30 @@ def test_stamps_say_which_segments_read_changed_since() -> None:
     assert index.since(index.drive_stamps, read, before) == [1]
     assert index.route_stamp(segment) > before and index.route_stamp(far) == 0
     assert index.since(index.stamps, read, index.tick) == []  # nothing since
+
+
+@settings(max_examples=100, deadline=None)
+@given(
+    st.dictionaries(st.integers(1, 3), plans, max_size=3),
+    st.lists(plans, min_size=1, max_size=3, unique_by=lambda p: p.vehicle_id),
+)
+def test_drives_alone_assumed_count_the_new_drives_and_restore_the_old(
+    counted: dict[int, FleetPlan], moved: list[FleetPlan]
+) -> None:
+    """While the plans of vehicles moved are assumed for their drives alone (a route search's costs read
+    nothing else), the drives are those of the fleet with them and everything else that of the fleet
+    without; restored, every table is as before, and the index takes whole plans again."""
+    index = FleetIndex(LAYOUT, AHEAD)
+    for vehicle, plan in sorted(counted.items()):
+        index.assume(vehicle, plan)
+    before = tables(index)
+    undo = [(plan.vehicle_id, index.assume_drives(plan.vehicle_id, plan)) for plan in moved]
+    with_them = FleetIndex(LAYOUT, AHEAD)
+    for vehicle, plan in sorted({**counted, **{plan.vehicle_id: plan for plan in moved}}.items()):
+        with_them.assume(vehicle, plan)
+    assert index.drives == with_them.drives
+    assert before[:2] == (index.fixed_near, index.ahead_near)
+    for vehicle, old in reversed(undo):
+        index.restore_drives(vehicle, old)
+    assert tables(index) == before
+    index.assume(moved[0].vehicle_id, moved[0])  # whole plans again
