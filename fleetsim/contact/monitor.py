@@ -169,6 +169,7 @@ class ContactMonitor:
         self._listed: _Listed | None = None  # the candidate pairs
         # Per vehicle, metres: the farthest any point of its footprint can have moved since the start.
         self._spent = np.zeros(len(self.ids))
+        self.looked = 0  # pairs looked at over the steps (a diagnostic: what the broad phase left)
 
     # -- the run ----------------------------------------------------------------------------------------
 
@@ -209,6 +210,7 @@ class ContactMonitor:
         due = due[moved[listed.i[due]] | moved[listed.j[due]]]
         if len(due) == 0:
             return []
+        self.looked += len(due)
         # The step's few pairs read their two vehicles from plain lists, gathered once for all of them:
         # x, y, heading at the end and at the start, and the spin, for the pairs' first vehicles and then
         # their second ones.

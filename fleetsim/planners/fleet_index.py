@@ -302,7 +302,8 @@ class FleetIndex:
     @staticmethod
     def since(stamps: npt.NDArray[np.int64], slots: Slots, tick: int) -> list[int]:
         """Which of the segments at ``slots`` (positions in that list) were stamped after ``tick``."""
-        return np.flatnonzero(stamps[slots] > tick).tolist()  # type: ignore[no-any-return]
+        changed: list[int] = np.flatnonzero(stamps[slots] > tick).tolist()
+        return changed
 
     def others_drive(self, vehicle: int, segment: int, traverse: Traverse) -> bool:
         """Another vehicle's plan drives ``segment`` with ``traverse``."""

@@ -250,31 +250,20 @@ def test_pairs_left_unlooked_at_could_not_have_mattered() -> None:
     assert report.clearance is not None and report.clearance.distance <= max(min(closest.values()), 0.0) + 1e-9
 
 
-def test_a_pair_drawing_apart_after_its_closest_approach_is_measured_again_only_when_it_could_beat_it(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
+def test_a_pair_drawing_apart_after_its_closest_approach_is_looked_at_again_only_when_it_could_beat_it() -> None:
     """Two vehicles side by side 0.3 m apart (a near miss, within the 0.5 m default): one draws away
-    1 cm a step. Nothing it does until 0.5 m can beat the 0.3 m on record, so the pair is measured again
+    1 cm a step. Nothing it does until 0.5 m can beat the 0.3 m on record, so the pair is looked at again
     only when it has moved far enough to have come closer than that; when it turns back and comes within
-    0.25 m, that is measured and recorded."""
-    import fleetsim.contact.monitor as monitor_module
-
-    measured: list[float] = []
-
-    def counted(a: Footprint, b: Footprint, beyond: float = math.inf) -> tuple[float, float, float]:
-        measured.append(a[1] if a[1] else b[1])
-        return signed_distance(a, b, beyond)
-
-    monkeypatch.setattr(monitor_module, "signed_distance", counted)
+    0.25 m, that is looked at and recorded."""
     monitor = ContactMonitor([1, 2], [2.0, 2.0], [1.0, 1.0])
     monitor.begin(_xs(0, 0), _xs(0, 1.3), _xs(0, 0))
     still = np.array([False, True])
     for k in range(1, 16):  # away, to 0.45 m apart
         monitor.step(0.1 * (k - 1), 0.1 * k, _xs(0, 0), _xs(0, 1.3 + 0.01 * k), _xs(0, 0), still)
-    away = len(measured)
-    assert 1 <= away <= 6  # at 0.3 (begin), then 0.31, 0.32, 0.34, 0.38: each doubling the excess
+    away = monitor.looked
+    assert 1 <= away <= 5  # at 0.31, 0.32, 0.34, 0.38: each doubling the excess over the record
     for k in range(16, 36):  # and back, to 0.25 m apart
         monitor.step(0.1 * (k - 1), 0.1 * k, _xs(0, 0), _xs(0, 1.45 - 0.01 * (k - 15)), _xs(0, 0), still)
     [miss] = monitor.report().near_misses
     assert miss.distance == pytest.approx(0.25) and miss.time == pytest.approx(3.5)
-    assert len(measured) - away >= 5  # closing in from 0.30 to 0.25: every step beats the record
+    assert monitor.looked - away >= 5  # closing in from 0.30 to 0.25: every step beats the record
