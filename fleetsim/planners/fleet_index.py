@@ -21,9 +21,6 @@ from collections.abc import Iterable, Iterator, Sequence
 from itertools import compress, islice
 from operator import is_not
 
-import numpy as np
-import numpy.typing as npt
-
 from fleetsim.enums import Traverse
 from fleetsim.layout.layout import Layout
 from fleetsim.planning.plans import FleetLeg, FleetPlan
@@ -34,7 +31,6 @@ from fleetsim.planning.views import replaced
 __all__ = ["FleetIndex"]
 
 Counts = dict[int, int]  # vehicle -> how many of its legs
-Slots = npt.NDArray[np.intp]  # segments by their places in the index's stamp arrays
 Drive = tuple[int, Traverse]
 
 
@@ -91,12 +87,6 @@ class FleetIndex:
             for segment in conflicts:
                 near_from.setdefault(segment, []).append(sid)
         self._near_from = {segment: tuple(sources) for segment, sources in near_from.items()}
-        self.slot = {sid: place for place, sid in enumerate(self._conflicts)}  # a segment's place in the stamps
-        self._conflict_slots = {sid: tuple(self.slot[s] for s in near) for sid, near in self._conflicts.items()}
-        self._near_from_slots = {
-            segment: np.array([self.slot[s] for s in sources], dtype=np.intp)
-            for segment, sources in self._near_from.items()
-        }
         self._ahead = ahead
         self._plans: object = None  # the mapping last refreshed from, when the snapshot has no plans version
         self._version: int | None = None  # else the plans version last refreshed from
@@ -107,12 +97,11 @@ class FleetIndex:
         self.fixed_near: dict[int, Counts] = {}
         self.ahead_near: dict[int, Counts] = {}
         self.drives: dict[Drive, Counts] = {}  # per (segment, traverse), the vehicles whose routes drive it
-        # When each segment's fixed holders last changed, in changes counted (``tick``), by its place
-        # (``slot``): what a search read of them still holds while its segments' stamps are no later than
-        # when it read them. Arrays, so that a long list of segments read is checked at once (``since``).
+        # When each segment's fixed holders last changed, in changes counted (``tick``): what a search read
+        # of them still holds while its segments' stamps are no later than when it read them.
         self.tick = 0
-        self.stamps = np.zeros(len(self.slot), dtype=np.int64)
-        self.drive_stamps = np.zeros(len(self.slot), dtype=np.int64)  # ... when a plan driving it changed
+        self.stamps: dict[int, int] = {}
+        self.drive_stamps: dict[int, int] = {}  # ... and when a plan driving it either way changed
 
     def refresh(self, fleet: FleetSnapshot) -> None:
         """Count the plans of a snapshot that changed since the last refresh: those the snapshot says changed
@@ -232,26 +221,21 @@ class FleetIndex:
         the key itself (drives)."""
         self.tick += 1
         tick = self.tick
-        if table is self.ahead_near:
+        if table is self.fixed_near or table is self.ahead_near:
             conflicts = self._conflicts
+            stamps = self.stamps if table is self.fixed_near else None
             for key, amount in changes:
                 if amount:
                     for segment in conflicts[key]:  # type: ignore[index]
                         _add(table, segment, vehicle, amount)
+                        if stamps is not None:
+                            stamps[segment] = tick
             return
-        if table is self.fixed_near:
-            conflicts, places, stamps = self._conflicts, self._conflict_slots, self.stamps
-            for key, amount in changes:
-                if amount:
-                    for segment, place in zip(conflicts[key], places[key], strict=True):  # type: ignore[index]
-                        _add(table, segment, vehicle, amount)
-                        stamps[place] = tick
-            return
-        slot, stamps = self.slot, self.drive_stamps
+        stamps = self.drive_stamps
         for key, amount in changes:
             if amount:
                 _add(table, key, vehicle, amount)
-                stamps[slot[key[0]]] = tick  # type: ignore[index]
+                stamps[key[0]] = tick  # type: ignore[index]
 
     # -- questions -----------------------------------------------------------------------------------
 
@@ -292,18 +276,8 @@ class FleetIndex:
 
     def route_stamp(self, segment: int) -> int:
         """When the routes near ``segment`` last changed (a ``tick``; 0: never)."""
-        places = self._near_from_slots.get(segment)
-        return 0 if places is None or not len(places) else int(self.drive_stamps[places].max())
-
-    def slots(self, segments: Iterable[int]) -> Slots:
-        """The places of ``segments`` in the stamp arrays, in order."""
-        return np.array([self.slot[segment] for segment in segments], dtype=np.intp)
-
-    @staticmethod
-    def since(stamps: npt.NDArray[np.int64], slots: Slots, tick: int) -> list[int]:
-        """Which of the segments at ``slots`` (positions in that list) were stamped after ``tick``."""
-        changed: list[int] = np.flatnonzero(stamps[slots] > tick).tolist()
-        return changed
+        stamps = self.drive_stamps
+        return max([stamps.get(near, 0) for near in self._near_from.get(segment, ())], default=0)
 
     def others_drive(self, vehicle: int, segment: int, traverse: Traverse) -> bool:
         """Another vehicle's plan drives ``segment`` with ``traverse``."""

@@ -19,7 +19,7 @@ from typing import ClassVar
 from fleetsim.enums import JointKind, TurnCapability
 from fleetsim.layout.layout import Layout
 from fleetsim.layout.reachability import State, state_key
-from fleetsim.planners.fleet_index import FleetIndex, Slots
+from fleetsim.planners.fleet_index import FleetIndex
 from fleetsim.planners.routing import Recent, StepTable, rebuild_path
 
 __all__ = ["WayOut", "WaysOutMemo", "ways_out"]
@@ -73,18 +73,14 @@ class _Found:
     held: tuple[tuple[int, list[int]], ...]
     routes: tuple[tuple[int, int], ...]
     asked: tuple[tuple[int, bool], ...]
-    slots: Slots | None = None  # the segments of ``held``, by their places in the index (at the first check)
 
     def holds(self, vehicle: int, index: FleetIndex, movable: Callable[[int], bool]) -> bool:
         """Whether the search would read the same now (and so find the same ways). A segment stamped later
         than the search may hold what it held then (a plan counted and taken back, say): it is read again."""
         if index.tick != self.tick:
-            held, tick = self.held, self.tick
-            if self.slots is None:
-                self.slots = index.slots(segment for segment, _ in held)
-            for at in index.since(index.stamps, self.slots, tick):
-                segment, holders = held[at]
-                if index.holders(vehicle, segment) != holders:
+            stamps, tick = index.stamps, self.tick
+            for segment, holders in self.held:
+                if stamps.get(segment, 0) > tick and index.holders(vehicle, segment) != holders:
                     return False
             for segment, count in self.routes:
                 if index.route_stamp(segment) > tick and index.routes_near(vehicle, segment) != count:

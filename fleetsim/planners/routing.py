@@ -19,7 +19,7 @@ from typing import ClassVar, Generic, TypeVar
 from fleetsim.enums import JointKind, Progress, Traverse, TurnCapability
 from fleetsim.layout.layout import Layout
 from fleetsim.layout.reachability import State, next_states, next_steps, state_key
-from fleetsim.planners.fleet_index import FleetIndex, Slots
+from fleetsim.planners.fleet_index import FleetIndex
 from fleetsim.planning.plans import FleetLeg
 from fleetsim.scenario import Task
 
@@ -244,19 +244,15 @@ class RouteFound:
     read: tuple[RouteRead, ...]
     parked: frozenset[int]
     unparked: frozenset[int]
-    slots: Slots | None = None  # the segments read, by their places in the index (at the first check)
 
     def holds(self, vehicle: int, index: FleetIndex, parked: AbstractSet[int]) -> bool:
         """Whether the search would read the same now (and so find the same route)."""
         if not self.parked <= parked or not parked.isdisjoint(self.unparked):
             return False
         if index.tick != self.tick:
-            read = self.read
-            if self.slots is None:
-                self.slots = index.slots(segment for segment, _, _, _, _ in read)
-            for at in index.since(index.drive_stamps, self.slots, self.tick):
-                segment, _, other_way, oncoming, _ = read[at]
-                if index.others_drive(vehicle, segment, other_way) != oncoming:
+            stamps, tick = index.drive_stamps, self.tick
+            for segment, _, other_way, oncoming, _ in self.read:
+                if stamps.get(segment, 0) > tick and index.others_drive(vehicle, segment, other_way) != oncoming:
                     return False
         self.tick = index.tick  # read again: as it is now
         return True
