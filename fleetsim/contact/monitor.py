@@ -158,9 +158,8 @@ class ContactMonitor:
         self.contacts: list[Contact] = []
         self._active: dict[tuple[int, int], int] = {}  # a pair of indices in contact -> its contact
         # Pairs closer than near_miss: their closest approach as (distance, time, x, y), made an Approach
-        # only for the report (most are beaten again many times over a run), and its distance alone.
+        # only for the report (most are beaten again many times over a run).
         self._closest: dict[tuple[int, int], tuple[float, float, float, float]] = {}
-        self._closest_distance: dict[tuple[int, int], float] = {}
         self._clearance: Approach | None = None
         self._limit = self.reach  # how close two footprints must come for their distance to count now
         self._sizes = np.array((self.half_length, self.half_width, self.radius))  # per vehicle
@@ -221,7 +220,7 @@ class ContactMonitor:
         pairs = len(due)
         fresh: list[Contact] = []
         slack: list[float] = []
-        active, closest = self._active, self._closest_distance
+        active, closest = self._active, self._closest
         for k, (p, q) in enumerate(zip(i.tolist(), j.tolist(), strict=True)):
             (ax, ay, ah), (ax0, ay0, ah0), (al, aw, ar) = ends[k], starts[k], sizes[p]
             (bx, by, bh), (bx0, by0, bh0), (bl, bw, br) = ends[pairs + k], starts[pairs + k], sizes[q]
@@ -246,8 +245,9 @@ class ContactMonitor:
             # The pair need not be looked at again until the fleet has spent what keeps it farther apart than
             # anything it could still add to the report: the limit (which only shrinks over a run), or its own
             # closest approach so far, which only a closer one replaces (the clearance is never farther).
-            floor = closest.get((p, q), self._limit)
-            slack.append(distance - min(floor, self._limit) - TOUCH)
+            known = closest.get((p, q))
+            floor = self._limit if known is None else min(known[0], self._limit)
+            slack.append(distance - floor - TOUCH)
         listed.due[due] = spent[due] + np.array(slack)
         return fresh
 
@@ -438,10 +438,9 @@ class ContactMonitor:
             # distance, or closer than the clearance so far (within ``reach`` before there is one).
             self._limit = max(self.near_miss, distance)
         if distance < self.near_miss:
-            known = self._closest_distance.get((p, q))
-            if known is None or distance < known:
+            known = self._closest.get((p, q))
+            if known is None or distance < known[0]:
                 self._closest[(p, q)] = (distance, time, x, y)
-                self._closest_distance[(p, q)] = distance
 
 
 class _Listed:

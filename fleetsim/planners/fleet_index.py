@@ -58,9 +58,9 @@ def _short_parts(plan: FleetPlan, ahead: int) -> tuple[list[int], list[int]]:
     return fixed_segments(plan), [leg.segment for leg in plan.legs[:ahead]]
 
 
-def _drives(plan: FleetPlan) -> list[Drive]:
-    """Its legs' drives (segment, traverse)."""
-    return [(leg.segment, leg.traverse) for leg in plan.legs]
+def _drives(plan: FleetPlan | None) -> list[Drive]:
+    """Its legs' drives (segment, traverse); none without a plan."""
+    return [] if plan is None else [(leg.segment, leg.traverse) for leg in plan.legs]
 
 
 def _delta(before: Sequence[object], after: Sequence[object]) -> Iterable[tuple[object, int]]:
@@ -85,7 +85,7 @@ class FleetIndex:
         near_from: dict[int, list[int]] = {sid: [] for sid in layout.segments}
         for sid, conflicts in self._conflicts.items():
             for segment in conflicts:
-                near_from.setdefault(segment, []).append(sid)
+                near_from[segment].append(sid)
         self._near_from = {segment: tuple(sources) for segment, sources in near_from.items()}
         self._ahead = ahead
         self._plans: object = None  # the mapping last refreshed from, when the snapshot has no plans version
@@ -175,14 +175,14 @@ class FleetIndex:
         old = self._seen.get(vehicle)
         if old is not plan:
             self._drives_only[vehicle] = plan
-            self._add_all(self._tables()[2], vehicle, _delta(_drives(old) if old is not None else [], _drives(plan)))
+            self._add_all(self._tables()[2], vehicle, _delta(_drives(old), _drives(plan)))
         return old
 
     def restore_drives(self, vehicle: int, old: FleetPlan | None) -> None:
         """Undo :meth:`assume_drives`."""
         plan = self._drives_only.pop(vehicle, None)
         if plan is not None:
-            self._add_all(self._tables()[2], vehicle, _delta(_drives(plan), _drives(old) if old is not None else []))
+            self._add_all(self._tables()[2], vehicle, _delta(_drives(plan), _drives(old)))
 
     def _count(self, vehicle: int, plan: FleetPlan, amount: int) -> None:
         for table, keys in zip(self._tables(), _parts(plan, self._ahead), strict=True):
