@@ -19,6 +19,7 @@ from result_document import RESULT_KEYS, schema_errors
 
 import fleetsim
 from fleetsim.cli import main
+from fleetsim.cli.run import _targets
 from fleetsim.planners import ReservingPlanner
 from fleetsim.sim import run_scenario
 from fleetsim.sim.report import SUMMARY_COLUMNS
@@ -169,16 +170,22 @@ def test_a_selector_runs_one_scenario(capsys: pytest.CaptureFixture[str]) -> Non
 
 
 def test_a_scenario_named_twice_runs_once_in_the_order_given(capsys: pytest.CaptureFixture[str]) -> None:
-    status, out, _ = run(capsys, "run", f"{EXAMPLES}::mixed-shapes", str(SUITES), "--planner", RESERVING, "--json")
+    status, out, _ = run(capsys, "run", f"{EXAMPLES}::mixed-shapes", str(EXAMPLES), "--planner", RESERVING, "--json")
     assert status == 0
-    names = [r["scenario"] for r in json_lines(out)]
-    assert names == [
+    assert [r["scenario"] for r in json_lines(out)] == ["mixed-shapes", "crossing", "loop-one-way", "corridor-passing-bay"]
+
+
+def test_a_scenario_named_and_in_a_folder_named_after_it_is_taken_once_where_first_named() -> None:
+    # (What would run, without running it: the shipped suites take a while.)
+    targets = _targets([f"{EXAMPLES}::mixed-shapes", str(SUITES)])
+    assert [target.spec.name for target in targets if target.spec is not None] == [
         "mixed-shapes", "crossing-collides", "corridor-head-on", "generated-layouts", "late-crossing-stop", "late-crossing-hunt",
         *(spec.name for spec in fleetsim.load_suite(SUITES / "disturbances.fleetsim.yaml").scenarios),
         "crossing", "loop-one-way", "corridor-passing-bay", "sorting-hall-2024", "sorting-hall-2026", "depot-4",
         "depot-all", "packing-hall-lif", "clinic-rmf",
         *(spec.name for spec in fleetsim.load_suite(SUITES / "warehouse.fleetsim.yaml").scenarios),
     ]  # fmt: skip
+    assert len(targets) == len({(target.suite_path.resolve(), target.label) for target in targets})
 
 
 # -- failures -------------------------------------------------------------------------------------

@@ -212,6 +212,7 @@ RUNS: dict[str, Callable[[Path], list[str]]] = {
 }
 
 
+_EVERY_LINE_UP_TO = 5_000
 _RAN: dict[str, list[str]] = {}  # run name -> its lines, each run made once per process
 
 
@@ -235,8 +236,13 @@ def test_the_packaged_schema_is_the_published_one_and_a_valid_schema() -> None:
 def test_every_line_of_a_real_runs_trace_satisfies_the_schema(name: str, tmp_path: Path) -> None:
     lines = _ran(name, tmp_path)
     assert len(lines) >= 2
+    # fleetsim's own reader (jsonschema-rs) checks every line; jsonschema, the second opinion, checks every
+    # line of a short run, and of an hour's run (36,000 lines, 12 s of it) the header, each line with
+    # new plans or events and every tenth step.
+    every = 1 if len(lines) <= _EVERY_LINE_UP_TO else 10
     for number, line in enumerate(lines, start=1):
-        assert schema_errors(line) == [], f"line {number}: {line[:200]}"
+        if number % every == 1 % every or not line.endswith(",[],[]]"):
+            assert schema_errors(line) == [], f"line {number}: {line[:200]}"
     assert trace_problem(lines) is None
 
 
