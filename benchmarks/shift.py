@@ -2,6 +2,7 @@
 
     python benchmarks/shift.py [--case shift|shift100|stretch|both] [--hours 8] [--minutes 10] [--repeat 3]
                                [--profile shift|stretch] [--top 25] [--orders-only]
+                               [--vs REF [--parallel]]
 
 Two cases (issue 45, point 7), each on a site of ``fleetsim generate warehouse`` (``generate_warehouse``)
 run by the reference dispatcher (``NearestVehicleDispatcher``) and planner (``ReservingPlanner``):
@@ -45,6 +46,15 @@ otherwise).
 Target (issue 45): dispatch and order bookkeeping add at most 10 % to the harness per vehicle-step
 (judged on the inside figure). The script exits 1 when a target is missed or hashes differ.
 
+``--vs REF`` compares this tree with commit REF instead, side by side in one invocation (the orders run's
+wall time, as ``--orders-only``): the case's site is generated once, by this tree, and each of
+``--repeat`` rounds runs it in a fresh process in REF (a temporary git worktree, ``benchmarks/compare.py``)
+and in this tree, in turn; ``--parallel`` runs the two of a round at once instead, one per core (an
+8-hour shift takes minutes: a 2-core machine then gives each tree a core of its own). Printed per tree:
+each round's wall time, planner time, harness per vehicle-step and planner calls, their medians, how
+many times faster this tree runs the shift, and whether the trace hashes agree (they must: a speed-up
+changes no behaviour; the script exits 1 otherwise). REF must have transport orders (issue 45 on).
+
 ``--profile CASE`` runs that case's orders run once more under cProfile and prints the functions with
 the most own time in ``fleetsim/dispatch`` and ``fleetsim/sim/dispatching.py`` (cProfile slows pure-Python
 code about 2x; read shares, not seconds).
@@ -55,8 +65,13 @@ from __future__ import annotations
 import argparse
 import cProfile
 import dataclasses
+import json
+import os
 import pstats
+import resource
 import statistics
+import subprocess
+import sys
 import tempfile
 import time
 from collections import defaultdict
@@ -65,6 +80,8 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
+
+from compare import trees
 
 from fleetsim import load_scenario, load_suite
 from fleetsim.compiled import compiled_modules
@@ -162,8 +179,12 @@ def bookkeeping_clocks(spent: dict[str, float]) -> Iterator[None]:
 
 def orders_scenario(case: Case, folder: Path, seconds: float) -> Scenario:
     """The generated site with its suite's order stream: the case's rate, a parking place as last stop."""
-    generated = generate_warehouse(folder, case.site)
-    suite = load_suite(generated.suite)
+    return with_orders(generate_warehouse(folder, case.site).suite, case, seconds)
+
+
+def with_orders(suite_file: Path, case: Case, seconds: float) -> Scenario:
+    """The generated suite's scenario with the case's order stream and a shift of ``seconds``."""
+    suite = load_suite(suite_file)
     scenario = load_scenario(suite.scenarios[0], suite)
     stream = scenario.order_stream
     assert stream is not None
@@ -346,6 +367,87 @@ def profile(case: Case, seconds: float, folder: Path, top: int) -> None:
         print(f"  {calls:>9} {tt:8.2f} {tt / total:6.1%}  {name} ({where}:{line})")
 
 
+# -- this tree against another commit ------------------------------------------------------------------
+
+
+def run_child(suite_file: Path, case: Case, seconds: float) -> None:
+    """One orders run of the generated suite (in whichever tree's fleetsim is importable): one JSON line."""
+    scenario = with_orders(suite_file, case, seconds)
+    dispatcher = TimedDispatcher()
+    result = run_scenario(scenario, ReservingPlanner(), keep_trace=False, dispatcher=dispatcher)
+    m = result.metrics
+    harness = m.wall_time - m.planner_wall_time - dispatcher.seconds
+    print(json.dumps({
+        "hash": result.trace_hash,
+        "wall": m.wall_time,
+        "planner": m.planner_wall_time,
+        "harness": harness / (result.steps * len(scenario.vehicles)) * 1e6,
+        "calls": m.planner_calls,
+        "peak_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
+    }))  # fmt: skip
+
+
+def run_in(tree: Path, suite_file: Path, case: Case, seconds: float) -> subprocess.Popen[str]:
+    """The child of :func:`run_child` started in ``tree`` (its fleetsim first on the path)."""
+    command = [sys.executable, str(Path(__file__).resolve()), "--child", str(suite_file), "--case", case.name]
+    command += [
+        "--hours" if case.name != "stretch" else "--minutes",
+        f"{seconds / (60.0 if case.name == 'stretch' else 3600.0)!r}",
+    ]
+    env = {**os.environ, "PYTHONPATH": str(tree)}
+    return subprocess.Popen(command, cwd=tree, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def finished(tree: Path, child: subprocess.Popen[str]) -> dict[str, Any]:
+    out, err = child.communicate()
+    if child.returncode != 0:
+        raise SystemExit(f"the shift in {tree} failed:\n{err}")
+    figures: dict[str, Any] = json.loads(out.splitlines()[-1])
+    return figures
+
+
+def versus(ref: str, case: Case, seconds: float, repeat: int, parallel: bool, folder: Path) -> bool:
+    """``case`` in REF and this tree, ``repeat`` rounds; True when every run gives the same trace hash."""
+    suite_file = generate_warehouse(folder, case.site).suite
+    how = "at once, one per core" if parallel else "in turn"
+    print(
+        f"\n{case.name}: {case.site.vehicles} vehicles, {seconds / 3600:g} h simulated, {repeat} rounds, the trees {how}"
+    )
+    with trees(ref) as both:
+        rounds: dict[str, list[dict[str, Any]]] = {name: [] for name in both}
+        for _ in range(repeat):
+            if parallel:
+                children = {name: run_in(tree, suite_file, case, seconds) for name, tree in both.items()}
+                for name, child in children.items():
+                    rounds[name].append(finished(both[name], child))
+            else:
+                for name, tree in both.items():
+                    rounds[name].append(finished(tree, run_in(tree, suite_file, case, seconds)))
+            print("  " + "   ".join(f"{name}: {r[-1]['wall']:.1f} s" for name, r in rounds.items()), flush=True)
+    for name, runs in rounds.items():
+        print(f"  {name}")
+        for label, key, form in VERSUS_FIGURES:
+            values = [float(run[key]) for run in runs]
+            shown = " ".join(form.format(v) for v in values)
+            print(f"    {label:<18} {shown}  median {form.format(statistics.median(values))}")
+    walls = {name: statistics.median(float(run["wall"]) for run in runs) for name, runs in rounds.items()}
+    (first, before), (_, after) = walls.items()
+    print(f"  this tree runs the shift {before / after:.2f}x as fast as {first}")
+    hashes = {str(run["hash"]) for runs in rounds.values() for run in runs}
+    print("  trace hashes agree" if len(hashes) == 1 else f"  trace hashes DIFFER: {sorted(h[:12] for h in hashes)}")
+    return len(hashes) == 1
+
+
+# (label, key, format) of each figure printed per tree with --vs.
+VERSUS_FIGURES = (
+    ("wall s", "wall", "{:8.1f}"),
+    ("planner s", "planner", "{:8.1f}"),
+    ("harness µs/vs", "harness", "{:8.2f}"),
+    ("planner calls", "calls", "{:8.0f}"),
+    ("peak MiB", "peak_mib", "{:8.0f}"),
+)
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--case", choices=("shift", "shift100", "stretch", "both"), default="both")
@@ -355,23 +457,37 @@ def main() -> int:
     parser.add_argument("--repeat", type=int, default=3, help="paired runs per case")
     parser.add_argument("--profile", choices=("shift", "stretch"), help="profile that case's orders run")
     parser.add_argument("--top", type=int, default=25, help="functions listed with --profile")
+    parser.add_argument("--vs", metavar="REF", help="compare the orders run with commit REF side by side instead")
+    parser.add_argument("--parallel", action="store_true", help="with --vs: run the two trees at once, a core each")
+    parser.add_argument("--child", type=Path, help=argparse.SUPPRESS)  # (--vs: one run of a generated suite)
     args = parser.parse_args()
+    seconds = {"shift": args.hours * 3600.0, "shift100": args.hours * 3600.0, "stretch": args.minutes * 60.0}
+    if args.child is not None:
+        run_child(args.child, CASES[args.case], seconds[args.case])
+        return 0
     if args.repeat < 1:
         parser.error(f"--repeat={args.repeat} must be at least 1")
     if not args.hours > 0 or not args.minutes > 0:
         parser.error(f"--hours={args.hours} and --minutes={args.minutes} must be > 0")
+    if args.parallel and args.vs is None:
+        parser.error("--parallel runs the two trees of --vs at once: give --vs REF")
     if not args.orders_only and "fleetsim.sim.loop" in compiled_modules():
         parser.error("the bookkeeping figures time the loop's methods from outside, which the compiled build's loop "
                      "does not let them: with it, use --orders-only (the wall time)")  # fmt: skip
-    seconds = {"shift": args.hours * 3600.0, "shift100": args.hours * 3600.0, "stretch": args.minutes * 60.0}
     ok = True
     with tempfile.TemporaryDirectory() as tmp:
         if args.profile is not None:
             profile(CASES[args.profile], seconds[args.profile], Path(tmp) / "profile", args.top)
             return 0
         for name in ("shift", "stretch") if args.case == "both" else (args.case,):
+            if args.vs is not None:
+                if not versus(args.vs, CASES[name], seconds[name], args.repeat, args.parallel, Path(tmp) / name):
+                    return 1
+                continue
             how = wall_only if args.orders_only else measure
             ok = how(CASES[name], seconds[name], args.repeat, Path(tmp) / name) and ok
+    if args.vs is not None:
+        return 0
     print("\ntarget met" if ok else "\nTARGET MISSED")
     return 0 if ok else 1
 

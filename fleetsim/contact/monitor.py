@@ -193,7 +193,7 @@ class ContactMonitor:
         start = self._poses
         assert start is not None, "begin() first"
         self._poses = end = np.array((x, y, heading), dtype=np.float64)
-        if not moved.any():  # nothing moved: no distance changed
+        if not np.count_nonzero(moved):  # nothing moved: no distance changed
             return []
         delta = end - start
         shift = np.hypot(delta[0], delta[1])
@@ -205,7 +205,7 @@ class ContactMonitor:
         self._spent += shift + spin
         listed = self._neighbours(end, float(shift.max()))
         spent = self._spent[listed.i] + self._spent[listed.j]
-        due = np.flatnonzero(listed.due <= spent)
+        due = (listed.due <= spent).nonzero()[0]
         due = due[moved[listed.i[due]] | moved[listed.j[due]]]
         if len(due) == 0:
             return []

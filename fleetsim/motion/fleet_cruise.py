@@ -158,7 +158,7 @@ class FleetCruise:
             self._release(np.array([i], dtype=np.intp))
 
     def release_all(self) -> None:
-        self._release(np.flatnonzero(self._armed))
+        self._release(self._armed.nonzero()[0])
 
     def forget(self, vehicles: Iterable[int], plan_of: Callable[[int], FleetPlan]) -> None:
         """Hand back at the next step the armed vehicles among ``vehicles`` whose plan is now another
@@ -249,10 +249,10 @@ class FleetCruise:
             self._recalled = []
         stepped_now = np.stack((t1, travelled, odometer, along, speed, x, y, table[NOSE]))
         np.copyto(table[: HEADING + 1], stepped_now, where=ok)
-        handed_back = np.flatnonzero(armed & ~ok)
+        handed_back = (armed & ~ok).nonzero()[0]
         if len(handed_back):
             self._release(handed_back)
-        stepped = np.flatnonzero(ok)
+        stepped = ok.nonzero()[0]
         ids, segments, traverses, progresses, types, disturbed = self._objects[:, stepped].tolist()
         moved = table[DISTANCE : HEADING + 1, stepped]
         distances, speeds, xs, ys, headings = moved.tolist()
@@ -261,7 +261,7 @@ class FleetCruise:
         )
         states = list(map(_make_state, fields))
         cruised = StateColumns(ids, states, segments, traverses, progresses, moved[SPEED - DISTANCE :], stepped)
-        return CruiseStep(cruised, np.flatnonzero(~ok).tolist())
+        return CruiseStep(cruised, (~ok).nonzero()[0].tolist())
 
 
 class _Released(Mapping[int, Driver]):

@@ -364,7 +364,7 @@ class _Run:
         self.stepped_at = stepped_at
         if stepped or cruised.ids:
             self.last_activity = end
-            self.last_moved[stepped_at] = end
+            self.last_moved.put(stepped_at, end)  # (faster than indexing with a list)
             self.last_moved[cruised.positions] = end
             controller.set_states([ids[i] for i in stepped_at], stepped)
             controller.set_states(cruised.ids, cruised.states)
@@ -379,7 +379,7 @@ class _Run:
         poses = self.poses
         if stepped:  # by index, as move() stepped them
             values = np.fromiter(chain.from_iterable(map(_POSE, stepped)), dtype=np.float64, count=3 * len(stepped))
-            poses[:, self.stepped_at] = values.reshape(-1, 3).T
+            poses.T[self.stepped_at] = values.reshape(-1, 3)  # (rows of the transposed view: twice as fast)
         if cruised is not None and len(cruised.positions):
             poses[:, cruised.positions] = cruised.motion[1:4]
         moved = self.last_moved == end  # move() stamps each vehicle that moved with the step's end
