@@ -23,7 +23,11 @@ the pair's own closest approach so far when that is closer: only a closer one wo
 least one of them moved in the step. Their bounding circles sort out most of those (the distance
 between circles never exceeds the distance between the rectangles they hold). The narrow phase takes
 the exact distance (:mod:`.geometry`) of the pairs whose circles come close enough to matter, one pair
-at a time in plain Python: a step leaves a handful per hundred vehicles.
+at a time in plain Python: a step leaves a handful per hundred vehicles. A fleet of a few (at most
+twelve vehicles) skips the arrays, whose fixed cost per step would be most of its judgement: every pair
+is listed, its vehicles' spent distances are plain floats, and it is looked at on the same rule; what a
+pair adds to the report does not depend on how often it is looked at beyond that rule, so the report is
+the same either way.
 
 The continuous phase catches what no sampled step shows: two fast vehicles that pass through each other
 within one step. It is conservative advancement along the poses interpolated between the step's start
@@ -168,6 +172,8 @@ class ContactMonitor:
         self._listed: _Listed | None = None  # the candidate pairs
         # Per vehicle, metres: the farthest any point of its footprint can have moved since the start.
         self._spent = np.zeros(len(self.ids))
+        # A fleet of a few: every pair looked at in plain Python, without the arrays' fixed cost per step.
+        self._few = _Few(self.radius.tolist()) if len(self.ids) <= _FEW else None
         self.looked = 0  # pairs looked at over the steps (a diagnostic: what the broad phase left)
 
     # -- the run ----------------------------------------------------------------------------------------
@@ -175,6 +181,8 @@ class ContactMonitor:
     def begin(self, x: Floats, y: Floats, heading: Floats, time: float = 0.0) -> list[Contact]:
         """The poses at the start: footprints that overlap already are contacts from ``time``."""
         self._poses = poses = np.array((x, y, heading), dtype=np.float64)
+        if self._few is not None:
+            self._few.poses = poses.tolist()
         i, j = self._candidates(poses, 0.0)
         table = np.vstack((poses, self._sizes))  # per vehicle: x, y, heading, half sizes, radius
         fresh = []
@@ -192,6 +200,8 @@ class ContactMonitor:
         Returns the contacts that began in it."""
         start = self._poses
         assert start is not None, "begin() first"
+        if self._few is not None:
+            return self._step_few(t0, t1, x, y, heading, moved)
         self._poses = end = np.array((x, y, heading), dtype=np.float64)
         if not np.count_nonzero(moved):  # nothing moved: no distance changed
             return []
@@ -216,12 +226,69 @@ class ContactMonitor:
         i, j = listed.i[due], listed.j[due]
         both = np.concatenate((i, j))
         ends, starts, spins = end[:, both].T.tolist(), start[:, both].T.tolist(), spin[both].tolist()
-        sizes = self._size_rows
-        pairs = len(due)
         fresh: list[Contact] = []
+        slack = self._look(t0, t1, i.tolist(), j.tolist(), ends, starts, spins, fresh)
+        listed.due[due] = spent[due] + np.array(slack)
+        return fresh
+
+    def _step_few(
+        self, t0: float, t1: float, x: Floats, y: Floats, heading: Floats, moved: npt.NDArray[np.bool_]
+    ) -> list[Contact]:
+        """:meth:`step` for a fleet of a few, in plain Python: every pair is listed, and looked at when it
+        is due and one of its vehicles moved. What a pair adds to the report is the same either way: a pair
+        is looked at only when it could add something, and looking at one that could not adds nothing."""
+        few = self._few
+        assert few is not None
+        start, few.poses = few.poses, [x.tolist(), y.tolist(), heading.tolist()]
+        moving = moved.tolist()
+        if True not in moving:  # nothing moved: no distance changed
+            return []
+        (xs, ys, hs), (xs0, ys0, hs0) = few.poses, start
+        spent = few.spent
+        # (As step() works them out: a centre's shift, plus the turn times the half diagonal.)
+        spins = [min(abs(h - h0), math.pi) * r for h, h0, r in zip(hs, hs0, few.radius, strict=True)]
+        for k, spin in enumerate(spins):
+            spent[k] += math.hypot(xs[k] - xs0[k], ys[k] - ys0[k]) + spin
+        due = few.due
+        looked = [
+            (k, p, q)
+            for k, (p, q) in enumerate(few.pairs)
+            if due[k] <= spent[p] + spent[q] and (moving[p] or moving[q])
+        ]
+        if not looked:
+            return []
+        self.looked += len(looked)
+        firsts = [p for _, p, _ in looked]
+        seconds = [q for _, _, q in looked]
+        both = firsts + seconds
+        ends = [[xs[v], ys[v], hs[v]] for v in both]
+        starts = [[xs0[v], ys0[v], hs0[v]] for v in both]
+        fresh: list[Contact] = []
+        slack = self._look(t0, t1, firsts, seconds, ends, starts, [spins[v] for v in both], fresh)
+        for (k, p, q), more in zip(looked, slack, strict=True):
+            due[k] = (spent[p] + spent[q]) + more
+        return fresh
+
+    def _look(
+        self,
+        t0: float,
+        t1: float,
+        firsts: list[int],
+        seconds: list[int],
+        ends: list[list[float]],
+        starts: list[list[float]],
+        spins: list[float],
+        fresh: list[Contact],
+    ) -> list[float]:
+        """Look at the pairs ``(firsts[k], seconds[k])``, in order: ``ends``, ``starts`` and ``spins`` hold
+        their first vehicles' x, y, heading at the step's end and start and spin, then their second ones'.
+        Contacts begun go to ``fresh``; returns each pair's slack: what the two must spend before it needs
+        to be looked at again."""
+        sizes = self._size_rows
+        pairs = len(firsts)
         slack: list[float] = []
         active, closest = self._active, self._closest
-        for k, (p, q) in enumerate(zip(i.tolist(), j.tolist(), strict=True)):
+        for k, (p, q) in enumerate(zip(firsts, seconds, strict=True)):
             (ax, ay, ah), (ax0, ay0, ah0), (al, aw, ar) = ends[k], starts[k], sizes[p]
             (bx, by, bh), (bx0, by0, bh0), (bl, bw, br) = ends[pairs + k], starts[pairs + k], sizes[q]
             a1, b1 = (ax, ay, ah, al, aw), (bx, by, bh, bl, bw)
@@ -248,8 +315,7 @@ class ContactMonitor:
             known = closest.get((p, q))
             floor = self._limit if known is None else min(known[0], self._limit)
             slack.append(distance - floor - TOUCH)
-        listed.due[due] = spent[due] + np.array(slack)
-        return fresh
+        return slack
 
     def report(self) -> ContactReport:
         """What was found; an overlap still in force at the end has ``until`` None."""
@@ -441,6 +507,27 @@ class ContactMonitor:
             known = self._closest.get((p, q))
             if known is None or distance < known[0]:
                 self._closest[(p, q)] = (distance, time, x, y)
+
+
+# Fleets of at most this many vehicles (66 pairs) are judged in plain Python (ContactMonitor._step_few):
+# below it, the arrays' fixed cost per step (some twenty operations) is more than the pairs' own.
+_FEW = 12
+
+
+class _Few:
+    """A fleet of a few, judged in plain Python: every pair (i < j, in order), what its two vehicles must
+    have spent before it is looked at again, each vehicle's spent distance and half diagonal, and the
+    poses at the last step's end (x, y, heading rows)."""
+
+    __slots__ = ("due", "pairs", "poses", "radius", "spent")
+
+    def __init__(self, radius: list[float]) -> None:
+        count = len(radius)
+        self.pairs = [(i, j) for i in range(count) for j in range(i + 1, count)]
+        self.due = [-math.inf] * len(self.pairs)
+        self.spent = [0.0] * count
+        self.radius = radius
+        self.poses: list[list[float]] = []
 
 
 class _Listed:

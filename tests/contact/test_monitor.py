@@ -211,14 +211,16 @@ def test_the_broad_phase_misses_no_pair_that_could_matter(area: float) -> None:
     assert len(i) == len(found) and all(p < q for p, q in found)  # each pair once, in order
 
 
-def test_pairs_left_unlooked_at_could_not_have_mattered() -> None:
+@pytest.mark.parametrize("count", [40, 12])  # the arrays, and a fleet of a few judged in plain Python
+def test_pairs_left_unlooked_at_could_not_have_mattered(count: int) -> None:
     """The monitor keeps its candidate pairs over steps and looks at a pair again only when its vehicles
     have moved enough to close the gap to what counts. Against every pair's exact distance at every step's
     end, over a random walk of a crowd (some standing, some turning, some driving): no contact, near miss
     or closer clearance is missed."""
     rng = np.random.default_rng(5)
-    count, steps, dt = 40, 150, 0.1
-    x, y = rng.uniform(0, 12, count), rng.uniform(0, 12, count)
+    steps, dt = 150, 0.1
+    side = 12.0 * math.sqrt(count / 40)  # as crowded either way
+    x, y = rng.uniform(0, side, count), rng.uniform(0, side, count)
     heading = rng.uniform(-math.pi, math.pi, count)
     lengths, widths = rng.uniform(0.6, 1.4, count), rng.uniform(0.4, 0.8, count)
     monitor = ContactMonitor(list(range(count)), lengths.tolist(), widths.tolist())
@@ -267,3 +269,34 @@ def test_a_pair_drawing_apart_after_its_closest_approach_is_looked_at_again_only
     [miss] = monitor.report().near_misses
     assert miss.distance == pytest.approx(0.25) and miss.time == pytest.approx(3.5)
     assert monitor.looked - away >= 5  # closing in from 0.30 to 0.25: every step beats the record
+
+
+def _walk(monitor: ContactMonitor, seed: int, count: int) -> list[list[object]]:
+    """A seeded random walk of ``count`` vehicles, bumping into each other; each step's fresh contacts."""
+    rng = np.random.default_rng(seed)
+    side = 2.0 + 0.4 * count  # metres square: they stay in it (pressed against its walls)
+    x, y = rng.uniform(0, side, count), rng.uniform(0, side, count)
+    heading = rng.uniform(-math.pi, math.pi, count)
+    found: list[list[object]] = [list(monitor.begin(x, y, heading))]
+    speed = rng.uniform(0, 2.0, count)
+    for k in range(300):
+        moved = rng.uniform(size=count) < 0.7
+        turn = rng.normal(0, 0.3, count) * moved
+        heading = np.remainder(heading + turn + math.pi, 2 * math.pi) - math.pi  # wrapping round at times
+        x = np.clip(x + np.where(moved, speed * 0.1 * np.cos(heading), 0.0), 0.0, side)
+        y = np.clip(y + np.where(moved, speed * 0.1 * np.sin(heading), 0.0), 0.0, side)
+        found.append(list(monitor.step(k * 0.1, (k + 1) * 0.1, x, y, heading, moved)))
+    return found
+
+
+@pytest.mark.parametrize("count", range(2, 13))
+def test_a_fleet_of_a_few_judged_in_plain_python_gives_what_the_arrays_give(count: int) -> None:
+    sizes = np.random.default_rng(count).uniform(0.5, 1.5, (2, count)).tolist()
+    contacts = 0
+    for seed in range(3):
+        few, arrays = (ContactMonitor(list(range(1, count + 1)), *sizes) for _ in range(2))
+        arrays._few = None  # judged in arrays, as a larger fleet is
+        assert _walk(few, seed, count) == _walk(arrays, seed, count)
+        assert few.report() == arrays.report()
+        contacts += len(few.report().contacts)
+    assert contacts > 0
