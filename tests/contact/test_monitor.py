@@ -211,7 +211,7 @@ def test_the_broad_phase_misses_no_pair_that_could_matter(area: float) -> None:
     assert len(i) == len(found) and all(p < q for p, q in found)  # each pair once, in order
 
 
-@pytest.mark.parametrize("count", [40, 12])  # the arrays, and a fleet of a few judged in plain Python
+@pytest.mark.parametrize("count", [40, 16])  # the arrays, and a fleet of a few judged in plain Python
 def test_pairs_left_unlooked_at_could_not_have_mattered(count: int) -> None:
     """The monitor keeps its candidate pairs over steps and looks at a pair again only when its vehicles
     have moved enough to close the gap to what counts. Against every pair's exact distance at every step's
@@ -289,7 +289,7 @@ def _walk(monitor: ContactMonitor, seed: int, count: int) -> list[list[object]]:
     return found
 
 
-@pytest.mark.parametrize("count", range(2, 13))
+@pytest.mark.parametrize("count", range(2, 17))
 def test_a_fleet_of_a_few_judged_in_plain_python_gives_what_the_arrays_give(count: int) -> None:
     sizes = np.random.default_rng(count).uniform(0.5, 1.5, (2, count)).tolist()
     contacts = 0
