@@ -201,7 +201,9 @@ class ContactMonitor:
         start = self._poses
         assert start is not None, "begin() first"
         if self._few is not None:
-            return self._step_few(t0, t1, x, y, heading, moved)
+            at = moved.nonzero()[0]
+            poses = list(zip(x[at].tolist(), y[at].tolist(), heading[at].tolist(), strict=True))
+            return self._step_few(t0, t1, at.tolist(), poses)
         self._poses = end = np.array((x, y, heading), dtype=np.float64)
         if not np.count_nonzero(moved):  # nothing moved: no distance changed
             return []
@@ -231,29 +233,46 @@ class ContactMonitor:
         listed.due[due] = spent[due] + np.array(slack)
         return fresh
 
-    def _step_few(
-        self, t0: float, t1: float, x: Floats, y: Floats, heading: Floats, moved: npt.NDArray[np.bool_]
+    @property
+    def few(self) -> bool:
+        """The fleet is a few, judged in plain Python: :meth:`step_moved` takes its steps without arrays."""
+        return self._few is not None
+
+    def step_moved(
+        self, t0: float, t1: float, moved: list[int], poses: list[tuple[float, float, float]]
     ) -> list[Contact]:
-        """:meth:`step` for a fleet of a few, in plain Python: every pair is listed, and looked at when it
-        is due and one of its vehicles moved. What a pair adds to the report is the same either way: a pair
-        is looked at only when it could add something, and looking at one that could not adds nothing."""
+        """:meth:`step` for a fleet of a few (:attr:`few`), told only which vehicles moved (their indices)
+        and their poses (x, y, heading) at the step's end; the others stand where they were."""
+        assert self._poses is not None, "begin() first"
+        return self._step_few(t0, t1, moved, poses)
+
+    def _step_few(
+        self, t0: float, t1: float, moved: list[int], poses: list[tuple[float, float, float]]
+    ) -> list[Contact]:
+        """The step of a fleet of a few, in plain Python: every pair is listed, and looked at when it is due
+        and one of its vehicles moved. What a pair adds to the report is the same either way: a pair is
+        looked at only when it could add something, and looking at one that could not adds nothing."""
         few = self._few
         assert few is not None
-        start, few.poses = few.poses, [x.tolist(), y.tolist(), heading.tolist()]
-        moving = moved.tolist()
-        if True not in moving:  # nothing moved: no distance changed
+        if not moved:  # nothing moved: no distance changed
             return []
-        (xs, ys, hs), (xs0, ys0, hs0) = few.poses, start
-        spent = few.spent
-        # (As step() works them out: a centre's shift, plus the turn times the half diagonal.)
-        spins = [min(abs(h - h0), math.pi) * r for h, h0, r in zip(hs, hs0, few.radius, strict=True)]
-        for k, spin in enumerate(spins):
-            spent[k] += math.hypot(xs[k] - xs0[k], ys[k] - ys0[k]) + spin
+        xs, ys, hs = few.poses
+        spent, radius = few.spent, few.radius
+        # The moved vehicles' poses at the step's start, and their spins (a standing vehicle's is 0.0, as
+        # step() works it out); their spent distances as step() adds them: the centre's shift, plus the
+        # turn times the half diagonal.
+        starts: dict[int, tuple[float, float, float]] = {}
+        spins: dict[int, float] = {}
+        for v, (x, y, h) in zip(moved, poses, strict=True):
+            x0, y0, h0 = starts[v] = (xs[v], ys[v], hs[v])
+            xs[v], ys[v], hs[v] = x, y, h
+            spin = spins[v] = min(abs(h - h0), math.pi) * radius[v]
+            spent[v] += math.hypot(x - x0, y - y0) + spin
         due = few.due
         looked = [
             (k, p, q)
             for k, (p, q) in enumerate(few.pairs)
-            if due[k] <= spent[p] + spent[q] and (moving[p] or moving[q])
+            if due[k] <= spent[p] + spent[q] and (p in spins or q in spins)
         ]
         if not looked:
             return []
@@ -262,9 +281,9 @@ class ContactMonitor:
         seconds = [q for _, _, q in looked]
         both = firsts + seconds
         ends = [[xs[v], ys[v], hs[v]] for v in both]
-        starts = [[xs0[v], ys0[v], hs0[v]] for v in both]
+        begun = [list(starts[v]) if v in starts else [xs[v], ys[v], hs[v]] for v in both]
         fresh: list[Contact] = []
-        slack = self._look(t0, t1, firsts, seconds, ends, starts, [spins[v] for v in both], fresh)
+        slack = self._look(t0, t1, firsts, seconds, ends, begun, [spins.get(v, 0.0) for v in both], fresh)
         for (k, p, q), more in zip(looked, slack, strict=True):
             due[k] = (spent[p] + spent[q]) + more
         return fresh

@@ -375,7 +375,14 @@ class _Run:
     ) -> list[Contact]:
         """The contacts that began in the step from ``start`` to ``end``, the poses brought up to date
         with what moved in it."""
-        assert self.contact is not None
+        contact = self.contact
+        assert contact is not None
+        if contact.few:  # told only what moved, in plain Python (self.poses is not kept up to date then)
+            moved_at, moved_poses = list(self.stepped_at), list(map(_POSE, stepped))
+            if cruised is not None and len(cruised.positions):
+                moved_at += cruised.positions.tolist()
+                moved_poses += zip(*cruised.motion[1:4].tolist(), strict=True)
+            return contact.step_moved(start, end, moved_at, moved_poses)
         poses = self.poses
         if stepped:  # by index, as move() stepped them
             values = np.fromiter(chain.from_iterable(map(_POSE, stepped)), dtype=np.float64, count=3 * len(stepped))
@@ -383,7 +390,7 @@ class _Run:
         if cruised is not None and len(cruised.positions):
             poses[:, cruised.positions] = cruised.motion[1:4]
         moved = self.last_moved == end  # move() stamps each vehicle that moved with the step's end
-        return self.contact.step(start, end, poses[0], poses[1], poses[2], moved)
+        return contact.step(start, end, poses[0], poses[1], poses[2], moved)
 
     def diagnose(self, kind: Literal["deadlock", "timeout"], now: float) -> Diagnosis:
         """Why the vehicles with pending tasks have not finished them (at the run's end)."""

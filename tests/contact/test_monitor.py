@@ -271,8 +271,9 @@ def test_a_pair_drawing_apart_after_its_closest_approach_is_looked_at_again_only
     assert monitor.looked - away >= 5  # closing in from 0.30 to 0.25: every step beats the record
 
 
-def _walk(monitor: ContactMonitor, seed: int, count: int) -> list[list[object]]:
-    """A seeded random walk of ``count`` vehicles, bumping into each other; each step's fresh contacts."""
+def _walk(monitor: ContactMonitor, seed: int, count: int, told_what_moved: bool = False) -> list[list[object]]:
+    """A seeded random walk of ``count`` vehicles, bumping into each other; each step's fresh contacts
+    (``told_what_moved``: the monitor is given only the moved vehicles' poses, as the loop gives a few)."""
     rng = np.random.default_rng(seed)
     side = 2.0 + 0.4 * count  # metres square: they stay in it (pressed against its walls)
     x, y = rng.uniform(0, side, count), rng.uniform(0, side, count)
@@ -285,7 +286,12 @@ def _walk(monitor: ContactMonitor, seed: int, count: int) -> list[list[object]]:
         heading = np.remainder(heading + turn + math.pi, 2 * math.pi) - math.pi  # wrapping round at times
         x = np.clip(x + np.where(moved, speed * 0.1 * np.cos(heading), 0.0), 0.0, side)
         y = np.clip(y + np.where(moved, speed * 0.1 * np.sin(heading), 0.0), 0.0, side)
-        found.append(list(monitor.step(k * 0.1, (k + 1) * 0.1, x, y, heading, moved)))
+        if told_what_moved:
+            at = moved.nonzero()[0].tolist()
+            poses = [(float(x[v]), float(y[v]), float(heading[v])) for v in at]
+            found.append(list(monitor.step_moved(k * 0.1, (k + 1) * 0.1, at, poses)))
+        else:
+            found.append(list(monitor.step(k * 0.1, (k + 1) * 0.1, x, y, heading, moved)))
     return found
 
 
@@ -294,9 +300,12 @@ def test_a_fleet_of_a_few_judged_in_plain_python_gives_what_the_arrays_give(coun
     sizes = np.random.default_rng(count).uniform(0.5, 1.5, (2, count)).tolist()
     contacts = 0
     for seed in range(3):
-        few, arrays = (ContactMonitor(list(range(1, count + 1)), *sizes) for _ in range(2))
+        few, told, arrays = (ContactMonitor(list(range(1, count + 1)), *sizes) for _ in range(3))
         arrays._few = None  # judged in arrays, as a larger fleet is
-        assert _walk(few, seed, count) == _walk(arrays, seed, count)
-        assert few.report() == arrays.report()
+        assert few.few and told.few and not arrays.few
+        expected = _walk(arrays, seed, count)
+        assert _walk(few, seed, count) == expected
+        assert _walk(told, seed, count, told_what_moved=True) == expected  # as the loop tells a few
+        assert few.report() == told.report() == arrays.report()
         contacts += len(few.report().contacts)
     assert contacts > 0

@@ -9,6 +9,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
+from loop_switches import run_switched
 from mcap.reader import make_reader
 
 from fleetsim.enums import Progress, Traverse
@@ -47,6 +48,21 @@ def test_head_on_in_the_corridor_is_a_reservation_alert_and_a_contact() -> None:
     assert contact.depth == pytest.approx(0.6)  # they drove right through: the least way out, a width
     assert contact.until == pytest.approx(19.6)
     assert result.metrics.clearance == 0.0
+
+
+@pytest.mark.parametrize(
+    ("suite", "name"), [("caught-bugs.fleetsim.yaml", "corridor-head-on"), ("examples.fleetsim.yaml", "crossing")]
+)
+def test_a_few_vehicles_contact_report_is_the_same_cruising_in_arrays_or_stepped_one_by_one(
+    suite: str, name: str
+) -> None:
+    # The loop tells the monitor of a few what moved: from the drivers one by one, or from the arrays'
+    # columns when the vehicles cruise there (forced here; a few do not by default).
+    scenario = replace(_scenario(suite, name), expect=Expectations())
+    scenario = replace(scenario, settings=replace(scenario.settings, stop_on=()))  # on through the contacts
+    batched, one_by_one = (run_switched(scenario, BFSPlanner(), batched=b) for b in (True, False))
+    assert batched.contact is not None and batched.contact == one_by_one.contact
+    assert batched.contact.contacts  # (BFSPlanner drives into the other)
 
 
 def test_with_reservations_off_the_same_run_has_no_alert_and_fails_on_contact() -> None:
