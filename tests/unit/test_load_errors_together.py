@@ -70,8 +70,9 @@ def test_a_broken_map_and_bad_csv_rows_are_reported_together(tmp_path: Path) -> 
     errors = caught.value.errors
     assert isinstance(errors[0], MapError) and MAP_PROBLEM in errors[0].problem
     assert [str(e).removeprefix(f"{folder}/") for e in errors[1:]] == [ORIENTATION, UNKNOWN_VEHICLE]
-    # Whether segment 99 exists needs the map: not said until the map loads.
-    assert not any("99" in str(e) for e in errors)
+    # Whether segment 99 exists needs the map: not said until the map loads. (The folder's own path is left
+    # out: pytest's numbered temporary folders hold "99" at times.)
+    assert not any("99" in str(e).replace(str(tmp_path), "") for e in errors)
 
 
 def test_with_the_map_mended_the_segment_check_joins_the_row_errors(tmp_path: Path) -> None:
