@@ -81,7 +81,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from compare import trees
+from compare import column, trees
 
 from fleetsim import load_scenario, load_suite
 from fleetsim.compiled import compiled_modules
@@ -390,10 +390,7 @@ def run_child(suite_file: Path, case: Case, seconds: float) -> None:
 def run_in(tree: Path, suite_file: Path, case: Case, seconds: float) -> subprocess.Popen[str]:
     """The child of :func:`run_child` started in ``tree`` (its fleetsim first on the path)."""
     command = [sys.executable, str(Path(__file__).resolve()), "--child", str(suite_file), "--case", case.name]
-    command += [
-        "--hours" if case.name != "stretch" else "--minutes",
-        f"{seconds / (60.0 if case.name == 'stretch' else 3600.0)!r}",
-    ]
+    command += ["--child-seconds", repr(seconds)]
     env = {**os.environ, "PYTHONPATH": str(tree)}
     return subprocess.Popen(command, cwd=tree, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
@@ -427,9 +424,7 @@ def versus(ref: str, case: Case, seconds: float, repeat: int, parallel: bool, fo
     for name, runs in rounds.items():
         print(f"  {name}")
         for label, key, form in VERSUS_FIGURES:
-            values = [float(run[key]) for run in runs]
-            shown = " ".join(form.format(v) for v in values)
-            print(f"    {label:<18} {shown}  median {form.format(statistics.median(values))}")
+            print(f"    {label:<18} {column(runs, key, form)}")
     walls = {name: statistics.median(float(run["wall"]) for run in runs) for name, runs in rounds.items()}
     (first, before), (_, after) = walls.items()
     print(f"  this tree runs the shift {before / after:.2f}x as fast as {first}")
@@ -459,12 +454,14 @@ def main() -> int:
     parser.add_argument("--top", type=int, default=25, help="functions listed with --profile")
     parser.add_argument("--vs", metavar="REF", help="compare the orders run with commit REF side by side instead")
     parser.add_argument("--parallel", action="store_true", help="with --vs: run the two trees at once, a core each")
-    parser.add_argument("--child", type=Path, help=argparse.SUPPRESS)  # (--vs: one run of a generated suite)
+    # (--vs: one run of a generated suite, in the tree whose fleetsim is on the path)
+    parser.add_argument("--child", type=Path, help=argparse.SUPPRESS)
+    parser.add_argument("--child-seconds", type=float, help=argparse.SUPPRESS)
     args = parser.parse_args()
-    seconds = {"shift": args.hours * 3600.0, "shift100": args.hours * 3600.0, "stretch": args.minutes * 60.0}
     if args.child is not None:
-        run_child(args.child, CASES[args.case], seconds[args.case])
+        run_child(args.child, CASES[args.case], args.child_seconds)
         return 0
+    seconds = {"shift": args.hours * 3600.0, "shift100": args.hours * 3600.0, "stretch": args.minutes * 60.0}
     if args.repeat < 1:
         parser.error(f"--repeat={args.repeat} must be at least 1")
     if not args.hours > 0 or not args.minutes > 0:
