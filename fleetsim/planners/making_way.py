@@ -13,7 +13,7 @@ import heapq
 import math
 from collections.abc import Callable
 from collections.abc import Set as AbstractSet
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import ClassVar
 
 from fleetsim.enums import JointKind, TurnCapability
@@ -22,7 +22,7 @@ from fleetsim.layout.reachability import State, state_key
 from fleetsim.planners.fleet_index import FleetIndex
 from fleetsim.planners.routing import Recent, StepTable, rebuild_path
 
-__all__ = ["WayOut", "WaysOutMemo", "ways_out"]
+__all__ = ["Reads", "WayOut", "WaysOutMemo", "ways_out"]
 
 _CROSSING_PENALTY = 30.0  # metres added for driving where a movable vehicle stands
 
@@ -162,6 +162,31 @@ def _search(
     return _Found(ways, index.tick, tuple(held.items()), tuple(routes), tuple(asked.items()))
 
 
+@dataclass(slots=True)
+class Reads:
+    """What several searches for ways out read, gathered (for a planner's quiet hint, which names what to
+    wait for): the searches themselves, whose segments' holders were read and whose vehicles were asked
+    whether they may be moved (:meth:`segments`, :attr:`vehicles`: gathered only when asked for, as most
+    attempts read something no hint names), the places whose count of routes near ordered the ways found
+    (:meth:`routes`), and other vehicles read."""
+
+    others: set[int]
+    found: list[_Found] = field(default_factory=list)
+
+    def add(self, found: _Found) -> None:
+        self.found.append(found)
+
+    def segments(self) -> set[int]:
+        return {segment for found in self.found for segment, _ in found.held}
+
+    def routes(self) -> set[int]:
+        """The places whose count of routes near ordered two or more ways found (one way needs no order)."""
+        return {segment for found in self.found if len(found.ways) > 1 for segment, _ in found.routes}
+
+    def vehicles(self) -> set[int]:
+        return self.others.union(*({vehicle for vehicle, _ in found.asked} for found in self.found))
+
+
 class WaysOutMemo:
     """Ways out found, given again while nothing the search read has changed.
 
@@ -204,16 +229,22 @@ class WaysOutMemo:
         limit: int,
         table: StepTable,
         wanted: int = 6,
+        reads: Reads | None = None,
     ) -> list[WayOut]:
-        """As :func:`ways_out`, the layout's steps (``table``, for the vehicle's turn capability) given."""
+        """As :func:`ways_out`, the layout's steps (``table``, for the vehicle's turn capability) given;
+        what the search read (remembered or made) is added to ``reads``."""
         self.asked += 1
         key = (vehicle, start, frozenset(avoid), table.capability, turnaround, limit, wanted)
         for found in self._found.get(key):
             if found.holds(vehicle, index, movable):
+                if reads is not None:
+                    reads.add(found)
                 return found.ways
         self.searched += 1
         found = _search(vehicle, start, avoid, index, lengths, movable, turnaround, limit, wanted, table)
         self._found.keep(key, found)
+        if reads is not None:
+            reads.add(found)
         return found.ways
 
     def widened(self, avoid: AbstractSet[int], start: State, way: WayOut, layout: Layout) -> frozenset[int]:

@@ -45,7 +45,7 @@ from fleetsim.layout.layout import Layout
 from fleetsim.layout.reachability import State, next_states
 from fleetsim.planners.choreography import Dance, choreograph
 from fleetsim.planners.fleet_index import FleetIndex
-from fleetsim.planners.making_way import WayOut, WaysOutMemo
+from fleetsim.planners.making_way import Reads, WayOut, WaysOutMemo
 from fleetsim.planners.routing import (
     RouteFound,
     RouteRead,
@@ -146,7 +146,13 @@ class ReservingPlanner:
         # cruising along legs fixed far enough ahead with no vehicle without tasks near its next legs, and
         # the segments of those legs; the epoch changes when a dance starts (every vehicle is asked then).
         self._calm: tuple[int, Quiet] | None = None
+        # What a blocked vehicle's attempts to move others out of its way read, while it makes them: when
+        # they all fail, its hint names what to wait for (_calm_standing).
+        self._reads: Reads | None = None
         self._calm_after_clearing = False
+        # What the last call's failed attempts to move vehicles without tasks from ahead of it read (None:
+        # there were none to move): a hint given after them waits for these too.
+        self._clearing: Reads | None = None
         self._idle_of: tuple[object, frozenset[int]] = (None, frozenset())  # (fleet.tasks, its idle vehicles)
         self.quiet_epoch = 0
         # The hint holds for this class's answers: a subclass that answers otherwise gets none (unless it
@@ -196,7 +202,7 @@ class ReservingPlanner:
             return danced
         plan = fleet.plans[vehicle_id]
         if self._haven.get(vehicle_id) == plan.legs[0].segment:
-            del self._haven[vehicle_id]  # it has arrived where it was sent to wait
+            self._send_to_wait(vehicle_id, None)  # it has arrived where it was sent to wait
         fixed_count = len(plan.fixed_legs)
         cleared = self._clear_idle_ahead(vehicle_id, plan, fleet, layout, index)
         response: list[FleetPlan] = [*danced, *cleared]
@@ -205,7 +211,7 @@ class ReservingPlanner:
             # Committed, or enough to drive on at speed: until its plan or what stands near its next legs
             # changes, asking again changes nothing.
             if not response and self._calm_after_clearing:
-                self._calm = (vehicle_id, Quiet(self._next_segments(plan)))
+                self._hint(vehicle_id, self._next_segments(plan), fleet)
             if not committed:
                 # (_fix would fix nothing; moving, it is not standing, so _unblock would only forget its looks.)
                 (self._blocked if cleared else self._next_look).pop(vehicle_id, None)
@@ -222,7 +228,7 @@ class ReservingPlanner:
             # plan changes or what stands near its next legs does, asking again changes nothing.
             self._rank(vehicle_id, fleet)
             self._next_look.pop(vehicle_id, None)
-            self._calm = (vehicle_id, Quiet(self._next_segments(plan) | {following}, until_standing=True))
+            self._hint(vehicle_id, self._next_segments(plan) | {following}, fleet, until_standing=True)
             return response
         extended = self._fix(plan, fleet, index)
         if extended is not plan:
@@ -379,33 +385,19 @@ class ReservingPlanner:
                 return [moved_on]
         pushing = fleet.time - since >= self.push_after - 1e-9
         lower: list[int] = []
+        reads: Reads | None = None
         if pushing:
             mine = self._rank(vehicle_id, fleet)
-            lower = [other for other in index.holders(vehicle_id, following.segment) if self._rank(other, fleet) > mine]
-            moved: list[FleetPlan] = []
-            taken = {vehicle_id}
-            for other in lower:
-                plans = self._evacuate(other, self._near(plan, layout), mine, fleet, layout, index, taken, depth=2)
-                if plans:
-                    moved += self._assumed(plans, index)
-                    taken |= {p.vehicle_id for p in plans}
-            if moved:
-                return self._committed(moved, fleet)
-            standing = [other for other in lower if self._standing(other, fleet)]
-            where = tuple((other, fleet.vehicles[other].segment) for other in standing)
-            if standing and self._stepped_for.get(vehicle_id) != where:
-                # They cannot get out of its way (a dead end behind them, say): it gets out of theirs,
-                # off their routes and off the way they would take out of its way if it were not there.
-                keep_clear = set().union(*(self._near(fleet.plans[other], layout) for other in standing))
-                for other in standing:
-                    keep_clear |= self._way_out_past(other, vehicle_id, self._near(plan, layout), fleet, layout, index)
-                plans = self._evacuate(vehicle_id, keep_clear, mine, fleet, layout, index, set(standing), depth=2)
-                if plans:
-                    self._assumed(plans, index)
-                    self._stepped_for[vehicle_id] = where
-                    way = frozenset(self._near(plan, layout))
-                    self._aside[vehicle_id] = (fleet.time + self.aside_for, frozenset(keep_clear), where, way)
-                    return self._committed(plans, fleet)
+            holders = index.holders(vehicle_id, following.segment)
+            lower = [other for other in holders if self._rank(other, fleet) > mine]
+            if lower and self._calm_after_clearing:  # (else no hint is given: nothing to gather)
+                reads = self._reads = Reads({vehicle_id, *holders})
+            try:
+                pushed = self._push(vehicle_id, plan, lower, mine, fleet, layout, index)
+            finally:
+                self._reads = None
+            if pushed:
+                return pushed
         if (
             fleet.time - since >= self.dance_after - 1e-9
             and self._dance is None
@@ -425,22 +417,107 @@ class ReservingPlanner:
             if detour is not None and detour != plan.legs[len(plan.fixed_legs) :]:
                 rerouted = FleetPlan(vehicle_id, (*plan.fixed_legs, *detour))
                 return [self._fix(rerouted, fleet, index)]
-        if self._calm_after_clearing and not lower and index.others_fixed_near(vehicle_id, following.segment):
-            self._calm_standing(vehicle_id, plan, since, pushing, following.segment)
+        if self._calm_after_clearing and index.others_fixed_near(vehicle_id, following.segment):
+            # (With lower-ranked blockers that could not be moved, until what those attempts read changes.)
+            self._calm_standing(vehicle_id, plan, since, pushing, following.segment, fleet, reads)
         return []
 
-    def _calm_standing(self, vehicle_id: int, plan: FleetPlan, since: float, pushing: bool, following: int) -> None:
-        """The quiet hint for a vehicle that stands blocked right ahead by vehicles that all rank above it
-        (none to move away), with none without tasks near its next legs: until one of them or its own plan
-        changes, what it does changes only with time, when it may move blockers (``push_after``), start a
-        dance or look for a way round; it is asked again a little before the first of these."""
+    def _push(
+        self,
+        vehicle_id: int,
+        plan: FleetPlan,
+        lower: list[int],
+        mine: Rank,
+        fleet: FleetSnapshot,
+        layout: Layout,
+        index: FleetIndex,
+    ) -> list[FleetPlan]:
+        """Plans that move the lower-ranked blockers ``lower`` out of the way of standing, blocked
+        ``vehicle_id``, or that take it out of theirs; none when neither can be done."""
+        moved: list[FleetPlan] = []
+        taken = {vehicle_id}
+        for other in lower:
+            plans = self._evacuate(other, self._near(plan, layout), mine, fleet, layout, index, taken, depth=2)
+            if plans:
+                moved += self._assumed(plans, index)
+                taken |= {p.vehicle_id for p in plans}
+        if moved:
+            return self._committed(moved, fleet)
+        standing = [other for other in lower if self._standing(other, fleet)]
+        where = tuple((other, fleet.vehicles[other].segment) for other in standing)
+        if standing and self._stepped_for.get(vehicle_id) != where:
+            # They cannot get out of its way (a dead end behind them, say): it gets out of theirs,
+            # off their routes and off the way they would take out of its way if it were not there.
+            keep_clear = set().union(*(self._near(fleet.plans[other], layout) for other in standing))
+            for other in standing:
+                keep_clear |= self._way_out_past(other, vehicle_id, self._near(plan, layout), fleet, layout, index)
+            plans = self._evacuate(vehicle_id, keep_clear, mine, fleet, layout, index, set(standing), depth=2)
+            if plans:
+                self._assumed(plans, index)
+                self._stepped_for[vehicle_id] = where
+                way = frozenset(self._near(plan, layout))
+                self._aside[vehicle_id] = (fleet.time + self.aside_for, frozenset(keep_clear), where, way)
+                return self._committed(plans, fleet)
+        return []
+
+    def _calm_standing(
+        self,
+        vehicle_id: int,
+        plan: FleetPlan,
+        since: float,
+        pushing: bool,
+        following: int,
+        fleet: FleetSnapshot,
+        reads: Reads | None = None,
+    ) -> None:
+        """The quiet hint for a vehicle that stands blocked right ahead, with none without tasks near its
+        next legs, by vehicles that all rank above it (none to move away), or (``reads``) by lower-ranked ones
+        that could not be moved, nor it out of their way: what those attempts read. Until one of the
+        vehicles ahead or its own plan changes (or what the attempts read: the holders of the segments their
+        searches reached, the vehicles they asked about, whether those are moved lately), what it does
+        changes only with time, when it may move blockers (``push_after``), start a dance or look for a way
+        round; it is asked again a little before the first of these."""
         moments = [] if pushing else [since + self.push_after]
         if self._dance is None:
             moments.append(max(since + self.dance_after, self._no_dance.get(vehicle_id, -math.inf)))
         if vehicle_id not in self._haven and vehicle_id in self._next_look:
             moments.append(self._next_look[vehicle_id][0])
         until = min(moments) - _EARLY if moments else math.inf  # (none: a dance goes on, no hint is given)
-        self._calm = (vehicle_id, Quiet(self._next_segments(plan) | {following}, until=until))
+        self._hint(vehicle_id, self._next_segments(plan) | {following}, fleet, until=until, reads=reads)
+
+    def _hint(
+        self,
+        vehicle_id: int,
+        watch: frozenset[int],
+        fleet: FleetSnapshot,
+        *,
+        until: float = math.inf,
+        until_standing: bool = False,
+        reads: Reads | None = None,
+    ) -> None:
+        """Give the quiet hint for this call (``quiet()`` hands it out): rest, watching ``watch``, until
+        ``until`` or (``until_standing``) the vehicle stands; and until anything the call's failed attempts
+        to move others read changes (``reads``, and those of moving vehicles without tasks from ahead of
+        it): the holders of the segments their searches reached, the vehicles they asked about, the routes
+        near the places that ordered the ways found, and the end of the cooldown of any of those vehicles
+        moved lately (it may be moved again then)."""
+        vehicles: set[int] = set()
+        routes: set[int] = set()
+        for gathered in (self._clearing, reads):
+            if gathered is not None:
+                watch |= gathered.segments()
+                vehicles |= gathered.vehicles()
+                routes |= gathered.routes()
+        moments = [
+            self._pushed[other] + self.push_cooldown - 1e-9 - _EARLY
+            for other in sorted(vehicles)
+            if self._recently_moved(other, fleet)
+        ]
+        until = min(until, *moments) if moments else until
+        self._calm = (
+            vehicle_id,
+            Quiet(watch, until, until_standing, vehicles=frozenset(vehicles), routes=frozenset(routes)),
+        )
 
     @staticmethod
     def _assumed(plans: list[FleetPlan], index: FleetIndex) -> list[FleetPlan]:
@@ -491,15 +568,20 @@ class ReservingPlanner:
         aside = self._aside.get(vehicle_id)
         if aside is not None:
             to_move += [(other, set(aside[3])) for other, _ in aside[2] if other in idle]
-        # Nobody to move, and no standing aside: nothing here changes until near vehicles do (the quiet hint).
-        self._calm_after_clearing = not to_move and aside is None
-        for other, avoid in to_move:
-            if other in taken:
-                continue
-            plans = self._evacuate(other, avoid, (math.inf, -1), fleet, layout, index, taken, depth=0)
-            if plans:
-                moved += self._assumed(plans, index)
-                taken |= {p.vehicle_id for p in plans}
+        # Nobody to move, or nobody that could be moved (what those attempts read is gathered), and no standing
+        # aside: nothing here changes until near vehicles do, or what the attempts read (the quiet hint).
+        self._clearing = self._reads = Reads(set()) if to_move and aside is None else None
+        try:
+            for other, avoid in to_move:
+                if other in taken:
+                    continue
+                plans = self._evacuate(other, avoid, (math.inf, -1), fleet, layout, index, taken, depth=0)
+                if plans:
+                    moved += self._assumed(plans, index)
+                    taken |= {p.vehicle_id for p in plans}
+        finally:
+            self._reads = None
+        self._calm_after_clearing = aside is None and not moved
         return self._committed(moved, fleet) if moved else moved
 
     def _idle(self, fleet: FleetSnapshot) -> frozenset[int]:
@@ -523,6 +605,9 @@ class ReservingPlanner:
     ) -> list[FleetPlan] | None:
         """Plans that take standing ``vehicle_id`` out of ``avoid`` (and on to its goal), moving standing
         vehicles ranked below ``above`` out of its way first (up to ``depth`` deep); None if it cannot."""
+        reads = self._reads
+        if reads is not None:
+            reads.others.add(vehicle_id)
         if (
             vehicle_id in taken
             or vehicle_id in self._group
@@ -548,8 +633,9 @@ class ReservingPlanner:
         lengths, turnaround, limit = self._lengths, self.turnaround_penalty, self.search_limit
         table = self._table(layout, capability)
         for way in self._ways_out.ways_out(
-            vehicle_id, start, avoid, index, lengths, movable, turnaround=turnaround, limit=limit, table=table
-        ):
+            vehicle_id, start, avoid, index, lengths, movable, turnaround=turnaround, limit=limit, table=table,
+            reads=reads,
+        ):  # fmt: skip
             others: list[FleetPlan] = []
             replaced: list[tuple[int, FleetPlan | None]] = []  # what the index counted before, to undo
             last: list[tuple[int, FleetPlan | None]] = []  # ... of the last vehicle moved, its drives alone
@@ -600,6 +686,7 @@ class ReservingPlanner:
         ways = self._ways_out.ways_out(
             vehicle_id, start, avoid, index, self._lengths, lambda other: other == past,
             turnaround=self.turnaround_penalty, limit=self.search_limit, wanted=1, table=self._table(layout, capability),
+            reads=self._reads,
         )  # fmt: skip
         return {near for segment, _, _ in ways[0].path for near in layout.conflicts(segment)} if ways else set()
 
@@ -617,8 +704,20 @@ class ReservingPlanner:
                 return None  # never strand a vehicle where its task cannot be reached
             onward = route
         if not free:
-            self._haven[vehicle_id] = way.path[-1][0]  # it may wait there, whoever's way it is in
+            self._send_to_wait(vehicle_id, way.path[-1][0])  # it may wait there, whoever's way it is in
         return FleetPlan(vehicle_id, (current, *away, *onward))
+
+    def _send_to_wait(self, vehicle_id: int, segment: int | None) -> None:
+        """Note where a vehicle is sent to wait (None: nowhere now). A blocked vehicle's attempt to move
+        others may note it and still fail, and the same attempt, made again, notes it again: a vehicle resting
+        on a hint after such an attempt would not, so every resting vehicle is asked again when this changes
+        (``quiet_epoch``)."""
+        if self._haven.get(vehicle_id) != segment:
+            if segment is None:
+                del self._haven[vehicle_id]
+            else:
+                self._haven[vehicle_id] = segment
+            self.quiet_epoch += 1
 
     @staticmethod
     def _open_tasks(vehicle_id: int, current: FleetLeg, fleet: FleetSnapshot) -> tuple[Task, ...]:

@@ -265,7 +265,7 @@ class FleetController:
                     assert quiet is not None
                     hint = quiet(vehicle_id, self.snapshot(time))
                     if hint is not None:
-                        resting.rest(vehicle_id, hint)
+                        resting.rest(vehicle_id, hint, self._states)
                 continue  # nothing to change: the most common answer, so tested first
             outcome = self._answered(vehicle_id, method, task, response, time)
             if outcome is not None:

@@ -13,6 +13,10 @@ asks after each call for a vehicle that answered an empty list, and which return
   assigned or taken back);
 - another vehicle's fixed legs change on a segment that conflicts with one of ``Quiet.watch`` (a leg
   fixed or driven past there), or such a vehicle's task queue changes;
+- one of ``Quiet.vehicles`` changes: its plan or task queue changes, or it comes to rest or starts to
+  move (its speed crosses 1e-9 m/s), wherever it is;
+- another vehicle's route (any of its legs, fixed or not) comes onto or leaves a segment that conflicts
+  with one of ``Quiet.routes``;
 - the planning time reaches ``Quiet.until``;
 - with ``Quiet.until_standing``, a planning round finds the vehicle at rest (below 1e-9 m/s);
 - any plan of any call is rejected (the planner may have counted it already);
@@ -49,11 +53,19 @@ class Quiet:
         until: The planning time from which the vehicle is asked again (``inf``: no time).
         until_standing: The vehicle is asked again at the first planning round that finds it at rest
             (its speed below 1e-9 m/s: a vehicle that braked to a stop may keep a few 1e-15 m/s).
+        vehicles: Other vehicles: any change of their plans or task queues ends the rest, and so does one
+            of them coming to rest or starting to move (its speed crossing 1e-9 m/s) — for a vehicle that
+            read whether they stand or may be moved, wherever they are.
+        routes: Segments: another vehicle's route (any leg, fixed or not) coming onto or leaving a segment
+            that conflicts with one of these ends the rest (for a vehicle that read how many routes come
+            near them).
     """
 
     watch: frozenset[int] = frozenset()
     until: float = math.inf
     until_standing: bool = False
+    vehicles: frozenset[int] = frozenset()
+    routes: frozenset[int] = frozenset()
 
 
 # m/s: below this speed a vehicle is at rest (one that braked to a stop may keep a few 1e-15 m/s); a
@@ -63,6 +75,17 @@ STANDING = 1e-9
 
 def _fixed_segments(plan: FleetPlan | None) -> frozenset[int]:
     return frozenset(fixed_segments(plan)) if plan is not None else frozenset()
+
+
+def _route_changes(before: FleetPlan | None, after: FleetPlan) -> set[int]:
+    """The segments a vehicle's route (all its legs) came onto or left."""
+    if before is None:
+        return {leg.segment for leg in after.legs}
+    old, new = before.legs, after.legs
+    if len(new) == len(old) - 1 and all(a is b for a, b in zip(old[1:], new, strict=True)):
+        left = old[0].segment  # the first leg driven past: the commonest change
+        return set() if any(leg.segment == left for leg in new) else {left}
+    return {leg.segment for leg in old} ^ {leg.segment for leg in new}
 
 
 class Resting:
@@ -76,6 +99,11 @@ class Resting:
         self._until: dict[int, float] = {}
         self._epoch: object = None  # the planner's quiet_epoch when last read
         self._until_standing: set[int] = set()  # resting vehicles asked again once at rest
+        self._followers: dict[int, set[int]] = {}  # watched vehicle -> the resting vehicles watching it
+        # resting vehicle -> the vehicles it watches, each with whether it stood when the rest began
+        self._stood: dict[int, tuple[tuple[int, bool], ...]] = {}
+        self._routes: dict[int, frozenset[int]] = {}  # resting vehicle -> the segments whose routes near it watches
+        self._route_watchers: dict[int, set[int]] = {}  # such a segment -> the resting vehicles watching it
 
     def epoch(self, epoch: object) -> None:
         """The planner's ``quiet_epoch`` now: when it changed, every resting vehicle wakes."""
@@ -83,8 +111,19 @@ class Resting:
             self._epoch = epoch
             self.wake_all()
 
-    def rest(self, vehicle: int, quiet: Quiet) -> None:
+    def rest(self, vehicle: int, quiet: Quiet, states: Mapping[int, VehicleState] | None = None) -> None:
+        """``vehicle`` rests on ``quiet``; ``states``: the states its planner saw (needed when the hint
+        watches vehicles, to tell when one comes to rest or starts to move)."""
         self.wake(vehicle)
+        if quiet.vehicles:
+            assert states is not None, "a hint that watches vehicles needs the states it was given on"
+            self._stood[vehicle] = tuple((other, states[other].speed < STANDING) for other in sorted(quiet.vehicles))
+            for other in quiet.vehicles:
+                followers = self._followers.get(other)
+                if followers is None:
+                    self._followers[other] = {vehicle}
+                else:
+                    followers.add(vehicle)
         self.resting[vehicle] = quiet.watch
         for segment in quiet.watch:
             watchers = self._watchers.get(segment)
@@ -92,6 +131,14 @@ class Resting:
                 self._watchers[segment] = {vehicle}
             else:
                 watchers.add(vehicle)
+        if quiet.routes:
+            self._routes[vehicle] = quiet.routes
+            for segment in quiet.routes:
+                watchers = self._route_watchers.get(segment)
+                if watchers is None:
+                    self._route_watchers[segment] = {vehicle}
+                else:
+                    watchers.add(vehicle)
         if quiet.until != math.inf:
             self._until[vehicle] = quiet.until
             heapq.heappush(self._due, (quiet.until, vehicle))
@@ -109,6 +156,20 @@ class Resting:
                 del self._watchers[segment]
         self._until.pop(vehicle, None)
         self._until_standing.discard(vehicle)
+        routes = self._routes.pop(vehicle, None)
+        if routes is not None:
+            for segment in routes:
+                watchers = self._route_watchers[segment]
+                watchers.discard(vehicle)
+                if not watchers:
+                    del self._route_watchers[segment]
+        stood = self._stood.pop(vehicle, None)
+        if stood is not None:
+            for other, _ in stood:
+                followers = self._followers[other]
+                followers.discard(vehicle)
+                if not followers:
+                    del self._followers[other]
 
     def wake_all(self) -> None:
         self.resting.clear()
@@ -116,13 +177,29 @@ class Resting:
         self._due.clear()
         self._until.clear()
         self._until_standing.clear()
+        self._followers.clear()
+        self._stood.clear()
+        self._routes.clear()
+        self._route_watchers.clear()
 
     def wake_standing(self, states: Mapping[int, VehicleState]) -> None:
-        """Wake the vehicles resting until they stand that stand now (a planning round begins)."""
+        """Wake the vehicles resting until they stand that stand now, and those watching a vehicle that
+        came to rest or started to move since their rest began (a planning round begins)."""
         if self._until_standing:
             for vehicle in sorted(self._until_standing):
                 if states[vehicle].speed < STANDING:
                     self.wake(vehicle)
+        if self._stood:
+            for vehicle, stood in sorted(self._stood.items()):
+                if any((states[other].speed < STANDING) is not was for other, was in stood):
+                    self.wake(vehicle)
+
+    def _followed(self, vehicle: int) -> None:
+        """``vehicle`` changed: those watching it wake."""
+        followers = self._followers.get(vehicle)
+        if followers:
+            for other in sorted(followers):
+                self.wake(other)
 
     def wake_due(self, time: float) -> None:
         """Wake the vehicles whose ``until`` has come (a planning round at ``time`` begins)."""
@@ -136,18 +213,26 @@ class Resting:
         """A vehicle's plan changed: it wakes, and so do those watching near the fixed legs it gained or lost."""
         vehicle = after.vehicle_id
         self.wake(vehicle)
+        if self._followers:
+            self._followed(vehicle)
         if self._watchers:
             self._near(vehicle, _fixed_segments(before) ^ _fixed_segments(after))
+        if self._route_watchers:
+            self._near(vehicle, _route_changes(before, after), self._route_watchers)
 
     def queue_changed(self, vehicles: Iterable[int], plans: Mapping[int, FleetPlan]) -> None:
         """These vehicles' task queues changed: they wake, and so do those watching near their fixed legs."""
         for vehicle in vehicles:
             self.wake(vehicle)
+            if self._followers:
+                self._followed(vehicle)
             if self._watchers:
                 self._near(vehicle, _fixed_segments(plans.get(vehicle)))
 
-    def _near(self, vehicle: int, segments: Iterable[int]) -> None:
-        watchers, conflicts = self._watchers, self._conflicts
+    def _near(self, vehicle: int, segments: Iterable[int], watching: dict[int, set[int]] | None = None) -> None:
+        """Wake those watching (``watching``: the routes near; else the fixed legs near) a segment that
+        conflicts with one of ``segments``, where ``vehicle``'s changed."""
+        watchers, conflicts = self._watchers if watching is None else watching, self._conflicts
         for segment in segments:
             for near in conflicts(segment):
                 woken = watchers.get(near)

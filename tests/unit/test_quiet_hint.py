@@ -246,6 +246,6 @@ def test_a_vehicle_standing_blocked_while_a_dance_goes_on_gets_no_hint_and_no_er
     planner._dance = object()  # type: ignore[assignment]  # a dance goes on
     planner._haven[7] = 3
     plan = FleetPlan(7, (_leg(1, fixed=True), _leg(2)))
-    planner._calm_standing(7, plan, since=0.0, pushing=True, following=2)
+    planner._calm_standing(7, plan, since=0.0, pushing=True, following=2, fleet=None)  # type: ignore[arg-type]
     assert planner._calm is not None and planner._calm[1].until == math.inf
     assert planner.quiet(7, None) is None  # type: ignore[arg-type]  # (the dance: no hint)
