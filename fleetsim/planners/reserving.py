@@ -243,8 +243,10 @@ class ReservingPlanner:
 
     def quiet(self, vehicle_id: int, fleet: FleetSnapshot) -> Quiet | None:
         """The quiet hint (fleetsim.planning.quiet), given when no dance goes on and no vehicle without tasks
-        stands near this one's next legs, for a vehicle cruising along legs fixed far enough ahead, and for
-        one still moving whose next leg another holds (until it stands): asked again, it would answer the
+        stands near this one's next legs (or none that could be moved), for a vehicle cruising along legs
+        fixed far enough ahead, for one still moving whose next leg another holds (until it stands), and
+        for one standing blocked (until it may push, dance or look round; behind lower-ranked vehicles that
+        could not be moved, until what those attempts read changes): asked again, it would answer the
         same empty list, and touch nothing of this planner's, until its plan changes or other vehicles'
         fixed legs or queues near its next legs do. A subclass that overrides ``fix_legs`` or
         ``plan_routes`` gets none (its answers may depend on more), unless it overrides this too."""

@@ -139,13 +139,16 @@ class QuietPlanner(Planner, Protocol):
     [`Quiet`][fleetsim.planning.quiet.Quiet] answer promises that asking again would answer an empty list
     and change nothing of the planner's own, until the vehicle's plan or task queue changes, another
     vehicle's fixed legs change on a segment conflicting with one of ``Quiet.watch`` (or such a vehicle's
-    queue changes), the planning time reaches ``Quiet.until``, a round finds it at rest with
+    queue changes), one of ``Quiet.vehicles`` changes its plan or queue or comes to rest or starts to
+    move, another vehicle's route comes onto or leaves a segment conflicting with one of
+    ``Quiet.routes``, the planning time reaches ``Quiet.until``, a round finds it at rest with
     ``Quiet.until_standing``, a plan of any call is rejected, or the
     planner's ``quiet_epoch`` attribute (if any; read after every call and at every round) changes. Until
     then the vehicle is not asked. ``None`` promises nothing.
 
     The promise must hold exactly: a run must be the same, hash for hash, with the hint honoured or
-    ignored. ``ReservingPlanner`` gives it for cruising vehicles (half its calls on a busy warehouse); a
+    ignored. ``ReservingPlanner`` gives it for cruising vehicles (half its calls on a busy warehouse) and
+    for vehicles standing blocked (most of a congested shift's); a
     planner in another process is asked about every vehicle, as before.
     """
 

@@ -99,7 +99,8 @@ class Resting:
         self._until: dict[int, float] = {}
         self._epoch: object = None  # the planner's quiet_epoch when last read
         self._until_standing: set[int] = set()  # resting vehicles asked again once at rest
-        self._followers: dict[int, set[int]] = {}  # watched vehicle -> the resting vehicles watching it
+        # watched vehicle -> the resting vehicles watching it that saw it moving, and that saw it standing
+        self._followers: dict[int, tuple[set[int], set[int]]] = {}
         # resting vehicle -> the vehicles it watches, each with whether it stood when the rest began
         self._stood: dict[int, tuple[tuple[int, bool], ...]] = {}
         self._routes: dict[int, frozenset[int]] = {}  # resting vehicle -> the segments whose routes near it watches
@@ -118,12 +119,11 @@ class Resting:
         if quiet.vehicles:
             assert states is not None, "a hint that watches vehicles needs the states it was given on"
             self._stood[vehicle] = tuple((other, states[other].speed < STANDING) for other in sorted(quiet.vehicles))
-            for other in quiet.vehicles:
+            for other, stood in self._stood[vehicle]:
                 followers = self._followers.get(other)
                 if followers is None:
-                    self._followers[other] = {vehicle}
-                else:
-                    followers.add(vehicle)
+                    followers = self._followers[other] = (set(), set())
+                followers[stood].add(vehicle)
         self.resting[vehicle] = quiet.watch
         for segment in quiet.watch:
             watchers = self._watchers.get(segment)
@@ -165,10 +165,10 @@ class Resting:
                     del self._route_watchers[segment]
         stood = self._stood.pop(vehicle, None)
         if stood is not None:
-            for other, _ in stood:
+            for other, was in stood:
                 followers = self._followers[other]
-                followers.discard(vehicle)
-                if not followers:
+                followers[was].discard(vehicle)
+                if not followers[0] and not followers[1]:
                     del self._followers[other]
 
     def wake_all(self) -> None:
@@ -189,16 +189,18 @@ class Resting:
             for vehicle in sorted(self._until_standing):
                 if states[vehicle].speed < STANDING:
                     self.wake(vehicle)
-        if self._stood:
-            for vehicle, stood in sorted(self._stood.items()):
-                if any((states[other].speed < STANDING) is not was for other, was in stood):
-                    self.wake(vehicle)
+        if self._followers:
+            for other, followers in sorted(self._followers.items()):
+                saw_otherwise = followers[states[other].speed >= STANDING]  # those that saw it standing, if it moves
+                if saw_otherwise:
+                    for vehicle in sorted(saw_otherwise):
+                        self.wake(vehicle)
 
     def _followed(self, vehicle: int) -> None:
         """``vehicle`` changed: those watching it wake."""
         followers = self._followers.get(vehicle)
         if followers:
-            for other in sorted(followers):
+            for other in sorted(followers[0] | followers[1]):
                 self.wake(other)
 
     def wake_due(self, time: float) -> None:

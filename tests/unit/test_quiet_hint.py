@@ -4,6 +4,7 @@ ignored)."""
 
 from __future__ import annotations
 
+import importlib.util
 import math
 from collections.abc import Iterator
 from pathlib import Path
@@ -13,14 +14,15 @@ from loop_switches import run_switched, same_run
 
 from fleetsim.enums import Direction, Progress, Shape, Traverse
 from fleetsim.layout import Layout, Segment, build_layout
-from fleetsim.load.suites.scenario import load_scenario
+from fleetsim.load.suites.scenario import load_scenario, load_scenario_dir
 from fleetsim.load.suites.suite import load_suite
 from fleetsim.planners import ReservingPlanner
 from fleetsim.planning import FleetController, FleetLeg, FleetPlan, FleetSnapshot, Response
 from fleetsim.planning.quiet import Quiet, Resting
-from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Scenario, Task, Vehicle
+from fleetsim.scenario import DEFAULT_VEHICLE_TYPE, Scenario, ScenarioSettings, Task, Vehicle
 
-SUITES = sorted((Path(__file__).resolve().parents[2] / "scenario_suites").glob("*.fleetsim.yaml"))
+ROOT = Path(__file__).resolve().parents[2]
+SUITES = sorted((ROOT / "scenario_suites").glob("*.fleetsim.yaml"))
 
 
 def _straight(sid: int, start: tuple[float, float], end: tuple[float, float]) -> Segment:
@@ -60,6 +62,7 @@ class Promising:
     def __init__(self, calm: set[int], watch: frozenset[int] = frozenset(), until: float = math.inf) -> None:
         self.calm, self.watch, self.until = calm, watch, until
         self.until_standing = False
+        self.vehicles: frozenset[int] = frozenset()
         self.calls: list[int] = []
         self.answers: dict[int, list[FleetPlan]] = {}  # vehicle -> what its next call answers
         self.quiet_epoch = 0
@@ -72,7 +75,9 @@ class Promising:
         return self.answers.pop(task.vehicle_id, [])
 
     def quiet(self, vehicle_id: int, fleet: FleetSnapshot) -> Quiet | None:
-        return Quiet(self.watch, self.until, self.until_standing) if vehicle_id in self.calm else None
+        if vehicle_id not in self.calm:
+            return None
+        return Quiet(self.watch, self.until, self.until_standing, vehicles=self.vehicles)
 
 
 def _round(controller: FleetController, planner: Promising, time: float) -> list[int]:
@@ -202,6 +207,85 @@ def test_resting_wakes_by_the_conflict_sets_of_the_legs_that_changed() -> None:
     assert set(resting.resting) == {3}
     resting.plan_changed(None, FleetPlan(3, (_leg(21, fixed=True),)))  # its own plan
     assert resting.resting == {}
+
+
+def test_a_watched_vehicle_changing_its_plan_or_queue_wakes_the_resting_vehicle_wherever_it_is() -> None:
+    resting = Resting(LAYOUT.conflicts)
+    states = _controller(*TASKS).states
+    resting.rest(1, Quiet(vehicles=frozenset({3})), states)  # vehicle 3 stands on 21, far from everything
+    resting.plan_changed(None, FleetPlan(2, (_leg(11, fixed=True), _leg(12, fixed=True))))  # not watched
+    resting.queue_changed([2], {})
+    assert set(resting.resting) == {1}
+    resting.plan_changed(None, FleetPlan(3, (_leg(21),)))  # not even a fixed leg
+    assert resting.resting == {}
+    resting.rest(1, Quiet(vehicles=frozenset({3})), states)
+    resting.queue_changed([3], {})
+    assert resting.resting == {}
+
+
+def test_a_watched_vehicle_coming_to_rest_or_starting_to_move_wakes_the_resting_vehicle() -> None:
+    controller = _controller(*TASKS)
+    planner = Promising({1})
+    planner.vehicles = frozenset({3})
+    standing = controller.states[3]
+    assert _round(controller, planner, 0.0) == [1, 2]
+    controller.set_state(standing._replace(speed=3e-15))  # a rounding error: it still stands
+    assert _round(controller, planner, 0.1) == [2]
+    controller.set_state(standing._replace(speed=0.2))  # it starts to move
+    assert _round(controller, planner, 0.2) == [1, 2]
+    assert _round(controller, planner, 0.3) == [2]
+    controller.set_state(standing._replace(speed=1e-10))  # ... and comes to rest
+    assert _round(controller, planner, 0.4) == [1, 2]
+
+
+def test_a_route_coming_onto_or_leaving_a_segment_near_a_watched_one_wakes_the_resting_vehicle() -> None:
+    resting = Resting(LAYOUT.conflicts)
+    resting.rest(1, Quiet(routes=frozenset({2})))
+    across = FleetPlan(2, (_leg(11, fixed=True), _leg(12), _leg(13)))  # 12 crosses 2: planned, not fixed
+    resting.plan_changed(None, FleetPlan(3, (_leg(21, fixed=True),)))
+    assert set(resting.resting) == {1}
+    resting.plan_changed(None, across)
+    assert resting.resting == {}
+    resting.rest(1, Quiet(routes=frozenset({2})))
+    driven = FleetPlan(2, across.legs[1:])  # 11 driven past: the route left a segment not near 2
+    resting.plan_changed(across, driven)
+    resting.plan_changed(driven, FleetPlan(2, (driven.legs[0], _leg(13, fixed=True))))  # fixed: same route
+    assert set(resting.resting) == {1}
+    resting.plan_changed(driven, FleetPlan(2, driven.legs[1:]))  # 12 driven past: it left 2's neighbour
+    assert resting.resting == {}
+
+
+def _congestion(folder: Path, vehicles: int, seconds: float) -> Scenario:
+    """The benchmarks' congestion site: the whole fleet queueing at a dozen stations."""
+    spec = importlib.util.spec_from_file_location("warehouse", ROOT / "benchmarks" / "warehouse.py")
+    assert spec is not None and spec.loader is not None
+    warehouse = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(warehouse)
+    site = warehouse.write_congestion_scenario(folder / "site", vehicles)
+    return load_scenario_dir(site, settings=ScenarioSettings(time_limit=seconds, stop_on=()))
+
+
+def test_vehicles_behind_lower_ranked_blockers_that_cannot_be_moved_rest_and_run_the_same(tmp_path: Path) -> None:
+    """On the congestion site, vehicles standing behind lower-ranked vehicles that cannot be moved out of
+    their way rest until what their attempts read changes: hints that watch vehicles, and hints that watch
+    the routes near the places that ordered the ways out found; the run is the same with them ignored."""
+    scenario = _congestion(tmp_path, 60, 120.0)
+    planner = ReservingPlanner()
+    given: list[Quiet] = []
+    hint = planner.quiet
+
+    def recorded(vehicle_id: int, fleet: FleetSnapshot) -> Quiet | None:
+        quiet = hint(vehicle_id, fleet)
+        if quiet is not None:
+            given.append(quiet)
+        return quiet
+
+    planner.quiet = recorded  # type: ignore[method-assign]
+    honoured = run_switched(scenario, planner, quiet=True)
+    ignored = run_switched(scenario, ReservingPlanner(), quiet=False)
+    assert same_run(honoured) == same_run(ignored)
+    assert any(quiet.vehicles for quiet in given) and any(quiet.routes for quiet in given)
+    assert honoured.metrics.planner_calls < 0.7 * ignored.metrics.planner_calls
 
 
 def _shipped() -> Iterator[tuple[str, Scenario]]:
