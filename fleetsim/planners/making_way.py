@@ -166,9 +166,9 @@ def _search(
 class Reads:
     """What several searches for ways out read, gathered (for a planner's quiet hint, which names what to
     wait for): the searches themselves, whose segments' holders were read and whose vehicles were asked
-    whether they may be moved (:meth:`segments`, :attr:`vehicles`: gathered only when asked for, as most
-    attempts read something no hint names), the places whose count of routes near ordered the ways found
-    (:meth:`routes`), and other vehicles read."""
+    whether they may be moved (:meth:`segments`, :meth:`vehicles`: gathered only when a hint is given),
+    the places whose count of routes near ordered the ways found (:meth:`routes`), and other vehicles read
+    (``others``)."""
 
     others: set[int]
     found: list[_Found] = field(default_factory=list)

@@ -34,12 +34,15 @@ import heapq
 import math
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
+from typing import TypeVar
 
 from fleetsim.planning.plans import FleetPlan
 from fleetsim.planning.reservations import fixed_segments
 from fleetsim.planning.snapshot import VehicleState
 
 __all__ = ["STANDING", "Quiet", "Resting"]
+
+_Key = TypeVar("_Key")
 
 
 @dataclass(frozen=True, slots=True)
@@ -88,6 +91,25 @@ def _route_changes(before: FleetPlan | None, after: FleetPlan) -> set[int]:
     return {leg.segment for leg in old} ^ {leg.segment for leg in new}
 
 
+def _enlist(table: dict[_Key, set[int]], keys: Iterable[_Key], vehicle: int) -> None:
+    """``vehicle`` watches each of ``keys`` in ``table`` (key -> the resting vehicles watching it)."""
+    for key in keys:
+        watchers = table.get(key)
+        if watchers is None:
+            table[key] = {vehicle}
+        else:
+            watchers.add(vehicle)
+
+
+def _discharge(table: dict[_Key, set[int]], keys: Iterable[_Key], vehicle: int) -> None:
+    """``vehicle`` no longer watches ``keys`` (:func:`_enlist`)."""
+    for key in keys:
+        watchers = table[key]
+        watchers.discard(vehicle)
+        if not watchers:
+            del table[key]
+
+
 class Resting:
     """The resting vehicles of one run and what wakes each (the controller keeps it up to date)."""
 
@@ -99,8 +121,8 @@ class Resting:
         self._until: dict[int, float] = {}
         self._epoch: object = None  # the planner's quiet_epoch when last read
         self._until_standing: set[int] = set()  # resting vehicles asked again once at rest
-        # watched vehicle -> the resting vehicles watching it that saw it moving, and that saw it standing
-        self._followers: dict[int, tuple[set[int], set[int]]] = {}
+        # (watched vehicle, whether it stood when their rest began) -> the resting vehicles watching it
+        self._followers: dict[tuple[int, bool], set[int]] = {}
         # resting vehicle -> the vehicles it watches, each with whether it stood when the rest began
         self._stood: dict[int, tuple[tuple[int, bool], ...]] = {}
         self._routes: dict[int, frozenset[int]] = {}  # resting vehicle -> the segments whose routes near it watches
@@ -118,27 +140,15 @@ class Resting:
         self.wake(vehicle)
         if quiet.vehicles:
             assert states is not None, "a hint that watches vehicles needs the states it was given on"
-            self._stood[vehicle] = tuple((other, states[other].speed < STANDING) for other in sorted(quiet.vehicles))
-            for other, stood in self._stood[vehicle]:
-                followers = self._followers.get(other)
-                if followers is None:
-                    followers = self._followers[other] = (set(), set())
-                followers[stood].add(vehicle)
+            stood = self._stood[vehicle] = tuple(
+                (other, states[other].speed < STANDING) for other in sorted(quiet.vehicles)
+            )
+            _enlist(self._followers, stood, vehicle)
         self.resting[vehicle] = quiet.watch
-        for segment in quiet.watch:
-            watchers = self._watchers.get(segment)
-            if watchers is None:
-                self._watchers[segment] = {vehicle}
-            else:
-                watchers.add(vehicle)
+        _enlist(self._watchers, quiet.watch, vehicle)
         if quiet.routes:
             self._routes[vehicle] = quiet.routes
-            for segment in quiet.routes:
-                watchers = self._route_watchers.get(segment)
-                if watchers is None:
-                    self._route_watchers[segment] = {vehicle}
-                else:
-                    watchers.add(vehicle)
+            _enlist(self._route_watchers, quiet.routes, vehicle)
         if quiet.until != math.inf:
             self._until[vehicle] = quiet.until
             heapq.heappush(self._due, (quiet.until, vehicle))
@@ -149,27 +159,11 @@ class Resting:
         watch = self.resting.pop(vehicle, None)
         if watch is None:
             return
-        for segment in watch:
-            watchers = self._watchers[segment]
-            watchers.discard(vehicle)
-            if not watchers:
-                del self._watchers[segment]
+        _discharge(self._watchers, watch, vehicle)
         self._until.pop(vehicle, None)
         self._until_standing.discard(vehicle)
-        routes = self._routes.pop(vehicle, None)
-        if routes is not None:
-            for segment in routes:
-                watchers = self._route_watchers[segment]
-                watchers.discard(vehicle)
-                if not watchers:
-                    del self._route_watchers[segment]
-        stood = self._stood.pop(vehicle, None)
-        if stood is not None:
-            for other, was in stood:
-                followers = self._followers[other]
-                followers[was].discard(vehicle)
-                if not followers[0] and not followers[1]:
-                    del self._followers[other]
+        _discharge(self._route_watchers, self._routes.pop(vehicle, ()), vehicle)
+        _discharge(self._followers, self._stood.pop(vehicle, ()), vehicle)
 
     def wake_all(self) -> None:
         self.resting.clear()
@@ -190,18 +184,17 @@ class Resting:
                 if states[vehicle].speed < STANDING:
                     self.wake(vehicle)
         if self._followers:
-            for other, followers in sorted(self._followers.items()):
-                saw_otherwise = followers[states[other].speed >= STANDING]  # those that saw it standing, if it moves
-                if saw_otherwise:
-                    for vehicle in sorted(saw_otherwise):
+            for (other, stood), followers in sorted(self._followers.items()):
+                if (states[other].speed < STANDING) is not stood:
+                    for vehicle in sorted(followers):
                         self.wake(vehicle)
 
     def _followed(self, vehicle: int) -> None:
         """``vehicle`` changed: those watching it wake."""
-        followers = self._followers.get(vehicle)
-        if followers:
-            for other in sorted(followers[0] | followers[1]):
-                self.wake(other)
+        followers = self._followers
+        woken = followers.get((vehicle, False), set()) | followers.get((vehicle, True), set())
+        for other in sorted(woken):
+            self.wake(other)
 
     def wake_due(self, time: float) -> None:
         """Wake the vehicles whose ``until`` has come (a planning round at ``time`` begins)."""
