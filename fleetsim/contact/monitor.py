@@ -324,8 +324,12 @@ class ContactMonitor:
                     contact = self._sweep(p, q, a0, a1, b0, b1, most, t0, t1)
                     if contact is not None:
                         fresh.append(contact)
-                if gap < self._limit:  # close enough at the step's end to count
-                    distance, contact = self._judge(p, q, a1, b1, t1)
+                # Close enough at the step's end to count: within the limit and, once the pair has a closest
+                # approach on record, within that too (only a closer one, or a touch, would be recorded).
+                known = closest.get((p, q))
+                bar = self._limit if known is None else max(min(known[0], self._limit), TOUCH)
+                if gap < self._limit and gap <= bar:
+                    distance, contact = self._judge(p, q, a1, b1, t1, bar)
                     if contact is not None:
                         fresh.append(contact)
             # The pair need not be looked at again until the fleet has spent what keeps it farther apart than
@@ -421,13 +425,17 @@ class ContactMonitor:
         i, j = i[keep], j[keep]
         return np.minimum(i, j), np.maximum(i, j)
 
-    def _judge(self, p: int, q: int, a: Footprint, b: Footprint, time: float) -> tuple[float, Contact | None]:
+    def _judge(
+        self, p: int, q: int, a: Footprint, b: Footprint, time: float, bar: float | None = None
+    ) -> tuple[float, Contact | None]:
         """The pair ``(p, q)``, not in contact before, at ``time`` (footprints ``a``, ``b``): if they touch
         now they begin a contact (unless the sweep began it already), else their distance is recorded.
-        Their signed distance (or a lower bound of it beyond the limit), and the contact begun."""
-        limit = self._limit
-        distance, x, y = signed_distance(a, b, limit)  # beyond the limit, nothing counts
-        if distance > limit:
+        Their signed distance (or a lower bound of it beyond ``bar``), and the contact begun. ``bar``: how
+        close they must be for anything to count, at most the limit and at least :data:`TOUCH` (the limit
+        when None); beyond it they neither touch nor come closer than anything on record."""
+        bar = self._limit if bar is None else bar
+        distance, x, y = signed_distance(a, b, bar)  # beyond the bar, nothing counts
+        if distance > bar:
             return distance, None
         if distance > TOUCH:
             self._approach(p, q, distance, time, x, y)
