@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import heapq
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Hashable
 from collections.abc import Set as AbstractSet
 from dataclasses import dataclass, field
 from typing import ClassVar
@@ -167,11 +167,13 @@ class Reads:
     """What several searches for ways out read, gathered (for a planner's quiet hint, which names what to
     wait for): the searches themselves, whose segments' holders were read and whose vehicles were asked
     whether they may be moved (:meth:`segments`, :meth:`vehicles`: gathered only when a hint is given),
-    the places whose count of routes near ordered the ways found (:meth:`routes`), and other vehicles read
-    (``others``)."""
+    the places whose count of routes near ordered the ways found (:meth:`routes`), other vehicles read
+    (``others``), and the marks of the planner's own state that the attempts wrote (``marks``: made
+    again, they would write them again)."""
 
     others: set[int]
     found: list[_Found] = field(default_factory=list)
+    marks: set[Hashable] = field(default_factory=set)
 
     def add(self, found: _Found) -> None:
         self.found.append(found)

@@ -34,6 +34,7 @@ by state, never by hashing).
 from __future__ import annotations
 
 import math
+from collections.abc import Hashable
 from collections.abc import Set as AbstractSet
 from dataclasses import replace
 from typing import ClassVar
@@ -155,6 +156,9 @@ class ReservingPlanner:
         self._clearing: Reads | None = None
         self._idle_of: tuple[object, frozenset[int]] = (None, frozenset())  # (fleet.tasks, its idle vehicles)
         self.quiet_epoch = 0
+        # The marks of this planner's own state changed since changed_marks() was last asked (in order, each
+        # once): ("haven", vehicle) when where a vehicle was sent to wait changed.
+        self._changed_marks: dict[Hashable, None] = {}
         # The hint holds for this class's answers: a subclass that answers otherwise gets none (unless it
         # gives its own quiet()).
         cls = type(self)
@@ -505,11 +509,13 @@ class ReservingPlanner:
         moved lately (it may be moved again then)."""
         vehicles: set[int] = set()
         routes: set[int] = set()
+        marks: set[Hashable] = {("haven", vehicle_id)}  # where it was sent to wait: every call reads that
         for gathered in (self._clearing, reads):
             if gathered is not None:
                 watch |= gathered.segments()
                 vehicles |= gathered.vehicles()
                 routes |= gathered.routes()
+                marks |= gathered.marks
         moments = [
             self._pushed[other] + self.push_cooldown - 1e-9 - _EARLY
             for other in sorted(vehicles)
@@ -518,7 +524,14 @@ class ReservingPlanner:
         until = min(until, *moments) if moments else until
         self._calm = (
             vehicle_id,
-            Quiet(watch, until, until_standing, vehicles=frozenset(vehicles), routes=frozenset(routes)),
+            Quiet(
+                watch,
+                until,
+                until_standing,
+                vehicles=frozenset(vehicles),
+                routes=frozenset(routes),
+                marks=frozenset(marks),
+            ),
         )
 
     @staticmethod
@@ -712,14 +725,32 @@ class ReservingPlanner:
     def _send_to_wait(self, vehicle_id: int, segment: int | None) -> None:
         """Note where a vehicle is sent to wait (None: nowhere now). A blocked vehicle's attempt to move
         others may note it and still fail, and the same attempt, made again, notes it again: a vehicle resting
-        on a hint after such an attempt would not, so every resting vehicle is asked again when this changes
-        (``quiet_epoch``)."""
+        on a hint after such an attempt would not. So the attempt's reads take the mark ("haven", vehicle),
+        and when the place changes, those resting on that mark are asked again (and the vehicle itself,
+        whose every call reads it: its hints watch the mark too); a change that no attempt being recorded
+        makes asks every resting vehicle again (``quiet_epoch``)."""
+        mark = ("haven", vehicle_id)
+        reads = self._reads
+        if reads is not None:
+            reads.marks.add(mark)
         if self._haven.get(vehicle_id) != segment:
             if segment is None:
                 del self._haven[vehicle_id]
             else:
                 self._haven[vehicle_id] = segment
-            self.quiet_epoch += 1
+            if reads is None:
+                self.quiet_epoch += 1
+            else:
+                self._changed_marks[mark] = None
+
+    def changed_marks(self) -> list[Hashable]:
+        """The marks of this planner's own state that changed since last asked (the quiet hint's
+        ``marks``), each once, in the order they first changed."""
+        if not self._changed_marks:
+            return []
+        marks = list(self._changed_marks)
+        self._changed_marks.clear()
+        return marks
 
     @staticmethod
     def _open_tasks(vehicle_id: int, current: FleetLeg, fleet: FleetSnapshot) -> tuple[Task, ...]:

@@ -12,7 +12,7 @@ against the fleet as changed. Every other planner is called one call at a time, 
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Hashable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import Literal, cast
 
@@ -240,10 +240,16 @@ class FleetController:
         plan_routes, fix_legs = planner.plan_routes, planner.fix_legs
         quiet: Callable[[int, FleetSnapshot], Quiet | None] | None = getattr(planner, "quiet", None)
         resting = self.resting if callable(quiet) else None
+        changed_marks: Callable[[], Iterable[Hashable]] | None = None
         if resting is not None:
+            changed_marks = getattr(planner, "changed_marks", None)
+            if not callable(changed_marks):
+                changed_marks = None
             resting.wake_due(time)
             resting.wake_standing(self._states)
             resting.epoch(getattr(planner, "quiet_epoch", None))
+            if changed_marks is not None:
+                resting.marks_changed(changed_marks())
         for vehicle_id, task in heads:
             if resting is not None and vehicle_id in resting.resting:
                 continue  # its planner said asking again would change nothing until now
@@ -258,8 +264,10 @@ class FleetController:
                 response: object = invoke(method, call, vehicle_id, task, self.snapshot(time), layout)
             except RouteError as error:  # the whole request cannot be routed
                 response = error
-            if resting is not None:  # the planner's own state may have changed: then everyone is asked again
+            if resting is not None:  # the planner's own state may have changed: then everyone is asked again,
                 resting.epoch(getattr(planner, "quiet_epoch", None))
+                if changed_marks is not None:  # or those watching the marks of it that changed
+                    resting.marks_changed(changed_marks())
             if type(response) is list and not response:
                 if resting is not None:
                     assert quiet is not None

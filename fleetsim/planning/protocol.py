@@ -142,7 +142,9 @@ class QuietPlanner(Planner, Protocol):
     queue changes), one of ``Quiet.vehicles`` changes its plan or queue or comes to rest or starts to
     move, another vehicle's route comes onto or leaves a segment conflicting with one of
     ``Quiet.routes``, the planning time reaches ``Quiet.until``, a round finds it at rest with
-    ``Quiet.until_standing``, a plan of any call is rejected, or the
+    ``Quiet.until_standing``, a plan of any call is rejected, the planner names one of ``Quiet.marks``
+    among the marks of its own state that changed (its optional ``changed_marks()`` method, asked after
+    every call and at every round: each mark once, then forgotten), or the
     planner's ``quiet_epoch`` attribute (if any; read after every call and at every round) changes. Until
     then the vehicle is not asked. ``None`` promises nothing.
 

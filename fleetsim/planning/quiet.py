@@ -20,8 +20,11 @@ asks after each call for a vehicle that answered an empty list, and which return
 - the planning time reaches ``Quiet.until``;
 - with ``Quiet.until_standing``, a planning round finds the vehicle at rest (below 1e-9 m/s);
 - any plan of any call is rejected (the planner may have counted it already);
+- the planner names one of ``Quiet.marks`` among the marks of its own state that changed (its
+  ``changed_marks()`` method, asked after every call: a part of its own state that the answer read,
+  or that the call would write again, such as where another vehicle was sent to wait);
 - the planner's ``quiet_epoch`` attribute changes (read after every call: the planner's own state
-  changed in a way it cannot express by segments, so every resting vehicle is asked again).
+  changed in a way it cannot express by segments or marks, so every resting vehicle is asked again).
 
 The promise must be exact: a run is the same, call for call and hash for hash, with the hint honoured
 or ignored (``FleetController(..., quiet=False)``); the tests compare both. A planner without ``quiet``
@@ -32,7 +35,7 @@ from __future__ import annotations
 
 import heapq
 import math
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Hashable, Iterable, Mapping
 from dataclasses import dataclass
 from typing import TypeVar
 
@@ -62,6 +65,9 @@ class Quiet:
         routes: Segments: another vehicle's route (any leg, fixed or not) coming onto or leaving a segment
             that conflicts with one of these ends the rest (for a vehicle that read how many routes come
             near them).
+        marks: Marks of the planner's own state (anything hashable, named by the planner): the planner
+            naming one of these among those that changed (``changed_marks()``, asked after every call)
+            ends the rest. Finer than ``quiet_epoch``, which ends every rest.
     """
 
     watch: frozenset[int] = frozenset()
@@ -69,6 +75,7 @@ class Quiet:
     until_standing: bool = False
     vehicles: frozenset[int] = frozenset()
     routes: frozenset[int] = frozenset()
+    marks: frozenset[Hashable] = frozenset()
 
 
 # m/s: below this speed a vehicle is at rest (one that braked to a stop may keep a few 1e-15 m/s); a
@@ -127,6 +134,8 @@ class Resting:
         self._stood: dict[int, tuple[tuple[int, bool], ...]] = {}
         self._routes: dict[int, frozenset[int]] = {}  # resting vehicle -> the segments whose routes near it watches
         self._route_watchers: dict[int, set[int]] = {}  # such a segment -> the resting vehicles watching it
+        self._marks: dict[int, frozenset[Hashable]] = {}  # resting vehicle -> the planner's marks it watches
+        self._mark_watchers: dict[Hashable, set[int]] = {}  # such a mark -> the resting vehicles watching it
 
     def epoch(self, epoch: object) -> None:
         """The planner's ``quiet_epoch`` now: when it changed, every resting vehicle wakes."""
@@ -149,6 +158,9 @@ class Resting:
         if quiet.routes:
             self._routes[vehicle] = quiet.routes
             _enlist(self._route_watchers, quiet.routes, vehicle)
+        if quiet.marks:
+            self._marks[vehicle] = quiet.marks
+            _enlist(self._mark_watchers, quiet.marks, vehicle)
         if quiet.until != math.inf:
             self._until[vehicle] = quiet.until
             heapq.heappush(self._due, (quiet.until, vehicle))
@@ -164,6 +176,7 @@ class Resting:
         self._until_standing.discard(vehicle)
         _discharge(self._route_watchers, self._routes.pop(vehicle, ()), vehicle)
         _discharge(self._followers, self._stood.pop(vehicle, ()), vehicle)
+        _discharge(self._mark_watchers, self._marks.pop(vehicle, ()), vehicle)
 
     def wake_all(self) -> None:
         self.resting.clear()
@@ -175,6 +188,17 @@ class Resting:
         self._stood.clear()
         self._routes.clear()
         self._route_watchers.clear()
+        self._marks.clear()
+        self._mark_watchers.clear()
+
+    def marks_changed(self, marks: Iterable[Hashable]) -> None:
+        """The planner's marks ``marks`` changed: those watching one wake."""
+        watchers = self._mark_watchers
+        for mark in marks:
+            woken = watchers.get(mark)
+            if woken:
+                for vehicle in sorted(woken):
+                    self.wake(vehicle)
 
     def wake_standing(self, states: Mapping[int, VehicleState]) -> None:
         """Wake the vehicles resting until they stand that stand now, and those watching a vehicle that

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import importlib.util
 import math
-from collections.abc import Iterator
+from collections.abc import Hashable, Iterator
 from pathlib import Path
 
 import pytest
@@ -63,6 +63,8 @@ class Promising:
         self.calm, self.watch, self.until = calm, watch, until
         self.until_standing = False
         self.vehicles: frozenset[int] = frozenset()
+        self.marks: frozenset[Hashable] = frozenset()
+        self.changed: list[Hashable] = []  # what changed_marks() answers next
         self.calls: list[int] = []
         self.answers: dict[int, list[FleetPlan]] = {}  # vehicle -> what its next call answers
         self.quiet_epoch = 0
@@ -77,7 +79,11 @@ class Promising:
     def quiet(self, vehicle_id: int, fleet: FleetSnapshot) -> Quiet | None:
         if vehicle_id not in self.calm:
             return None
-        return Quiet(self.watch, self.until, self.until_standing, vehicles=self.vehicles)
+        return Quiet(self.watch, self.until, self.until_standing, vehicles=self.vehicles, marks=self.marks)
+
+    def changed_marks(self) -> list[Hashable]:
+        changed, self.changed = self.changed, []
+        return changed
 
 
 def _round(controller: FleetController, planner: Promising, time: float) -> list[int]:
@@ -183,6 +189,23 @@ def test_a_new_quiet_epoch_wakes_every_resting_vehicle() -> None:
     assert _round(controller, planner, 0.3) == []
 
 
+def test_a_changed_mark_wakes_the_vehicles_resting_on_it_and_no_other() -> None:
+    controller = _controller(*TASKS)
+    planner = Promising({1, 2})
+    planner.marks = frozenset({("haven", 7)})
+    _round(controller, planner, 0.0)
+    assert _round(controller, planner, 0.1) == []
+    planner.marks = frozenset({("haven", 8)})
+    planner.changed = [("haven", 9)]  # a mark nobody watches: nobody wakes
+    assert _round(controller, planner, 0.2) == []
+    planner.changed = [("haven", 7)]
+    assert _round(controller, planner, 0.3) == [1, 2]  # now resting on ("haven", 8)
+    planner.answers[1] = []
+    planner.changed = [("haven", 8)]  # named during a round (as a call's attempt changes it): after the call
+    assert _round(controller, planner, 0.4) == [1, 2]
+    assert _round(controller, planner, 0.5) == []
+
+
 def test_a_rejected_plan_wakes_every_resting_vehicle() -> None:
     controller = _controller(*TASKS)
     planner = Promising({1})
@@ -272,12 +295,14 @@ def test_vehicles_behind_lower_ranked_blockers_that_cannot_be_moved_rest_and_run
     scenario = _congestion(tmp_path, 60, 120.0)
     planner = ReservingPlanner()
     given: list[Quiet] = []
+    others_sent: list[Hashable] = []  # marks of where other vehicles were sent to wait, named by hints
     hint = planner.quiet
 
     def recorded(vehicle_id: int, fleet: FleetSnapshot) -> Quiet | None:
         quiet = hint(vehicle_id, fleet)
         if quiet is not None:
             given.append(quiet)
+            others_sent.extend(mark for mark in quiet.marks if mark != ("haven", vehicle_id))
         return quiet
 
     planner.quiet = recorded  # type: ignore[method-assign]
@@ -285,6 +310,8 @@ def test_vehicles_behind_lower_ranked_blockers_that_cannot_be_moved_rest_and_run
     ignored = run_switched(scenario, ReservingPlanner(), quiet=False)
     assert same_run(honoured) == same_run(ignored)
     assert any(quiet.vehicles for quiet in given) and any(quiet.routes for quiet in given)
+    # Where the attempts sent others to wait: a change there wakes those resting on it, not everyone.
+    assert others_sent
     assert honoured.metrics.planner_calls < 0.7 * ignored.metrics.planner_calls
 
 
