@@ -159,6 +159,7 @@ class ReservingPlanner:
         # The marks of this planner's own state changed since changed_marks() was last asked (in order, each
         # once): ("haven", vehicle) when where a vehicle was sent to wait changed.
         self._changed_marks: dict[Hashable, None] = {}
+        self._own_marks: dict[int, frozenset[Hashable]] = {}  # vehicle -> {("haven", vehicle)}, made once
         # The hint holds for this class's answers: a subclass that answers otherwise gets none (unless it
         # gives its own quiet()).
         cls = type(self)
@@ -509,13 +510,16 @@ class ReservingPlanner:
         moved lately (it may be moved again then)."""
         vehicles: set[int] = set()
         routes: set[int] = set()
-        marks: set[Hashable] = {("haven", vehicle_id)}  # where it was sent to wait: every call reads that
+        marks = self._own_marks.get(vehicle_id)  # where it was sent to wait: every call reads that
+        if marks is None:
+            marks = self._own_marks[vehicle_id] = frozenset({("haven", vehicle_id)})
         for gathered in (self._clearing, reads):
             if gathered is not None:
                 watch |= gathered.segments()
                 vehicles |= gathered.vehicles()
                 routes |= gathered.routes()
-                marks |= gathered.marks
+                if gathered.marks:
+                    marks |= gathered.marks
         moments = [
             self._pushed[other] + self.push_cooldown - 1e-9 - _EARLY
             for other in sorted(vehicles)
@@ -530,7 +534,7 @@ class ReservingPlanner:
                 until_standing,
                 vehicles=frozenset(vehicles),
                 routes=frozenset(routes),
-                marks=frozenset(marks),
+                marks=marks,
             ),
         )
 
