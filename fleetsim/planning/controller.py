@@ -247,9 +247,7 @@ class FleetController:
                 changed_marks = None
             resting.wake_due(time)
             resting.wake_standing(self._states)
-            resting.epoch(getattr(planner, "quiet_epoch", None))
-            if changed_marks is not None:
-                resting.marks_changed(changed_marks())
+            resting.planner_changed(getattr(planner, "quiet_epoch", None), changed_marks)
         for vehicle_id, task in heads:
             if resting is not None and vehicle_id in resting.resting:
                 continue  # its planner said asking again would change nothing until now
@@ -264,10 +262,8 @@ class FleetController:
                 response: object = invoke(method, call, vehicle_id, task, self.snapshot(time), layout)
             except RouteError as error:  # the whole request cannot be routed
                 response = error
-            if resting is not None:  # the planner's own state may have changed: then everyone is asked again,
-                resting.epoch(getattr(planner, "quiet_epoch", None))
-                if changed_marks is not None:  # or those watching the marks of it that changed
-                    resting.marks_changed(changed_marks())
+            if resting is not None:  # the planner's own state may have changed
+                resting.planner_changed(getattr(planner, "quiet_epoch", None), changed_marks)
             if type(response) is list and not response:
                 if resting is not None:
                     assert quiet is not None

@@ -191,6 +191,13 @@ class Resting:
         self._marks.clear()
         self._mark_watchers.clear()
 
+    def planner_changed(self, epoch: object, changed_marks: Callable[[], Iterable[Hashable]] | None) -> None:
+        """What the planner says of its own state now: its ``quiet_epoch`` (:meth:`epoch`) and, when it
+        names them, the marks of it that changed (:meth:`marks_changed`)."""
+        self.epoch(epoch)
+        if changed_marks is not None:
+            self.marks_changed(changed_marks())
+
     def marks_changed(self, marks: Iterable[Hashable]) -> None:
         """The planner's marks ``marks`` changed: those watching one wake."""
         watchers = self._mark_watchers
