@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import heapq
 import math
-from collections.abc import Callable, Hashable
+from collections.abc import Callable
 from collections.abc import Set as AbstractSet
 from dataclasses import dataclass, field
 from typing import ClassVar
@@ -168,12 +168,12 @@ class Reads:
     wait for): the searches themselves, whose segments' holders were read and whose vehicles were asked
     whether they may be moved (:meth:`segments`, :meth:`vehicles`: gathered only when a hint is given),
     the places whose count of routes near ordered the ways found (:meth:`routes`), other vehicles read
-    (``others``), and the marks of the planner's own state that the attempts wrote (``marks``: made
-    again, they would write them again)."""
+    (``others``), and where the attempts sent vehicles to wait (``sent``: vehicle -> the segment last
+    noted for it; made again, they would note the same again)."""
 
     others: set[int]
     found: list[_Found] = field(default_factory=list)
-    marks: set[Hashable] = field(default_factory=set)
+    sent: dict[int, int | None] = field(default_factory=dict)
 
     def add(self, found: _Found) -> None:
         self.found.append(found)

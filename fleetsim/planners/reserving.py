@@ -160,6 +160,9 @@ class ReservingPlanner:
         # once): ("haven", vehicle) when where a vehicle was sent to wait changed.
         self._changed_marks: dict[Hashable, None] = {}
         self._own_marks: dict[int, frozenset[Hashable]] = {}  # vehicle -> {("haven", vehicle)}, made once
+        # vehicle -> where its last call that gave a hint sent others to wait (the hint's writes, which
+        # write_again() notes again)
+        self._sent_by: dict[int, dict[int, int | None]] = {}
         # The hint holds for this class's answers: a subclass that answers otherwise gets none (unless it
         # gives its own quiet()).
         cls = type(self)
@@ -510,16 +513,25 @@ class ReservingPlanner:
         moved lately (it may be moved again then)."""
         vehicles: set[int] = set()
         routes: set[int] = set()
-        marks = self._own_marks.get(vehicle_id)  # where it was sent to wait: every call reads that
-        if marks is None:
-            marks = self._own_marks[vehicle_id] = frozenset({("haven", vehicle_id)})
+        sent: dict[int, int | None] = {}
         for gathered in (self._clearing, reads):
             if gathered is not None:
                 watch |= gathered.segments()
                 vehicles |= gathered.vehicles()
                 routes |= gathered.routes()
-                if gathered.marks:
-                    marks |= gathered.marks
+                sent.update(gathered.sent)  # (in the order noted first, as noted last)
+        marks = self._own_marks.get(vehicle_id)  # where it was sent to wait: every call reads that
+        if marks is None:
+            marks = self._own_marks[vehicle_id] = frozenset({("haven", vehicle_id)})
+        writes: frozenset[Hashable] = frozenset()
+        if sent:
+            # Where others were sent to wait: only this vehicle's own calls read that, so a call that noted
+            # it would, made again, note it again and do nothing else (``Quiet.writes``, write_again()).
+            sent.pop(vehicle_id, None)  # (its own is read: a mark)
+            self._sent_by[vehicle_id] = sent
+            writes = frozenset(("haven", other) for other in sent)
+        else:
+            self._sent_by.pop(vehicle_id, None)
         moments = [
             self._pushed[other] + self.push_cooldown - 1e-9 - _EARLY
             for other in sorted(vehicles)
@@ -535,6 +547,7 @@ class ReservingPlanner:
                 vehicles=frozenset(vehicles),
                 routes=frozenset(routes),
                 marks=marks,
+                writes=writes,
             ),
         )
 
@@ -729,23 +742,35 @@ class ReservingPlanner:
     def _send_to_wait(self, vehicle_id: int, segment: int | None) -> None:
         """Note where a vehicle is sent to wait (None: nowhere now). A blocked vehicle's attempt to move
         others may note it and still fail, and the same attempt, made again, notes it again: a vehicle resting
-        on a hint after such an attempt would not. So the attempt's reads take the mark ("haven", vehicle),
-        and when the place changes, those resting on that mark are asked again (and the vehicle itself,
-        whose every call reads it: its hints watch the mark too); a change that no attempt being recorded
-        makes asks every resting vehicle again (``quiet_epoch``)."""
-        mark = ("haven", vehicle_id)
+        on a hint after such an attempt would not. So the attempts' reads take what they noted (``sent``),
+        which the hint names as its writes: when the place changes, the vehicle whose call noted it notes
+        it again at its turn (write_again()), and the vehicle sent, whose every call reads it, is asked
+        again (its hints watch the mark ("haven", vehicle)); a change that no attempt being recorded makes
+        asks every resting vehicle again (``quiet_epoch``)."""
         reads = self._reads
         if reads is not None:
-            reads.marks.add(mark)
+            reads.sent[vehicle_id] = segment
+        self._note_haven(vehicle_id, segment, marked=reads is not None)
+
+    def _note_haven(self, vehicle_id: int, segment: int | None, *, marked: bool) -> None:
+        """Where a vehicle was sent to wait is now ``segment``; a change is told by its mark (``marked``)
+        or by a new ``quiet_epoch``."""
         if self._haven.get(vehicle_id) != segment:
             if segment is None:
                 del self._haven[vehicle_id]
             else:
                 self._haven[vehicle_id] = segment
-            if reads is None:
-                self.quiet_epoch += 1
+            if marked:
+                self._changed_marks[("haven", vehicle_id)] = None
             else:
-                self._changed_marks[mark] = None
+                self.quiet_epoch += 1
+
+    def write_again(self, vehicle_id: int) -> None:
+        """What the quiet hint's ``writes`` promise: where the vehicle's last call sent others to wait, noted
+        again as that call noted it (the harness calls this at the vehicle's turn, while it rests, when one
+        of those places changed since)."""
+        for other, segment in self._sent_by.get(vehicle_id, {}).items():
+            self._note_haven(other, segment, marked=True)
 
     def changed_marks(self) -> list[Hashable]:
         """The marks of this planner's own state that changed since last asked (the quiet hint's

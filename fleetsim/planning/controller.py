@@ -241,16 +241,27 @@ class FleetController:
         quiet: Callable[[int, FleetSnapshot], Quiet | None] | None = getattr(planner, "quiet", None)
         resting = self.resting if callable(quiet) else None
         changed_marks: Callable[[], Iterable[Hashable]] | None = None
+        write_again: Callable[[int], object] | None = None
         if resting is not None:
             changed_marks = getattr(planner, "changed_marks", None)
             if not callable(changed_marks):
                 changed_marks = None
+            write_again = getattr(planner, "write_again", None)
+            if not callable(write_again):
+                write_again = None
             resting.wake_due(time)
             resting.wake_standing(self._states)
             resting.planner_changed(getattr(planner, "quiet_epoch", None), changed_marks)
         for vehicle_id, task in heads:
             if resting is not None and vehicle_id in resting.resting:
-                continue  # its planner said asking again would change nothing until now
+                # Its planner said asking again would change nothing until now, but for what the call
+                # wrote, if that changed since: written again now, when the call would have been made.
+                if vehicle_id in resting.to_write:
+                    assert write_again is not None
+                    resting.to_write.discard(vehicle_id)
+                    write_again(vehicle_id)
+                    resting.planner_changed(getattr(planner, "quiet_epoch", None), changed_marks)
+                continue
             method: Method
             if is_routed(task.id):
                 method, call = "fix_legs", fix_legs
@@ -269,6 +280,8 @@ class FleetController:
                     assert quiet is not None
                     hint = quiet(vehicle_id, self.snapshot(time))
                     if hint is not None:
+                        if hint.writes and write_again is None:  # it cannot write them again: asked then
+                            hint = replace(hint, marks=hint.marks | hint.writes, writes=frozenset())
                         resting.rest(vehicle_id, hint, self._states)
                 continue  # nothing to change: the most common answer, so tested first
             outcome = self._answered(vehicle_id, method, task, response, time)

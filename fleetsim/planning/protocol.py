@@ -146,7 +146,10 @@ class QuietPlanner(Planner, Protocol):
     among the marks of its own state that changed (its optional ``changed_marks()`` method, asked after
     every call and at every round: each mark once, then forgotten), or the
     planner's ``quiet_epoch`` attribute (if any; read after every call and at every round) changes. Until
-    then the vehicle is not asked. ``None`` promises nothing.
+    then the vehicle is not asked. ``None`` promises nothing. ``Quiet.writes`` names marks the call wrote
+    without reading them: when one changes, the vehicle rests on and the planner's optional
+    ``write_again(vehicle_id)`` is called at its turn in the round instead, and must write them again as
+    the call did (without that method, the vehicle is asked again).
 
     The promise must hold exactly: a run must be the same, hash for hash, with the hint honoured or
     ignored. ``ReservingPlanner`` gives it for cruising vehicles (half its calls on a busy warehouse) and

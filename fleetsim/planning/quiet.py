@@ -23,6 +23,11 @@ asks after each call for a vehicle that answered an empty list, and which return
 - the planner names one of ``Quiet.marks`` among the marks of its own state that changed (its
   ``changed_marks()`` method, asked after every call: a part of its own state that the answer read,
   or that the call would write again, such as where another vehicle was sent to wait);
+- the planner names one of ``Quiet.writes`` among those that changed and has no ``write_again``
+  method. ``writes`` are marks the call wrote without reading them: asked again, it would write them
+  again as it did, and do nothing else. With ``write_again(vehicle_id)``, the vehicle rests on: at its
+  turn in the round (when it would have been asked), that method is called instead, and must write them
+  again as the call did;
 - the planner's ``quiet_epoch`` attribute changes (read after every call: the planner's own state
   changed in a way it cannot express by segments or marks, so every resting vehicle is asked again).
 
@@ -68,6 +73,10 @@ class Quiet:
         marks: Marks of the planner's own state (anything hashable, named by the planner): the planner
             naming one of these among those that changed (``changed_marks()``, asked after every call)
             ends the rest. Finer than ``quiet_epoch``, which ends every rest.
+        writes: Marks the call wrote and did not read: asked again, it would write them again as it did
+            and do nothing else. When the planner names one among those that changed, the vehicle rests on
+            and the planner's ``write_again(vehicle_id)`` is called at its turn in the round instead of
+            the call (a planner without ``write_again``: the rest ends, as for ``marks``).
     """
 
     watch: frozenset[int] = frozenset()
@@ -76,6 +85,7 @@ class Quiet:
     vehicles: frozenset[int] = frozenset()
     routes: frozenset[int] = frozenset()
     marks: frozenset[Hashable] = frozenset()
+    writes: frozenset[Hashable] = frozenset()
 
 
 # m/s: below this speed a vehicle is at rest (one that braked to a stop may keep a few 1e-15 m/s); a
@@ -136,6 +146,10 @@ class Resting:
         self._route_watchers: dict[int, set[int]] = {}  # such a segment -> the resting vehicles watching it
         self._marks: dict[int, frozenset[Hashable]] = {}  # resting vehicle -> the planner's marks it watches
         self._mark_watchers: dict[Hashable, set[int]] = {}  # such a mark -> the resting vehicles watching it
+        self._writes: dict[int, frozenset[Hashable]] = {}  # resting vehicle -> the marks its call writes
+        self._writers: dict[Hashable, set[int]] = {}  # such a mark -> the resting vehicles that write it
+        # Resting vehicles whose writes changed since: at their turn, the planner writes them again.
+        self.to_write: set[int] = set()
 
     def epoch(self, epoch: object) -> None:
         """The planner's ``quiet_epoch`` now: when it changed, every resting vehicle wakes."""
@@ -161,6 +175,9 @@ class Resting:
         if quiet.marks:
             self._marks[vehicle] = quiet.marks
             _enlist(self._mark_watchers, quiet.marks, vehicle)
+        if quiet.writes:
+            self._writes[vehicle] = quiet.writes
+            _enlist(self._writers, quiet.writes, vehicle)
         if quiet.until != math.inf:
             self._until[vehicle] = quiet.until
             heapq.heappush(self._due, (quiet.until, vehicle))
@@ -177,6 +194,9 @@ class Resting:
         _discharge(self._route_watchers, self._routes.pop(vehicle, ()), vehicle)
         _discharge(self._followers, self._stood.pop(vehicle, ()), vehicle)
         _discharge(self._mark_watchers, self._marks.pop(vehicle, ()), vehicle)
+        if self._writes:
+            _discharge(self._writers, self._writes.pop(vehicle, ()), vehicle)
+            self.to_write.discard(vehicle)
 
     def wake_all(self) -> None:
         self.resting.clear()
@@ -190,6 +210,9 @@ class Resting:
         self._route_watchers.clear()
         self._marks.clear()
         self._mark_watchers.clear()
+        self._writes.clear()
+        self._writers.clear()
+        self.to_write.clear()
 
     def planner_changed(self, epoch: object, changed_marks: Callable[[], Iterable[Hashable]] | None) -> None:
         """What the planner says of its own state now: its ``quiet_epoch`` (:meth:`epoch`) and, when it
@@ -199,13 +222,17 @@ class Resting:
             self.marks_changed(changed_marks())
 
     def marks_changed(self, marks: Iterable[Hashable]) -> None:
-        """The planner's marks ``marks`` changed: those watching one wake."""
-        watchers = self._mark_watchers
+        """The planner's marks ``marks`` changed: those watching one wake, and those that write one are due
+        to write it again."""
+        watchers, writers = self._mark_watchers, self._writers
         for mark in marks:
             woken = watchers.get(mark)
             if woken:
                 for vehicle in sorted(woken):
                     self.wake(vehicle)
+            writing = writers.get(mark)
+            if writing:
+                self.to_write |= writing
 
     def wake_standing(self, states: Mapping[int, VehicleState]) -> None:
         """Wake the vehicles resting until they stand that stand now, and those watching a vehicle that

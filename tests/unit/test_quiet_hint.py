@@ -4,9 +4,11 @@ ignored)."""
 
 from __future__ import annotations
 
+import copy
 import importlib.util
 import math
 from collections.abc import Hashable, Iterator
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -64,7 +66,9 @@ class Promising:
         self.until_standing = False
         self.vehicles: frozenset[int] = frozenset()
         self.marks: frozenset[Hashable] = frozenset()
+        self.writes: frozenset[Hashable] = frozenset()
         self.changed: list[Hashable] = []  # what changed_marks() answers next
+        self.changes: dict[int, list[Hashable]] = {}  # vehicle -> the marks its next call changes
         self.calls: list[int] = []
         self.answers: dict[int, list[FleetPlan]] = {}  # vehicle -> what its next call answers
         self.quiet_epoch = 0
@@ -74,12 +78,15 @@ class Promising:
 
     def fix_legs(self, task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
         self.calls.append(task.vehicle_id)
+        self.changed += self.changes.pop(task.vehicle_id, [])
         return self.answers.pop(task.vehicle_id, [])
 
     def quiet(self, vehicle_id: int, fleet: FleetSnapshot) -> Quiet | None:
         if vehicle_id not in self.calm:
             return None
-        return Quiet(self.watch, self.until, self.until_standing, vehicles=self.vehicles, marks=self.marks)
+        return Quiet(
+            self.watch, self.until, self.until_standing, vehicles=self.vehicles, marks=self.marks, writes=self.writes
+        )
 
     def changed_marks(self) -> list[Hashable]:
         changed, self.changed = self.changed, []
@@ -205,6 +212,72 @@ def test_a_changed_mark_wakes_the_vehicles_resting_on_it_and_no_other() -> None:
     assert _round(controller, planner, 0.5) == []
 
 
+class Writing(Promising):
+    """Promising, with write_again (recorded among the calls, as minus the vehicle), and each vehicle's hint
+    watching a mark of its own, ("own", vehicle)."""
+
+    def __init__(self, calm: set[int]) -> None:
+        super().__init__(calm)
+        self.written: list[int] = []
+
+    def quiet(self, vehicle_id: int, fleet: FleetSnapshot) -> Quiet | None:
+        quiet = super().quiet(vehicle_id, fleet)
+        return None if quiet is None else replace(quiet, marks=frozenset({("own", vehicle_id)}))
+
+    def write_again(self, vehicle_id: int) -> None:
+        self.written.append(vehicle_id)
+        self.calls.append(-vehicle_id)
+
+
+def test_a_changed_write_is_written_again_at_the_writers_turn_without_asking_it() -> None:
+    controller = _controller(*TASKS)
+    planner = Writing({1, 2})
+    planner.writes = frozenset({("haven", 3)})
+    _round(controller, planner, 0.0)
+    assert _round(controller, planner, 0.1) == []
+    planner.changed = [("haven", 9)]  # a mark nobody writes: nothing to do
+    assert _round(controller, planner, 0.2) == []
+    planner.changed = [("haven", 3)]  # both rest on: each writes again at its turn, once
+    assert _round(controller, planner, 0.3) == [-1, -2]
+    assert _round(controller, planner, 0.4) == []
+    # Vehicle 2 is asked, and its call changes the mark both write: vehicle 1's turn is past, so it writes
+    # again at its turn in the next round.
+    planner.changed = [("own", 2)]
+    planner.changes[2] = [("haven", 3)]
+    assert _round(controller, planner, 0.5) == [2]
+    assert _round(controller, planner, 0.6) == [-1]
+    # Vehicle 1's call changes it: vehicle 2's turn comes after, in the same round.
+    planner.changed = [("own", 1)]
+    planner.changes[1] = [("haven", 3)]
+    assert _round(controller, planner, 0.7) == [1, -2]
+    assert _round(controller, planner, 0.8) == []
+
+
+def test_a_woken_writer_is_asked_rather_than_writing_again() -> None:
+    controller = _controller(*TASKS)
+    planner = Writing({1, 2})
+    planner.writes = frozenset({("haven", 3)})
+    _round(controller, planner, 0.0)
+    planner.changed = [("haven", 3), ("own", 1)]  # vehicle 1 is asked (which writes anyway), once
+    assert _round(controller, planner, 0.1) == [1, -2]
+    assert planner.written == [2]
+    planner.changed = [("haven", 3)]
+    planner.quiet_epoch += 1  # every resting vehicle is asked
+    assert _round(controller, planner, 0.2) == [1, 2]
+    assert planner.written == [2]  # (the round before)
+
+
+def test_without_write_again_a_changed_write_wakes_the_writer() -> None:
+    controller = _controller(*TASKS)
+    planner = Promising({1, 2})
+    planner.writes = frozenset({("haven", 3)})
+    _round(controller, planner, 0.0)
+    assert _round(controller, planner, 0.1) == []
+    planner.changed = [("haven", 3)]
+    assert _round(controller, planner, 0.2) == [1, 2]
+    assert _round(controller, planner, 0.3) == []
+
+
 def test_a_rejected_plan_wakes_every_resting_vehicle() -> None:
     controller = _controller(*TASKS)
     planner = Promising({1})
@@ -295,23 +368,56 @@ def test_vehicles_behind_lower_ranked_blockers_that_cannot_be_moved_rest_and_run
     planner = ReservingPlanner()
     given: list[Quiet] = []
     others_sent: list[Hashable] = []  # marks of where other vehicles were sent to wait, named by hints
-    hint = planner.quiet
+    writes_checked = 0
+    hint, fix_legs = planner.quiet, planner.fix_legs
+    asked: list[tuple[Task, FleetSnapshot, Layout]] = []
+
+    def recorded_call(task: Task, fleet: FleetSnapshot, layout: Layout) -> Response:
+        asked[:] = [(task, fleet, layout)]
+        return fix_legs(task, fleet, layout)
 
     def recorded(vehicle_id: int, fleet: FleetSnapshot) -> Quiet | None:
+        nonlocal writes_checked
         quiet = hint(vehicle_id, fleet)
         if quiet is not None:
             given.append(quiet)
-            others_sent.extend(mark for mark in quiet.marks if mark != ("haven", vehicle_id))
+            assert quiet.marks == {("haven", vehicle_id)}  # its own place to wait: every call reads it
+            others_sent.extend(quiet.writes)
+            if quiet.writes and writes_checked < 3:
+                writes_checked += 1
+                _check_writes_again(planner, vehicle_id, quiet, *asked[0])
         return quiet
 
+    planner.fix_legs = recorded_call  # type: ignore[method-assign]
     planner.quiet = recorded  # type: ignore[method-assign]
     honoured = run_switched(scenario, planner, quiet=True)
     ignored = run_switched(scenario, ReservingPlanner(), quiet=False)
     assert same_run(honoured) == same_run(ignored)
     assert any(quiet.vehicles for quiet in given) and any(quiet.routes for quiet in given)
-    # Where the attempts sent others to wait: a change there wakes those resting on it, not everyone.
-    assert others_sent
+    # Where the attempts sent others to wait: a change there has those that noted it note it again at their
+    # turn (write_again), rather than being asked again or waking everyone.
+    assert others_sent and writes_checked == 3
     assert honoured.metrics.planner_calls < 0.7 * ignored.metrics.planner_calls
+
+
+def _check_writes_again(
+    planner: ReservingPlanner, vehicle_id: int, quiet: Quiet, task: Task, fleet: FleetSnapshot, layout: Layout
+) -> None:
+    """What ``quiet.writes`` promise, right after the call that gave it: with the places it noted for others
+    changed, write_again() notes them again just as asking again does, which answers nothing, changes
+    nothing else and gives the same hint."""
+    sent = {mark[1] for mark in quiet.writes}  # type: ignore[index]
+    moved = dict.fromkeys(sent, -1)  # somewhere else
+    shared = (planner._layout, planner._idle_of[0])  # (read only, and cannot be copied)
+    asked, written = (copy.deepcopy(planner, {id(kept): kept for kept in shared}) for _ in range(2))
+    for twin in (asked, written):
+        twin._haven.update(moved)
+        twin.changed_marks()
+    assert ReservingPlanner.fix_legs(asked, task, fleet, layout) == []
+    assert ReservingPlanner.quiet(asked, vehicle_id, fleet) == quiet
+    written.write_again(vehicle_id)
+    assert written._haven == asked._haven and all(written._haven[other] != -1 for other in sent)
+    assert sorted(map(str, written.changed_marks())) == sorted(map(str, quiet.writes))
 
 
 def _shipped() -> Iterator[tuple[str, Scenario]]:
