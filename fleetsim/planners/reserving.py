@@ -588,13 +588,16 @@ class ReservingPlanner:
         moved: list[FleetPlan] = []
         taken: set[int] = {vehicle_id}
         idle = self._idle(fleet)
-        fixed_near = index.fixed_near
         next_legs = plan.legs[1 : self.ahead_legs]
-        ahead = (
-            [other for leg in next_legs for other in index.holders(vehicle_id, leg.segment) if other in idle]
-            if idle and any(not idle.isdisjoint(fixed_near.get(leg.segment, ())) for leg in next_legs)
-            else []
-        )
+        ahead: list[int] = []
+        if idle:
+            fixed_near = index.fixed_near
+            for leg in next_legs:  # (a loop: asked on every call, and seldom true)
+                holding = fixed_near.get(leg.segment)
+                if holding and not idle.isdisjoint(holding):
+                    holders = [index.holders(vehicle_id, near.segment) for near in next_legs]
+                    ahead = [other for held in holders for other in held if other in idle]
+                    break
         near = self._near(plan, layout) if ahead else frozenset()
         to_move: list[tuple[int, AbstractSet[int]]] = [(other, near) for other in ahead]
         aside = self._aside.get(vehicle_id)

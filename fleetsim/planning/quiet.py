@@ -242,10 +242,11 @@ class Resting:
                 if states[vehicle].speed < STANDING:
                     self.wake(vehicle)
         if self._followers:
-            for (other, stood), followers in sorted(self._followers.items()):
-                if (states[other].speed < STANDING) is not stood:
-                    for vehicle in sorted(followers):
-                        self.wake(vehicle)
+            # (Those that changed found first, then woken in order: few change in a round.)
+            changed = [key for key in self._followers if (states[key[0]].speed < STANDING) is not key[1]]
+            for key in sorted(changed):
+                for vehicle in sorted(self._followers.get(key, ())):
+                    self.wake(vehicle)
 
     def _followed(self, vehicle: int) -> None:
         """``vehicle`` changed: those watching it wake."""
