@@ -2,7 +2,7 @@
 
     python benchmarks/shift.py [--case shift|shift100|stretch|both] [--hours 8] [--minutes 10] [--repeat 3]
                                [--profile shift|stretch] [--top 25] [--orders-only]
-                               [--vs REF [--parallel]]
+                               [--vs REF [--parallel] [--compiled]]
 
 Two cases (issue 45, point 7), each on a site of ``fleetsim generate warehouse`` (``generate_warehouse``)
 run by the reference dispatcher (``NearestVehicleDispatcher``) and planner (``ReservingPlanner``):
@@ -54,6 +54,10 @@ and in this tree, in turn; ``--parallel`` runs the two of a round at once instea
 each round's wall time, planner time, harness per vehicle-step and planner calls, their medians, how
 many times faster this tree runs the shift, and whether the trace hashes agree (they must: a speed-up
 changes no behaviour; the script exits 1 otherwise). REF must have transport orders (issue 45 on).
+``--compiled`` also builds this tree's compiled build (``scripts/compiled_copy.py``, about a minute) and
+runs it in each round, after REF and this tree, against this tree once more (with ``--parallel``, that
+second pair at once too): printed as two more trees, and how many times faster the compiled build runs
+the shift than this tree beside it.
 
 ``--profile CASE`` runs that case's orders run once more under cProfile and prints the functions with
 the most own time in ``fleetsim/dispatch`` and ``fleetsim/sim/dispatching.py`` (cProfile slows pure-Python
@@ -403,35 +407,46 @@ def finished(tree: Path, child: subprocess.Popen[str]) -> dict[str, Any]:
     return figures
 
 
-def versus(ref: str, case: Case, seconds: float, repeat: int, parallel: bool, folder: Path) -> bool:
-    """``case`` in REF and this tree, ``repeat`` rounds; True when every run gives the same trace hash."""
+def versus(
+    ref: str, case: Case, seconds: float, repeat: int, parallel: bool, folder: Path, compiled: bool = False
+) -> bool:
+    """``case`` in REF and this tree, ``repeat`` rounds (with ``compiled``, then this tree's compiled build
+    and this tree again); True when every run gives the same trace hash."""
     suite_file = generate_warehouse(folder, case.site).suite
     how = "at once, one per core" if parallel else "in turn"
     print(
         f"\n{case.name}: {case.site.vehicles} vehicles, {seconds / 3600:g} h simulated, {repeat} rounds, the trees {how}"
     )
-    with trees(ref) as both:
-        rounds: dict[str, list[dict[str, Any]]] = {name: [] for name in both}
+    with trees(ref, compiled) as found:
+        names = list(found)
+        pairs = [(names[0], names[1])]  # (run first, and the tree whose speed-up over it is printed)
+        if compiled:
+            pairs.append((AGAIN, names[2]))
+        tree_of = {**found, AGAIN: found[names[1]]}
+        rounds: dict[str, list[dict[str, Any]]] = {name: [] for pair in pairs for name in pair}
         for _ in range(repeat):
-            if parallel:
-                children = {name: run_in(tree, suite_file, case, seconds) for name, tree in both.items()}
-                for name, child in children.items():
-                    rounds[name].append(finished(both[name], child))
-            else:
-                for name, tree in both.items():
-                    rounds[name].append(finished(tree, run_in(tree, suite_file, case, seconds)))
+            for pair in pairs:
+                if parallel:
+                    children = {name: run_in(tree_of[name], suite_file, case, seconds) for name in pair}
+                    for name, child in children.items():
+                        rounds[name].append(finished(tree_of[name], child))
+                else:
+                    for name in pair:
+                        rounds[name].append(finished(tree_of[name], run_in(tree_of[name], suite_file, case, seconds)))
             print("  " + "   ".join(f"{name}: {r[-1]['wall']:.1f} s" for name, r in rounds.items()), flush=True)
     for name, runs in rounds.items():
         print(f"  {name}")
         for label, key, form in VERSUS_FIGURES:
             print(f"    {label:<18} {column(runs, key, form)}")
     walls = {name: statistics.median(float(run["wall"]) for run in runs) for name, runs in rounds.items()}
-    (first, before), (_, after) = walls.items()
-    print(f"  this tree runs the shift {before / after:.2f}x as fast as {first}")
+    for slower, faster in pairs:
+        print(f"  {faster} runs the shift {walls[slower] / walls[faster]:.2f}x as fast as {slower}")
     hashes = {str(run["hash"]) for runs in rounds.values() for run in runs}
     print("  trace hashes agree" if len(hashes) == 1 else f"  trace hashes DIFFER: {sorted(h[:12] for h in hashes)}")
     return len(hashes) == 1
 
+
+AGAIN = "this tree, again"  # this tree once more, beside the compiled build
 
 # (label, key, format) of each figure printed per tree with --vs.
 VERSUS_FIGURES = (
@@ -454,6 +469,7 @@ def main() -> int:
     parser.add_argument("--top", type=int, default=25, help="functions listed with --profile")
     parser.add_argument("--vs", metavar="REF", help="compare the orders run with commit REF side by side instead")
     parser.add_argument("--parallel", action="store_true", help="with --vs: run the two trees at once, a core each")
+    parser.add_argument("--compiled", action="store_true", help="with --vs: also this tree's compiled build")
     # (--vs: one run of a generated suite, in the tree whose fleetsim is on the path)
     parser.add_argument("--child", type=Path, help=argparse.SUPPRESS)
     parser.add_argument("--child-seconds", type=float, help=argparse.SUPPRESS)
@@ -468,6 +484,8 @@ def main() -> int:
         parser.error(f"--hours={args.hours} and --minutes={args.minutes} must be > 0")
     if args.parallel and args.vs is None:
         parser.error("--parallel runs the two trees of --vs at once: give --vs REF")
+    if args.compiled and args.vs is None:
+        parser.error("--compiled adds this tree's compiled build to --vs: give --vs REF")
     if not args.orders_only and "fleetsim.sim.loop" in compiled_modules():
         parser.error("the bookkeeping figures time the loop's methods from outside, which the compiled build's loop "
                      "does not let them: with it, use --orders-only (the wall time)")  # fmt: skip
@@ -478,7 +496,9 @@ def main() -> int:
             return 0
         for name in ("shift", "stretch") if args.case == "both" else (args.case,):
             if args.vs is not None:
-                if not versus(args.vs, CASES[name], seconds[name], args.repeat, args.parallel, Path(tmp) / name):
+                if not versus(
+                    args.vs, CASES[name], seconds[name], args.repeat, args.parallel, Path(tmp) / name, args.compiled
+                ):
                     return 1
                 continue
             how = wall_only if args.orders_only else measure
