@@ -407,6 +407,9 @@ def finished(tree: Path, child: subprocess.Popen[str]) -> dict[str, Any]:
     return figures
 
 
+AGAIN = "this tree, again"  # this tree once more, beside the compiled build
+
+
 def versus(
     ref: str, case: Case, seconds: float, repeat: int, parallel: bool, folder: Path, compiled: bool = False
 ) -> bool:
@@ -445,8 +448,6 @@ def versus(
     print("  trace hashes agree" if len(hashes) == 1 else f"  trace hashes DIFFER: {sorted(h[:12] for h in hashes)}")
     return len(hashes) == 1
 
-
-AGAIN = "this tree, again"  # this tree once more, beside the compiled build
 
 # (label, key, format) of each figure printed per tree with --vs.
 VERSUS_FIGURES = (

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Hashable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, replace
-from typing import Literal, cast
+from typing import Any, Literal, cast
 
 from fleetsim.errors import PlannerError
 from fleetsim.layout.layout import Layout
@@ -57,6 +57,12 @@ def _direct_round(
     layout: Layout,
 ) -> list[object]:
     return [response for response, _seconds in call(calls, fleet, layout)]
+
+
+def _optional(planner: object, name: str) -> Callable[..., Any] | None:
+    """The planner's optional method ``name``, or None when it has none."""
+    method = getattr(planner, name, None)
+    return method if callable(method) else None
 
 
 @dataclass(frozen=True, slots=True)
@@ -243,15 +249,10 @@ class FleetController:
         changed_marks: Callable[[], Iterable[Hashable]] | None = None
         write_again: Callable[[int], object] | None = None
         if resting is not None:
-            changed_marks = getattr(planner, "changed_marks", None)
-            if not callable(changed_marks):
-                changed_marks = None
-            write_again = getattr(planner, "write_again", None)
-            if not callable(write_again):
-                write_again = None
+            changed_marks, write_again = _optional(planner, "changed_marks"), _optional(planner, "write_again")
             resting.wake_due(time)
             resting.wake_standing(self._states)
-            resting.planner_changed(getattr(planner, "quiet_epoch", None), changed_marks)
+            resting.planner_changed(planner, changed_marks)
         for vehicle_id, task in heads:
             if resting is not None and vehicle_id in resting.resting:
                 # Its planner said asking again would change nothing until now, but for what the call
@@ -260,7 +261,7 @@ class FleetController:
                     assert write_again is not None
                     resting.to_write.discard(vehicle_id)
                     write_again(vehicle_id)
-                    resting.planner_changed(getattr(planner, "quiet_epoch", None), changed_marks)
+                    resting.planner_changed(planner, changed_marks)
                 continue
             method: Method
             if is_routed(task.id):
@@ -274,7 +275,7 @@ class FleetController:
             except RouteError as error:  # the whole request cannot be routed
                 response = error
             if resting is not None:  # the planner's own state may have changed
-                resting.planner_changed(getattr(planner, "quiet_epoch", None), changed_marks)
+                resting.planner_changed(planner, changed_marks)
             if type(response) is list and not response:
                 if resting is not None:
                     assert quiet is not None

@@ -214,10 +214,11 @@ class Resting:
         self._writers.clear()
         self.to_write.clear()
 
-    def planner_changed(self, epoch: object, changed_marks: Callable[[], Iterable[Hashable]] | None) -> None:
+    def planner_changed(self, planner: object, changed_marks: Callable[[], Iterable[Hashable]] | None) -> None:
         """What the planner says of its own state now: its ``quiet_epoch`` (:meth:`epoch`) and, when it
-        names them, the marks of it that changed (:meth:`marks_changed`)."""
-        self.epoch(epoch)
+        names them (``changed_marks``: its method, if it has one), the marks of it that changed
+        (:meth:`marks_changed`)."""
+        self.epoch(getattr(planner, "quiet_epoch", None))
         if changed_marks is not None:
             self.marks_changed(changed_marks())
 

@@ -186,22 +186,26 @@ def test_a_vehicle_resting_until_it_stands_is_asked_at_the_first_round_that_find
     assert _round(controller, planner, 0.2) == [1, 2]
 
 
-def test_a_new_quiet_epoch_wakes_every_resting_vehicle() -> None:
+def _both_resting(planner: Promising) -> FleetController:
+    """A controller whose two busy vehicles have each been asked once and rest on ``planner``'s hints."""
     controller = _controller(*TASKS)
-    planner = Promising({1, 2})
     _round(controller, planner, 0.0)
     assert _round(controller, planner, 0.1) == []
+    return controller
+
+
+def test_a_new_quiet_epoch_wakes_every_resting_vehicle() -> None:
+    planner = Promising({1, 2})
+    controller = _both_resting(planner)
     planner.quiet_epoch += 1
     assert _round(controller, planner, 0.2) == [1, 2]
     assert _round(controller, planner, 0.3) == []
 
 
 def test_a_changed_mark_wakes_the_vehicles_resting_on_it_and_no_other() -> None:
-    controller = _controller(*TASKS)
     planner = Promising({1, 2})
     planner.marks = frozenset({("haven", 7)})
-    _round(controller, planner, 0.0)
-    assert _round(controller, planner, 0.1) == []
+    controller = _both_resting(planner)
     planner.marks = frozenset({("haven", 8)})
     planner.changed = [("haven", 9)]  # a mark nobody watches: nobody wakes
     assert _round(controller, planner, 0.2) == []
@@ -230,11 +234,9 @@ class Writing(Promising):
 
 
 def test_a_changed_write_is_written_again_at_the_writers_turn_without_asking_it() -> None:
-    controller = _controller(*TASKS)
     planner = Writing({1, 2})
     planner.writes = frozenset({("haven", 3)})
-    _round(controller, planner, 0.0)
-    assert _round(controller, planner, 0.1) == []
+    controller = _both_resting(planner)
     planner.changed = [("haven", 9)]  # a mark nobody writes: nothing to do
     assert _round(controller, planner, 0.2) == []
     planner.changed = [("haven", 3)]  # both rest on: each writes again at its turn, once
@@ -254,25 +256,22 @@ def test_a_changed_write_is_written_again_at_the_writers_turn_without_asking_it(
 
 
 def test_a_woken_writer_is_asked_rather_than_writing_again() -> None:
-    controller = _controller(*TASKS)
     planner = Writing({1, 2})
     planner.writes = frozenset({("haven", 3)})
-    _round(controller, planner, 0.0)
+    controller = _both_resting(planner)
     planner.changed = [("haven", 3), ("own", 1)]  # vehicle 1 is asked (which writes anyway), once
-    assert _round(controller, planner, 0.1) == [1, -2]
+    assert _round(controller, planner, 0.2) == [1, -2]
     assert planner.written == [2]
     planner.changed = [("haven", 3)]
     planner.quiet_epoch += 1  # every resting vehicle is asked
-    assert _round(controller, planner, 0.2) == [1, 2]
+    assert _round(controller, planner, 0.3) == [1, 2]
     assert planner.written == [2]  # (the round before)
 
 
 def test_without_write_again_a_changed_write_wakes_the_writer() -> None:
-    controller = _controller(*TASKS)
     planner = Promising({1, 2})
     planner.writes = frozenset({("haven", 3)})
-    _round(controller, planner, 0.0)
-    assert _round(controller, planner, 0.1) == []
+    controller = _both_resting(planner)
     planner.changed = [("haven", 3)]
     assert _round(controller, planner, 0.2) == [1, 2]
     assert _round(controller, planner, 0.3) == []
