@@ -33,6 +33,14 @@ __all__ = ["Footprint", "interpolate", "separation", "signed_distance", "turn"]
 
 Footprint = tuple[float, float, float, float, float]  # x, y, heading (radians), half length, half width
 
+# A rectangle's corners as (along the length, along the width) multiples of its half sizes, in the order
+# they are looked at; and those that can be its closest to another rectangle, keyed by the side of each
+# axis beyond which the other lies wholly (1 or -1; 0: on neither, it overlaps that axis's span).
+_CORNERS = ((1.0, 1.0), (-1.0, 1.0), (-1.0, -1.0), (1.0, -1.0))
+_FACING = {
+    (u, v): tuple(c for c in _CORNERS if u in (0, c[0]) and v in (0, c[1])) for u in (-1, 0, 1) for v in (-1, 0, 1)
+}
+
 
 def turn(start: float, end: float) -> float:
     """The shorter turn (radians, -pi..pi) from heading ``start`` to ``end``."""
@@ -100,15 +108,28 @@ def signed_distance(a: Footprint, b: Footprint, beyond: float = math.inf) -> tup
     )
     if squared <= apart * apart * (1.0 + 1e-12):
         return math.sqrt(squared), at_x, at_y
-    # Else corner to corner, or a corner beyond the side's ends: the closest of all eight corners to the
-    # other rectangle (for convex polygons the closest points lie on a corner of one of them).
+    # Else corner to corner, or a corner beyond the side's ends: the closest of the corners to the other
+    # rectangle (for convex polygons the closest points lie on a corner of one of them). Where the other
+    # lies wholly beyond one of a rectangle's sides (its separation along that side's normal positive),
+    # the rectangle's closest points lie on that side: only its corners there need looking at (the
+    # others are farther by the rectangle's whole length or width).
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    a_corners = _FACING[
+        (0 if along[0] <= 0.0 else 1 if dx * ca + dy * sa > 0.0 else -1),
+        (0 if along[1] <= 0.0 else 1 if dy * ca - dx * sa > 0.0 else -1),
+    ]
+    b_corners = _FACING[
+        (0 if along[2] <= 0.0 else 1 if dx * cb + dy * sb < 0.0 else -1),
+        (0 if along[3] <= 0.0 else 1 if dy * cb - dx * sb < 0.0 else -1),
+    ]
     best = math.inf
-    for (x, y, _, length, width), co, si, (ox, oy, _, ol, ow), oc, os in (
-        (a, ca, sa, b, cb, sb),  # a's corners against b
-        (b, cb, sb, a, ca, sa),  # b's against a
+    for (x, y, _, length, width), co, si, (ox, oy, _, ol, ow), oc, os, corners in (
+        (a, ca, sa, b, cb, sb, a_corners),  # a's corners against b
+        (b, cb, sb, a, ca, sa, b_corners),  # b's against a
     ):
         lc, ls, wc, ws = length * co, length * si, width * co, width * si
-        for cx, cy in ((x + lc - ws, y + ls + wc), (x - lc - ws, y - ls + wc), (x - lc + ws, y - ls - wc), (x + lc + ws, y + ls - wc)):  # fmt: skip
+        for u, v in corners:
+            cx, cy = x + u * lc - v * ws, y + u * ls + v * wc
             rx, ry = cx - ox, cy - oy
             lx, ly = rx * oc + ry * os, ry * oc - rx * os  # the corner in the other's frame
             ex, ey = max(abs(lx) - ol, 0.0), max(abs(ly) - ow, 0.0)

@@ -23,11 +23,12 @@ the pair's own closest approach so far when that is closer: only a closer one wo
 least one of them moved in the step. Their bounding circles sort out most of those (the distance
 between circles never exceeds the distance between the rectangles they hold). The narrow phase takes
 the exact distance (:mod:`.geometry`) of the pairs whose circles come close enough to matter, one pair
-at a time in plain Python: a step leaves a handful per hundred vehicles. A fleet of a few (at most
-sixteen vehicles) skips the arrays, whose fixed cost per step would be most of its judgement: every pair
-is listed, its vehicles' spent distances are plain floats, and it is looked at on the same rule; what a
-pair adds to the report does not depend on how often it is looked at beyond that rule, so the report is
-the same either way.
+at a time in plain Python: a step leaves a handful per hundred vehicles. A step in which few vehicles
+moved (told only what moved, :meth:`ContactMonitor.step_moved`), and every step of a fleet of a few (at
+most sixteen vehicles, every pair listed), skips the arrays, whose fixed cost per step would be most of
+its judgement: the poses and spent distances are plain floats, only the moved vehicles' are brought up
+to date, and only their pairs are looked at, on the same rule; what a pair adds to the report does not
+depend on how often it is looked at beyond that rule, so the report is the same either way.
 
 The continuous phase catches what no sampled step shows: two fast vehicles that pass through each other
 within one step. It is conservative advancement along the poses interpolated between the step's start
@@ -45,6 +46,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from itertools import chain
 from typing import Any
 
 import numpy as np
@@ -168,12 +170,15 @@ class ContactMonitor:
         self._limit = self.reach  # how close two footprints must come for their distance to count now
         self._sizes = np.array((self.half_length, self.half_width, self.radius))  # per vehicle
         self._size_rows: list[list[float]] = self._sizes.T.tolist()  # the same, by vehicle
+        self._radii: list[float] = self.radius.tolist()  # the half diagonals, by vehicle
         self._poses: Floats | None = None  # at the last step's end: x, y, heading (3, n)
         self._listed: _Listed | None = None  # the candidate pairs
         # Per vehicle, metres: the farthest any point of its footprint can have moved since the start.
         self._spent = np.zeros(len(self.ids))
-        # A fleet of a few: every pair looked at in plain Python, without the arrays' fixed cost per step.
-        self._few = _Few(self.radius.tolist()) if len(self.ids) <= _FEW else None
+        # While few vehicles move (and always for a fleet of a few), the state above is kept in plain Python
+        # lists instead (``_told``), without the arrays' fixed cost per step; the arrays are stale meanwhile.
+        self._few = len(self.ids) <= _FEW
+        self._told: _Told | None = None
         self.looked = 0  # pairs looked at over the steps (a diagnostic: what the broad phase left)
 
     # -- the run ----------------------------------------------------------------------------------------
@@ -181,8 +186,11 @@ class ContactMonitor:
     def begin(self, x: Floats, y: Floats, heading: Floats, time: float = 0.0) -> list[Contact]:
         """The poses at the start: footprints that overlap already are contacts from ``time``."""
         self._poses = poses = np.array((x, y, heading), dtype=np.float64)
-        if self._few is not None:
-            self._few.poses = poses.tolist()
+        self._told = None
+        if self._few:  # every pair listed, for good
+            count = len(self.ids)
+            pairs = [(p, q) for p in range(count) for q in range(p + 1, count)]
+            self._told = _Told(self, [p for p, _ in pairs], [q for _, q in pairs], [-math.inf] * len(pairs))
         i, j = self._candidates(poses, 0.0)
         table = np.vstack((poses, self._sizes))  # per vehicle: x, y, heading, half sizes, radius
         fresh = []
@@ -198,13 +206,19 @@ class ContactMonitor:
     ) -> list[Contact]:
         """The step from ``t0`` to ``t1`` ended with these poses; ``moved``: which vehicles' poses changed.
         Returns the contacts that began in it."""
-        start = self._poses
-        assert start is not None, "begin() first"
-        if self._few is not None:
+        assert self._poses is not None, "begin() first"
+        if self._few:
             at = moved.nonzero()[0]
             poses = list(zip(x[at].tolist(), y[at].tolist(), heading[at].tolist(), strict=True))
-            return self._step_few(t0, t1, at.tolist(), poses)
-        self._poses = end = np.array((x, y, heading), dtype=np.float64)
+            return self._step_told(t0, t1, at.tolist(), poses)
+        self._flush()
+        return self._step_arrays(t0, t1, np.array((x, y, heading), dtype=np.float64), moved)
+
+    def _step_arrays(self, t0: float, t1: float, end: Floats, moved: npt.NDArray[np.bool_]) -> list[Contact]:
+        """:meth:`step` in arrays, the poses at its end in rows x, y, heading (kept as they are)."""
+        start = self._poses
+        assert start is not None
+        self._poses = end
         if not np.count_nonzero(moved):  # nothing moved: no distance changed
             return []
         delta = end - start
@@ -235,58 +249,98 @@ class ContactMonitor:
 
     @property
     def few(self) -> bool:
-        """The fleet is a few, judged in plain Python: :meth:`step_moved` takes its steps without arrays."""
-        return self._few is not None
+        """The fleet is a few: its steps are always judged in plain Python (:meth:`step_moved`)."""
+        return self._few
 
     def step_moved(
         self, t0: float, t1: float, moved: list[int], poses: list[tuple[float, float, float]]
     ) -> list[Contact]:
-        """:meth:`step` for a fleet of a few (:attr:`few`), told only which vehicles moved (their indices)
-        and their poses (x, y, heading) at the step's end; the others stand where they were."""
+        """:meth:`step`, told only which vehicles moved (their indices) and their poses (x, y,
+        heading) at the step's end; the others stand where they were. The same contacts and report as
+        :meth:`step`. While few vehicles move (at most :data:`_TOLD` per cent of the fleet, or any number
+        in a fleet of a few) the step is judged in plain Python, in proportion to what moved; else in arrays."""
         assert self._poses is not None, "begin() first"
-        return self._step_few(t0, t1, moved, poses)
+        if self._few or 100 * len(moved) <= _TOLD * len(self.ids):
+            return self._step_told(t0, t1, moved, poses)
+        self._flush()
+        end = self._poses.copy()
+        at = np.array(moved, dtype=np.intp)
+        end.T[at] = np.fromiter(chain.from_iterable(poses), dtype=np.float64, count=3 * len(moved)).reshape(-1, 3)
+        stirred = np.zeros(len(self.ids), dtype=np.bool_)
+        stirred[at] = True
+        return self._step_arrays(t0, t1, end, stirred)
 
-    def _step_few(
+    def _step_told(
         self, t0: float, t1: float, moved: list[int], poses: list[tuple[float, float, float]]
     ) -> list[Contact]:
-        """The step of a fleet of a few, in plain Python: every pair is listed, and looked at when it is due
-        and one of its vehicles moved. What a pair adds to the report is the same either way: a pair is
-        looked at only when it could add something, and looking at one that could not adds nothing."""
-        few = self._few
-        assert few is not None
+        """The step in plain Python: the moved vehicles' poses and spent distances brought up to date, as
+        :meth:`step` does in arrays (the centre's shift, plus the turn times the half diagonal), and the
+        listed pairs of a moved vehicle looked at when they are due, in the pairs' order. What a pair adds
+        to the report is the same either way: a pair is looked at only when it could add something, and
+        looking at one that could not adds nothing."""
         if not moved:  # nothing moved: no distance changed
             return []
-        xs, ys, hs = few.poses
-        spent, radius = few.spent, few.radius
+        told = self._told
+        if told is None:
+            told = self._told = self._tell()
+        xs, ys, hs = told.poses
+        spent, radius = told.spent, told.radius
         # The moved vehicles' poses at the step's start, and their spins (a standing vehicle's is 0.0, as
-        # step() works it out); their spent distances as step() adds them: the centre's shift, plus the
-        # turn times the half diagonal.
+        # step() works it out).
         starts: dict[int, tuple[float, float, float]] = {}
         spins: dict[int, float] = {}
+        travel = 0.0
         for v, (x, y, h) in zip(moved, poses, strict=True):
             x0, y0, h0 = starts[v] = (xs[v], ys[v], hs[v])
             xs[v], ys[v], hs[v] = x, y, h
+            shift = math.hypot(x - x0, y - y0)
             spin = spins[v] = min(abs(h - h0), math.pi) * radius[v]
-            spent[v] += math.hypot(x - x0, y - y0) + spin
-        due = few.due
+            spent[v] += shift + spin
+            if shift > travel:
+                travel = shift
+        if not self._few:
+            listed = self._listed
+            if listed is not None:
+                listed.travelled += travel
+            if listed is None or travel + listed.travelled > listed.skin:  # (else no vehicle drifted too far)
+                told.flush()
+                assert self._poses is not None
+                if self._drifted(self._poses, travel) is not listed:  # listed anew
+                    told = self._told = self._tell()
+        due, firsts_of, seconds_of, pairs_of = told.due, told.i, told.j, told.pairs_of
         looked = [
-            (k, p, q)
-            for k, (p, q) in enumerate(few.pairs)
-            if due[k] <= spent[p] + spent[q] and (p in spins or q in spins)
+            k
+            for k in sorted({k for v in moved for k in pairs_of[v]})
+            if due[k] <= spent[firsts_of[k]] + spent[seconds_of[k]]
         ]
         if not looked:
             return []
         self.looked += len(looked)
-        firsts = [p for _, p, _ in looked]
-        seconds = [q for _, _, q in looked]
+        firsts = [firsts_of[k] for k in looked]
+        seconds = [seconds_of[k] for k in looked]
         both = firsts + seconds
         ends = [[xs[v], ys[v], hs[v]] for v in both]
         begun = [list(starts[v]) if v in starts else [xs[v], ys[v], hs[v]] for v in both]
         fresh: list[Contact] = []
         slack = self._look(t0, t1, firsts, seconds, ends, begun, [spins.get(v, 0.0) for v in both], fresh)
-        for (k, p, q), more in zip(looked, slack, strict=True):
+        for k, p, q, more in zip(looked, firsts, seconds, slack, strict=True):
             due[k] = (spent[p] + spent[q]) + more
         return fresh
+
+    def _tell(self) -> _Told:
+        """The state in plain lists, to be judged in Python: the poses, spent distances and listed pairs (the
+        arrays are stale until :meth:`_flush`)."""
+        assert self._poses is not None
+        listed = self._listed
+        if listed is None:
+            return _Told(self, [], [], [])
+        return _Told(self, listed.i.tolist(), listed.j.tolist(), listed.due.tolist())
+
+    def _flush(self) -> None:
+        """Bring the arrays up to date from the lists of a step judged in Python, and judge in arrays on."""
+        if self._told is not None:
+            self._told.flush()
+            self._told = None
 
     def _look(
         self,
@@ -374,6 +428,12 @@ class ContactMonitor:
             listed.travelled += travel
             if travel + listed.travelled <= listed.skin:
                 return listed
+        return self._drifted(poses, travel)
+
+    def _drifted(self, poses: Floats, travel: float) -> _Listed:
+        """:meth:`_neighbours` once the travels added up do not settle it: each vehicle's drift."""
+        listed = self._listed
+        if listed is not None:
             centres = listed.centres
             drift = float(np.hypot(poses[0] - centres[0], poses[1] - centres[1]).max(initial=0.0))
             if travel + drift <= listed.skin:
@@ -536,27 +596,42 @@ class ContactMonitor:
                 self._closest[(p, q)] = (distance, time, x, y)
 
 
-# Fleets of at most this many vehicles (120 pairs) are judged in plain Python (ContactMonitor._step_few):
-# up to it, the arrays' fixed cost per step (some twenty operations) is more than the pairs' own. Measured
-# on random walks (µs a step, plain Python against arrays): 6 vehicles 26 against 48 crowded, 16 against
-# 33 spread out; 16 vehicles 95 against 104 and 35 against 50; 20 vehicles 134 against 133 crowded.
+# Fleets of at most this many vehicles (120 pairs) are judged in plain Python (ContactMonitor._step_told),
+# every pair listed: up to it, the arrays' fixed cost per step (some twenty operations) is more than the
+# pairs' own. Measured on random walks (µs a step, plain Python against arrays): 6 vehicles 26 against 48
+# crowded, 16 against 33 spread out; 16 vehicles 95 against 104 and 35 against 50; 20 vehicles 134
+# against 133 crowded.
 _FEW = 16
+# A larger fleet's step is judged in plain Python while at most this share of it (per cent) moved.
+_TOLD = 40
 
 
-class _Few:
-    """A fleet of a few, judged in plain Python: every pair (i < j, in order), what its two vehicles must
-    have spent before it is looked at again, each vehicle's spent distance and half diagonal, and the
-    poses at the last step's end (x, y, heading rows)."""
+class _Told:
+    """A monitor's state in plain lists, for the steps judged in Python: the poses (x, y, heading rows),
+    each vehicle's spent distance and half diagonal; the listed pairs (``i`` < ``j``, in order), what
+    each pair's two vehicles must have spent before it is looked at again, and per vehicle its pairs."""
 
-    __slots__ = ("due", "pairs", "poses", "radius", "spent")
+    __slots__ = ("due", "i", "j", "monitor", "pairs_of", "poses", "radius", "spent")
 
-    def __init__(self, radius: list[float]) -> None:
-        count = len(radius)
-        self.pairs = [(i, j) for i in range(count) for j in range(i + 1, count)]
-        self.due = [-math.inf] * len(self.pairs)
-        self.spent = [0.0] * count
-        self.radius = radius
-        self.poses: list[list[float]] = []
+    def __init__(self, monitor: ContactMonitor, i: list[int], j: list[int], due: list[float]) -> None:
+        assert monitor._poses is not None
+        self.monitor = monitor
+        self.poses: list[list[float]] = monitor._poses.tolist()
+        self.spent: list[float] = monitor._spent.tolist()
+        self.radius: list[float] = monitor._radii
+        self.i, self.j, self.due = i, j, due
+        self.pairs_of: list[list[int]] = [[] for _ in monitor.ids]
+        for k, (p, q) in enumerate(zip(i, j, strict=True)):
+            self.pairs_of[p].append(k)
+            self.pairs_of[q].append(k)
+
+    def flush(self) -> None:
+        """Bring the monitor's arrays up to date from these lists."""
+        monitor = self.monitor
+        monitor._poses = np.array(self.poses, dtype=np.float64)
+        monitor._spent = np.array(self.spent, dtype=np.float64)
+        if monitor._listed is not None:
+            monitor._listed.due = np.array(self.due, dtype=np.float64)
 
 
 class _Listed:

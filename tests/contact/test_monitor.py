@@ -271,9 +271,12 @@ def test_a_pair_drawing_apart_after_its_closest_approach_is_looked_at_again_only
     assert monitor.looked - away >= 5  # closing in from 0.30 to 0.25: every step beats the record
 
 
-def _walk(monitor: ContactMonitor, seed: int, count: int, told_what_moved: bool = False) -> list[list[object]]:
-    """A seeded random walk of ``count`` vehicles, bumping into each other; each step's fresh contacts
-    (``told_what_moved``: the monitor is given only the moved vehicles' poses, as the loop gives a few)."""
+def _walk(
+    monitor: ContactMonitor, seed: int, count: int, told_what_moved: bool = False, moving: float = 0.7
+) -> list[list[object]]:
+    """A seeded random walk of ``count`` vehicles, bumping into each other, each moving in a step with
+    probability ``moving``; each step's fresh contacts (``told_what_moved``: the monitor is given only the
+    moved vehicles' poses, as the loop gives them)."""
     rng = np.random.default_rng(seed)
     side = 2.0 + 0.4 * count  # metres square: they stay in it (pressed against its walls)
     x, y = rng.uniform(0, side, count), rng.uniform(0, side, count)
@@ -281,7 +284,7 @@ def _walk(monitor: ContactMonitor, seed: int, count: int, told_what_moved: bool 
     found: list[list[object]] = [list(monitor.begin(x, y, heading))]
     speed = rng.uniform(0, 2.0, count)
     for k in range(300):
-        moved = rng.uniform(size=count) < 0.7
+        moved = rng.uniform(size=count) < moving
         turn = rng.normal(0, 0.3, count) * moved
         heading = np.remainder(heading + turn + math.pi, 2 * math.pi) - math.pi  # wrapping round at times
         x = np.clip(x + np.where(moved, speed * 0.1 * np.cos(heading), 0.0), 0.0, side)
@@ -308,4 +311,21 @@ def test_a_fleet_of_a_few_judged_in_plain_python_gives_what_the_arrays_give(coun
         assert _walk(told, seed, count, told_what_moved=True) == expected  # as the loop tells a few
         assert few.report() == told.report() == arrays.report()
         contacts += len(few.report().contacts)
+    assert contacts > 0
+
+
+@pytest.mark.parametrize(("count", "moving"), [(20, 0.2), (40, 0.1), (40, 0.4), (80, 0.3), (80, 0.7)])
+def test_a_fleet_told_what_moved_gives_what_the_arrays_give(count: int, moving: float) -> None:
+    """Told only what moved, a larger fleet is judged in plain Python while few of it move, and in arrays
+    otherwise (around 40 %, from one step to the next): the same contacts step by step, and the same
+    report, as the arrays give it every step."""
+    sizes = np.random.default_rng(count).uniform(0.5, 1.5, (2, count)).tolist()
+    contacts = 0
+    for seed in range(2):
+        told, arrays = (ContactMonitor(list(range(1, count + 1)), *sizes) for _ in range(2))
+        assert not told.few
+        expected = _walk(arrays, seed, count, moving=moving)
+        assert _walk(told, seed, count, told_what_moved=True, moving=moving) == expected
+        assert told.report() == arrays.report()
+        contacts += len(told.report().contacts)
     assert contacts > 0
