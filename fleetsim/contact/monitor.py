@@ -44,7 +44,7 @@ scenarios the two differ by millimetres.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, replace
 from itertools import chain
 from typing import Any
@@ -186,11 +186,7 @@ class ContactMonitor:
     def begin(self, x: Floats, y: Floats, heading: Floats, time: float = 0.0) -> list[Contact]:
         """The poses at the start: footprints that overlap already are contacts from ``time``."""
         self._poses = poses = np.array((x, y, heading), dtype=np.float64)
-        self._told = None
-        if self._few:  # every pair listed, for good
-            count = len(self.ids)
-            pairs = [(p, q) for p in range(count) for q in range(p + 1, count)]
-            self._told = _Told(self, [p for p, _ in pairs], [q for _, q in pairs], [-math.inf] * len(pairs))
+        self._told = self._tell() if self._few else None  # (a few: every pair listed, for good)
         i, j = self._candidates(poses, 0.0)
         table = np.vstack((poses, self._sizes))  # per vehicle: x, y, heading, half sizes, radius
         fresh = []
@@ -257,10 +253,10 @@ class ContactMonitor:
     ) -> list[Contact]:
         """:meth:`step`, told only which vehicles moved (their indices) and their poses (x, y,
         heading) at the step's end; the others stand where they were. The same contacts and report as
-        :meth:`step`. While few vehicles move (at most :data:`_TOLD` per cent of the fleet, or any number
-        in a fleet of a few) the step is judged in plain Python, in proportion to what moved; else in arrays."""
+        :meth:`step`. While few vehicles move (at most :data:`_TOLD`, or any number in a fleet of a few)
+        the step is judged in plain Python, in proportion to what moved; else in arrays."""
         assert self._poses is not None, "begin() first"
-        if self._few or 100 * len(moved) <= _TOLD * len(self.ids):
+        if self._few or len(moved) <= _TOLD:
             return self._step_told(t0, t1, moved, poses)
         self._flush()
         end = self._poses.copy()
@@ -273,23 +269,25 @@ class ContactMonitor:
     def _step_told(
         self, t0: float, t1: float, moved: list[int], poses: list[tuple[float, float, float]]
     ) -> list[Contact]:
-        """The step in plain Python: the moved vehicles' poses and spent distances brought up to date, as
-        :meth:`step` does in arrays (the centre's shift, plus the turn times the half diagonal), and the
-        listed pairs of a moved vehicle looked at when they are due, in the pairs' order. What a pair adds
-        to the report is the same either way: a pair is looked at only when it could add something, and
-        looking at one that could not adds nothing."""
+        """The step in plain Python (:class:`_Told`): the moved vehicles' poses and spent distances brought
+        up to date as :meth:`step` does in arrays (the centre's shift, plus the turn times the half
+        diagonal), and the pairs of the moved vehicles that are due looked at, in the pairs' order: the
+        pairs :meth:`step` looks at. What a pair adds to the report does not depend on how often it is
+        looked at beyond that rule, so the report is the same either way."""
         if not moved:  # nothing moved: no distance changed
             return []
         told = self._told
         if told is None:
             told = self._told = self._tell()
         xs, ys, hs = told.poses
-        spent, radius = told.spent, told.radius
+        spent, radius, cx, cy = told.spent, told.radius, told.cx, told.cy
         # The moved vehicles' poses at the step's start, and their spins (a standing vehicle's is 0.0, as
-        # step() works it out).
+        # step() works it out); those that drifted so far from where their pairs were listed that a pair
+        # from outside could have come in.
         starts: dict[int, tuple[float, float, float]] = {}
         spins: dict[int, float] = {}
-        travel = 0.0
+        travel, skin = 0.0, told.skin
+        drifted: list[int] = []
         for v, (x, y, h) in zip(moved, poses, strict=True):
             x0, y0, h0 = starts[v] = (xs[v], ys[v], hs[v])
             xs[v], ys[v], hs[v] = x, y, h
@@ -298,43 +296,43 @@ class ContactMonitor:
             spent[v] += shift + spin
             if shift > travel:
                 travel = shift
+            if shift + math.hypot(x - cx[v], y - cy[v]) > skin:
+                drifted.append(v)
         if not self._few:
-            listed = self._listed
-            if listed is not None:
-                listed.travelled += travel
-            if listed is None or travel + listed.travelled > listed.skin:  # (else no vehicle drifted too far)
+            if self._listed is None or travel > skin:  # listed anew, wider (as step() does)
                 told.flush()
                 assert self._poses is not None
-                if self._drifted(self._poses, travel) is not listed:  # listed anew
-                    told = self._told = self._tell()
-        due, firsts_of, seconds_of, pairs_of = told.due, told.i, told.j, told.pairs_of
-        looked = [
-            k
-            for k in sorted({k for v in moved for k in pairs_of[v]})
-            if due[k] <= spent[firsts_of[k]] + spent[seconds_of[k]]
-        ]
+                self._drifted(self._poses, travel)
+                told = self._told = self._tell()
+            elif drifted:
+                told.list_again(drifted)
+        looked = told.due(moved)
         if not looked:
             return []
         self.looked += len(looked)
-        firsts = [firsts_of[k] for k in looked]
-        seconds = [seconds_of[k] for k in looked]
+        firsts = [p for p, _ in looked]
+        seconds = [q for _, q in looked]
         both = firsts + seconds
         ends = [[xs[v], ys[v], hs[v]] for v in both]
         begun = [list(starts[v]) if v in starts else [xs[v], ys[v], hs[v]] for v in both]
         fresh: list[Contact] = []
         slack = self._look(t0, t1, firsts, seconds, ends, begun, [spins.get(v, 0.0) for v in both], fresh)
-        for k, p, q, more in zip(looked, firsts, seconds, slack, strict=True):
-            due[k] = (spent[p] + spent[q]) + more
+        told.looked(looked, slack)
         return fresh
 
     def _tell(self) -> _Told:
         """The state in plain lists, to be judged in Python: the poses, spent distances and listed pairs (the
         arrays are stale until :meth:`_flush`)."""
         assert self._poses is not None
+        count = len(self.ids)
+        if self._few:  # every pair, for good
+            pairs = [(p, q, -math.inf) for p in range(count) for q in range(p + 1, count)]
+            return _Told(self, pairs, None, math.inf)
         listed = self._listed
         if listed is None:
-            return _Told(self, [], [], [])
-        return _Told(self, listed.i.tolist(), listed.j.tolist(), listed.due.tolist())
+            return _Told(self, [], None, -math.inf)  # (listed at the first step)
+        pairs = list(zip(listed.i.tolist(), listed.j.tolist(), listed.due.tolist(), strict=True))
+        return _Told(self, pairs, listed.centres, listed.skin)
 
     def _flush(self) -> None:
         """Bring the arrays up to date from the lists of a step judged in Python, and judge in arrays on."""
@@ -602,36 +600,140 @@ class ContactMonitor:
 # crowded, 16 against 33 spread out; 16 vehicles 95 against 104 and 35 against 50; 20 vehicles 134
 # against 133 crowded.
 _FEW = 16
-# A larger fleet's step is judged in plain Python while at most this share of it (per cent) moved.
+# A larger fleet's step is judged in plain Python while at most this many vehicles moved in it: about
+# where the arrays' fixed cost per step (some twenty operations) meets plain Python's cost per moved
+# vehicle (replayed steps of runs of 100 vehicles: about 31 µs a step against 0.84 µs a moved vehicle,
+# the pairs looked at apart; in a run, with the rest of the harness and the planner between the steps,
+# the arrays' fixed cost is the higher).
 _TOLD = 40
 
 
 class _Told:
-    """A monitor's state in plain lists, for the steps judged in Python: the poses (x, y, heading rows),
-    each vehicle's spent distance and half diagonal; the listed pairs (``i`` < ``j``, in order), what
-    each pair's two vehicles must have spent before it is looked at again, and per vehicle its pairs."""
+    """A monitor's state in plain lists, for the steps judged in Python (:meth:`ContactMonitor._step_told`):
+    the poses (x, y, heading rows), each vehicle's spent distance and half diagonal, the listed pairs and,
+    per vehicle, where its pairs were listed (its centre then).
 
-    __slots__ = ("due", "i", "j", "monitor", "pairs_of", "poses", "radius", "spent")
+    It is kept in proportion to what moved. A pair is listed with what its two vehicles must have spent
+    before it is due (as :class:`_Listed`), and that is split into a share for each: while neither has
+    spent its share the two together have not spent it, so only a moved vehicle that spent its own (its
+    ``low``, the least of its shares) has its pairs looked at, and a pair that is not due yet has what is
+    left split again. A vehicle whose centre drifted so far from where its pairs were listed that a pair
+    from outside could have come in (its drift plus its step's travel beyond the skin) is listed again
+    alone, against the others' centres then: a pair is listed while the two centres its vehicles were
+    listed at are within the broad phase's distance, whatever the others do.
+    """
 
-    def __init__(self, monitor: ContactMonitor, i: list[int], j: list[int], due: list[float]) -> None:
+    __slots__ = ("cx", "cy", "low", "monitor", "pairs", "poses", "radius", "size", "skin", "spent")
+
+    # A share is split this much short (relative), so that a pair whose two vehicles have not spent their
+    # shares is never due in floating point either: at worst a pair is found not due yet once more.
+    _SHORT = 1e-9
+
+    def __init__(
+        self,
+        monitor: ContactMonitor,
+        pairs: Iterable[tuple[int, int, float]],
+        centres: Floats | None,
+        skin: float,
+    ) -> None:
         assert monitor._poses is not None
+        count = len(monitor.ids)
         self.monitor = monitor
         self.poses: list[list[float]] = monitor._poses.tolist()
         self.spent: list[float] = monitor._spent.tolist()
         self.radius: list[float] = monitor._radii
-        self.i, self.j, self.due = i, j, due
-        self.pairs_of: list[list[int]] = [[] for _ in monitor.ids]
-        for k, (p, q) in enumerate(zip(i, j, strict=True)):
-            self.pairs_of[p].append(k)
-            self.pairs_of[q].append(k)
+        # Where each vehicle's pairs were listed (none: every pair is listed, or none yet), and how far it
+        # may drift from there.
+        self.skin = skin
+        self.size = monitor._largest + monitor.reach + 2.0 * skin + TOUCH
+        self.cx: list[float] = [0.0] * count if centres is None else centres[0].tolist()
+        self.cy: list[float] = [0.0] * count if centres is None else centres[1].tolist()
+        # Per vehicle, its listed pairs by the other vehicle: [due, the first's share, the second's share]
+        # (shared by the two), and the least of its shares.
+        self.pairs: list[dict[int, list[float]]] = [{} for _ in range(count)]
+        self.low = [math.inf] * count
+        spent, low = self.spent, self.low
+        for p, q, due in pairs:
+            self.pairs[p][q] = self.pairs[q][p] = pair = [due, 0.0, 0.0]
+            self._split(pair, p, q, due - spent[p] - spent[q])
+            low[p], low[q] = min(low[p], pair[1]), min(low[q], pair[2])
+
+    def _split(self, pair: list[float], p: int, q: int, left: float) -> None:
+        """Share what the pair ``(p, q)``'s two vehicles have ``left`` to spend before it is due."""
+        half = 0.5 * left - self._SHORT * (1.0 + abs(pair[0]))
+        pair[1], pair[2] = self.spent[p] + half, self.spent[q] + half
+
+    def due(self, moved: list[int]) -> list[tuple[int, int]]:
+        """The pairs (p < q, in order) due after a step in which ``moved`` moved: those of a moved vehicle
+        whose two vehicles have spent what it was listed with (as :meth:`ContactMonitor.step` finds them)."""
+        spent, low, pairs = self.spent, self.low, self.pairs
+        found: set[tuple[int, int]] = set()
+        for v in moved:
+            spent_v = spent[v]
+            if spent_v < low[v]:
+                continue  # none of its pairs can be due: it spent no share of theirs
+            least = math.inf
+            for w, pair in pairs[v].items():
+                p, q = (v, w) if v < w else (w, v)
+                if pair[1 if v < w else 2] <= spent_v:
+                    if pair[0] <= spent[p] + spent[q]:
+                        found.add((p, q))
+                        continue  # (its new shares are made when it has been looked at)
+                    self._split(pair, p, q, pair[0] - spent[p] - spent[q])
+                    other = pair[2] if v < w else pair[1]
+                    if other < low[w]:
+                        low[w] = other
+                share = pair[1 if v < w else 2]
+                if share < least:
+                    least = share
+            low[v] = least
+        return sorted(found)
+
+    def looked(self, looked: list[tuple[int, int]], slack: list[float]) -> None:
+        """The pairs ``looked`` at are due again when their two vehicles have spent ``slack`` more."""
+        spent, low, pairs = self.spent, self.low, self.pairs
+        for (p, q), more in zip(looked, slack, strict=True):
+            pair = pairs[p][q]
+            pair[0] = (spent[p] + spent[q]) + more
+            self._split(pair, p, q, more)
+            low[p], low[q] = min(low[p], pair[1]), min(low[q], pair[2])
+
+    def list_again(self, drifted: list[int]) -> None:
+        """List the pairs of the vehicles that ``drifted`` anew, from where they are (a pair found anew is
+        due at once, as one listed anew by the arrays; one no longer near is dropped)."""
+        xs, ys = self.poses[0], self.poses[1]
+        cx, cy, pairs, low = self.cx, self.cy, self.pairs, self.low
+        for v in drifted:
+            cx[v], cy[v] = xs[v], ys[v]
+        centres = np.array((cx, cy))
+        for v in drifted:
+            near = np.hypot(centres[0] - cx[v], centres[1] - cy[v]) <= self.size
+            near[v] = False
+            now = set(near.nonzero()[0].tolist())
+            mine = pairs[v]
+            for w in [w for w in mine if w not in now]:
+                del mine[w], pairs[w][v]
+            for w in now:
+                if w not in mine:
+                    mine[w] = pairs[w][v] = [-math.inf, -math.inf, -math.inf]
+                    low[v] = low[w] = -math.inf
 
     def flush(self) -> None:
-        """Bring the monitor's arrays up to date from these lists."""
+        """Bring the monitor's arrays up to date from these lists (the pairs listed as they are here)."""
         monitor = self.monitor
         monitor._poses = np.array(self.poses, dtype=np.float64)
         monitor._spent = np.array(self.spent, dtype=np.float64)
-        if monitor._listed is not None:
-            monitor._listed.due = np.array(self.due, dtype=np.float64)
+        if monitor._few or monitor._listed is None:
+            return
+        count = len(self.pairs)
+        listed = sorted(
+            (p * count + q, pair[0]) for p, mine in enumerate(self.pairs) for q, pair in mine.items() if p < q
+        )
+        keys = np.array([key for key, _ in listed], dtype=np.intp)
+        due = np.array([due for _, due in listed], dtype=np.float64)
+        monitor._listed = _Listed(keys, due, np.array((self.cx, self.cy), dtype=np.float64), self.skin, count)
+        # Each vehicle drifted less than the skin from its own centre: the arrays look at the drifts next.
+        monitor._listed.travelled = self.skin
 
 
 class _Listed:

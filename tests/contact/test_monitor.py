@@ -211,8 +211,11 @@ def test_the_broad_phase_misses_no_pair_that_could_matter(area: float) -> None:
     assert len(i) == len(found) and all(p < q for p, q in found)  # each pair once, in order
 
 
-@pytest.mark.parametrize("count", [40, 16])  # the arrays, and a fleet of a few judged in plain Python
-def test_pairs_left_unlooked_at_could_not_have_mattered(count: int) -> None:
+@pytest.mark.parametrize(
+    ("count", "told"),
+    [(40, False), (16, False), (60, True)],  # the arrays; a few, and a fleet told what moved, in plain Python
+)
+def test_pairs_left_unlooked_at_could_not_have_mattered(count: int, told: bool) -> None:
     """The monitor keeps its candidate pairs over steps and looks at a pair again only when its vehicles
     have moved enough to close the gap to what counts. Against every pair's exact distance at every step's
     end, over a random walk of a crowd (some standing, some turning, some driving): no contact, near miss
@@ -229,11 +232,17 @@ def test_pairs_left_unlooked_at_could_not_have_mattered(count: int) -> None:
     closest: dict[tuple[int, int], float] = {}
     touched: set[tuple[int, int]] = set()
     for k in range(steps):
-        heading = heading + rng.normal(0, 0.2, count) * (rng.uniform(size=count) < 0.5)
+        turn = rng.normal(0, 0.2, count)
+        turning = rng.uniform(size=count) < 0.5
+        heading = heading + turn * turning
         moved = (speed > 0) | (rng.uniform(size=count) < 0.1)
         x = x + speed * dt * np.cos(heading)
         y = y + speed * dt * np.sin(heading)
-        monitor.step(k * dt, (k + 1) * dt, x, y, heading, moved)
+        if told:  # (told of every vehicle whose pose changed, as the loop tells it)
+            at = (moved | turning).nonzero()[0].tolist()
+            monitor.step_moved(k * dt, (k + 1) * dt, at, [(x[v], y[v], heading[v]) for v in at])
+        else:
+            monitor.step(k * dt, (k + 1) * dt, x, y, heading, moved)
         shapes = [(x[n], y[n], heading[n], lengths[n] / 2, widths[n] / 2) for n in range(count)]
         for p in range(count):
             for q in range(p + 1, count):
@@ -314,10 +323,10 @@ def test_a_fleet_of_a_few_judged_in_plain_python_gives_what_the_arrays_give(coun
     assert contacts > 0
 
 
-@pytest.mark.parametrize(("count", "moving"), [(20, 0.2), (40, 0.1), (40, 0.4), (80, 0.3), (80, 0.7)])
+@pytest.mark.parametrize(("count", "moving"), [(20, 0.2), (40, 0.6), (100, 0.1), (100, 0.4), (80, 0.8)])
 def test_a_fleet_told_what_moved_gives_what_the_arrays_give(count: int, moving: float) -> None:
     """Told only what moved, a larger fleet is judged in plain Python while few of it move, and in arrays
-    otherwise (around 40 %, from one step to the next): the same contacts step by step, and the same
+    otherwise (around 40 vehicles, from one step to the next): the same contacts step by step, and the same
     report, as the arrays give it every step."""
     sizes = np.random.default_rng(count).uniform(0.5, 1.5, (2, count)).tolist()
     contacts = 0
