@@ -313,7 +313,7 @@ def test_a_fleet_of_a_few_judged_in_plain_python_gives_what_the_arrays_give(coun
     contacts = 0
     for seed in range(3):
         few, told, arrays = (ContactMonitor(list(range(1, count + 1)), *sizes) for _ in range(3))
-        arrays._few = None  # judged in arrays, as a larger fleet is
+        arrays._few = False  # judged in arrays, as a larger fleet is
         assert few.few and told.few and not arrays.few
         expected = _walk(arrays, seed, count)
         assert _walk(few, seed, count) == expected
