@@ -627,7 +627,7 @@ class _Told:
     listed at are within the broad phase's distance, whatever the others do.
     """
 
-    __slots__ = ("cx", "cy", "low", "monitor", "pairs", "poses", "radius", "size", "skin", "spent")
+    __slots__ = ("cx", "cy", "every", "low", "monitor", "pairs", "poses", "radius", "size", "skin", "spent")
 
     # A share is split this much short (relative), so that a pair whose two vehicles have not spent their
     # shares is never due in floating point either: at worst a pair is found not due yet once more.
@@ -656,9 +656,15 @@ class _Told:
         # (shared by the two), and the least of its shares.
         self.pairs: list[dict[int, list[float]]] = [{} for _ in range(count)]
         self.low = [math.inf] * count
+        # A fleet of a few, every pair listed for good: its pairs in order, each looked at in turn (for so
+        # few, cheaper than the shares).
+        self.every: list[tuple[int, int, list[float]]] | None = [] if centres is None and skin == math.inf else None
         spent, low = self.spent, self.low
         for p, q, due in pairs:
             self.pairs[p][q] = self.pairs[q][p] = pair = [due, 0.0, 0.0]
+            if self.every is not None:
+                self.every.append((p, q, pair))
+                continue
             self._split(pair, p, q, due - spent[p] - spent[q])
             low[p], low[q] = min(low[p], pair[1]), min(low[q], pair[2])
 
@@ -671,6 +677,11 @@ class _Told:
         """The pairs (p < q, in order) due after a step in which ``moved`` moved: those of a moved vehicle
         whose two vehicles have spent what it was listed with (as :meth:`ContactMonitor.step` finds them)."""
         spent, low, pairs = self.spent, self.low, self.pairs
+        if self.every is not None:
+            stirred = set(moved)
+            return [
+                (p, q) for p, q, pair in self.every if pair[0] <= spent[p] + spent[q] and (p in stirred or q in stirred)
+            ]
         found: set[tuple[int, int]] = set()
         for v in moved:
             spent_v = spent[v]
@@ -699,8 +710,9 @@ class _Told:
         for (p, q), more in zip(looked, slack, strict=True):
             pair = pairs[p][q]
             pair[0] = (spent[p] + spent[q]) + more
-            self._split(pair, p, q, more)
-            low[p], low[q] = min(low[p], pair[1]), min(low[q], pair[2])
+            if self.every is None:
+                self._split(pair, p, q, more)
+                low[p], low[q] = min(low[p], pair[1]), min(low[q], pair[2])
 
     def list_again(self, drifted: list[int]) -> None:
         """List the pairs of the vehicles that ``drifted`` anew, from where they are (a pair found anew is
