@@ -12,7 +12,7 @@ from collections.abc import Callable, Mapping, Sequence
 from collections.abc import Set as AbstractSet
 from dataclasses import dataclass, field, replace
 from enum import Enum
-from itertools import pairwise
+from itertools import islice, pairwise
 
 from fleetsim.enums import JointKind, Progress, Traverse, TurnCapability
 from fleetsim.layout.continuations import progresses_after
@@ -157,13 +157,17 @@ class DriveMemo:
     illegal-progress-change checks, on one layout: those checks judge each leg and each pair of legs
     alone, so a plan made only of drives and pairs passed before passes them again, and is not walked
     through again (a planner that fixes one more leg of a long route sends the same route again and
-    again). A plan with anything new is checked in full, as ever, and what passes is remembered."""
+    again). A plan with anything new is checked in full, as ever, and what passes is remembered.
 
-    __slots__ = ("_legs", "_pairs")
+    The last plan of each vehicle that passed is kept too: a plan whose drives are the end of its drives
+    (the same route, legs fixed or driven past since) passes without its keys being made at all."""
+
+    __slots__ = ("_last", "_legs", "_pairs")
 
     def __init__(self) -> None:
         self._legs: set[tuple[int, Traverse]] = set()
         self._pairs: set[tuple[TurnCapability, int, Traverse, Progress, int, Traverse, Progress]] = set()
+        self._last: dict[tuple[int, TurnCapability], tuple[FleetLeg, ...]] = {}
 
     def _keys(
         self, plan: FleetPlan, capability: TurnCapability
@@ -179,13 +183,33 @@ class DriveMemo:
         return drives, pairs
 
     def passed(self, plan: FleetPlan, capability: TurnCapability) -> bool:
+        key = (plan.vehicle_id, capability)
+        last = self._last.get(key)
+        if last is not None and _ends(last, plan.legs):
+            return True  # its drives and pairs are among those of a plan that passed
         drives, pairs = self._keys(plan, capability)
-        return self._legs.issuperset(drives) and self._pairs.issuperset(pairs)
+        if self._legs.issuperset(drives) and self._pairs.issuperset(pairs):
+            self._last[key] = plan.legs
+            return True
+        return False
 
     def learn(self, plan: FleetPlan, capability: TurnCapability) -> None:
         drives, pairs = self._keys(plan, capability)
         self._legs.update(drives)
         self._pairs.update(pairs)
+        self._last[(plan.vehicle_id, capability)] = plan.legs
+
+
+def _ends(before: Sequence[FleetLeg], legs: Sequence[FleetLeg]) -> bool:
+    """``legs`` drive as the end of ``before`` does, leg by leg (segment, traverse, progress): their drives
+    and pairs of consecutive drives are among ``before``'s. Legs unchanged are mostly the same objects."""
+    skip = len(before) - len(legs)
+    if skip < 0:
+        return False
+    for a, b in zip(islice(before, skip, None), legs, strict=True):
+        if a is not b and (a.segment != b.segment or a.traverse != b.traverse or a.progress != b.progress):
+            return False
+    return True
 
 
 def _reject(code: RejectionCode, plan: FleetPlan, index: int | None, message: str) -> Rejection:

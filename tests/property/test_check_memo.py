@@ -73,3 +73,45 @@ def test_a_plan_of_remembered_drives_with_one_new_pair_is_still_judged_in_full()
     broken = FleetPlan(2, (*legal.legs, back))
     assert not memo.passed(broken, TurnCapability.CURVE)
     assert _verdict(broken, memo) == _verdict(broken, None) is not None
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(walks(), min_size=1, max_size=10), st.data())
+def test_a_plan_that_ends_as_the_last_one_passed_gets_the_same_verdict(
+    plans: list[FleetPlan], data: st.DataObject
+) -> None:
+    """The memory keeps each vehicle's last plan that passed: the same route again, with legs fixed or
+    driven past, or changed at one leg (another drive, backing instead of nose first), gets the verdict
+    the checks give without any memory."""
+    memo = DriveMemo()
+    for plan in plans:
+        assert _verdict(plan, memo) == _verdict(plan, None)
+        legs = plan.legs
+        skip = data.draw(st.integers(0, len(legs) - 1))
+        fixed = data.draw(st.integers(0, len(legs)))
+        again = tuple(replace(leg, fixed=k < fixed) if k != 0 else leg for k, leg in enumerate(legs[skip:]))
+        variants = [FleetPlan(plan.vehicle_id, (legs[0], *again[1:]) if skip == 0 else again)]
+        at = data.draw(st.integers(0, len(legs) - 1))
+        changed = replace(
+            legs[at], progress=Progress.REVERSE if legs[at].progress is Progress.FORWARD else Progress.FORWARD
+        )
+        variants.append(FleetPlan(plan.vehicle_id, (*legs[:at], changed, *legs[at + 1 :])))
+        for variant in variants:
+            assert _verdict(variant, memo) == _verdict(variant, None)
+
+
+def test_the_last_plan_that_passed_lets_the_same_route_pass_without_its_drives() -> None:
+    first = START[2]
+    onward = sorted(LAYOUT.successors(first.segment, first.traverse))
+    segment, traverse, _joint = next(step for step in onward if step[2] is JointKind.SAME)
+    legal = FleetPlan(2, (first, FleetLeg(segment, traverse, Progress.FORWARD, fixed=False)))
+    memo = DriveMemo()
+    assert _verdict(legal, memo) is None
+    memo._legs.clear()  # (forgotten drives: only the last plan can say it passed)
+    memo._pairs.clear()
+    fixed = FleetPlan(2, (first, replace(legal.legs[1], fixed=True)))
+    assert memo.passed(fixed, TurnCapability.CURVE)  # the same drives, a leg fixed
+    assert memo.passed(FleetPlan(2, legal.legs[1:]), TurnCapability.CURVE)  # the first driven past
+    assert not memo.passed(legal, TurnCapability.IN_PLACE)  # another capability: its own last plan
+    backing = FleetPlan(2, (first, replace(legal.legs[1], progress=Progress.REVERSE)))
+    assert not memo.passed(backing, TurnCapability.CURVE)
