@@ -105,6 +105,8 @@ def _route_changes(before: FleetPlan | None, after: FleetPlan) -> set[int]:
     if len(new) == len(old) - 1 and all(a is b for a, b in zip(old[1:], new, strict=True)):
         left = old[0].segment  # the first leg driven past: the commonest change
         return set() if any(leg.segment == left for leg in new) else {left}
+    if len(new) == len(old) and all(a is b or a.segment == b.segment for a, b in zip(old, new, strict=True)):
+        return set()  # the same segments in the same order: legs fixed, the next commonest change
     return {leg.segment for leg in old} ^ {leg.segment for leg in new}
 
 
