@@ -173,7 +173,6 @@ class ContactMonitor:
         self._limit = self.reach  # how close two footprints must come for their distance to count now
         self._sizes = np.array((self.half_length, self.half_width, self.radius))  # per vehicle
         self._size_rows: list[list[float]] = self._sizes.T.tolist()  # the same, by vehicle
-        self._radii: list[float] = self.radius.tolist()  # the half diagonals, by vehicle
         self._poses: Floats | None = None  # at the last step's end: x, y, heading (3, n)
         self._listed: _Listed | None = None  # the candidate pairs
         # Per vehicle, metres: the farthest any point of its footprint can have moved since the start.
@@ -645,7 +644,7 @@ class _Told:
         self.monitor = monitor
         self.poses: list[list[float]] = monitor._poses.tolist()
         self.spent: list[float] = monitor._spent.tolist()
-        self.radius: list[float] = monitor._radii
+        self.radius: list[float] = monitor.radius.tolist()
         # Where each vehicle's pairs were listed (none: every pair is listed, or none yet), and how far it
         # may drift from there.
         self.skin = skin
@@ -658,7 +657,7 @@ class _Told:
         self.low = [math.inf] * count
         # A fleet of a few, every pair listed for good: its pairs in order, each looked at in turn (for so
         # few, cheaper than the shares).
-        self.every: list[tuple[int, int, list[float]]] | None = [] if centres is None and skin == math.inf else None
+        self.every: list[tuple[int, int, list[float]]] | None = [] if monitor._few else None
         spent, low = self.spent, self.low
         for p, q, due in pairs:
             self.pairs[p][q] = self.pairs[q][p] = pair = [due, 0.0, 0.0]

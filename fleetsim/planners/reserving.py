@@ -595,8 +595,12 @@ class ReservingPlanner:
             for leg in next_legs:  # (a loop: asked on every call, and seldom true)
                 holding = fixed_near.get(leg.segment)
                 if holding and not idle.isdisjoint(holding):
-                    holders = [index.holders(vehicle_id, near.segment) for near in next_legs]
-                    ahead = [other for held in holders for other in held if other in idle]
+                    ahead = [
+                        other
+                        for near in next_legs
+                        for other in index.holders(vehicle_id, near.segment)
+                        if other in idle
+                    ]
                     break
         near = self._near(plan, layout) if ahead else frozenset()
         to_move: list[tuple[int, AbstractSet[int]]] = [(other, near) for other in ahead]

@@ -61,11 +61,17 @@ def test_the_start_plan_passes() -> None:
     assert _verdict(initial_plan(vehicle), DriveMemo()) is None
 
 
-def test_a_plan_of_remembered_drives_with_one_new_pair_is_still_judged_in_full() -> None:
+def _legal_two_legs() -> FleetPlan:
+    """The tugger's start leg and a legal one after it, straight on."""
     first = START[2]
     onward = sorted(LAYOUT.successors(first.segment, first.traverse))
     segment, traverse, _joint = next(step for step in onward if step[2] is JointKind.SAME)
-    legal = FleetPlan(2, (first, FleetLeg(segment, traverse, Progress.FORWARD, fixed=False)))
+    return FleetPlan(2, (first, FleetLeg(segment, traverse, Progress.FORWARD, fixed=False)))
+
+
+def test_a_plan_of_remembered_drives_with_one_new_pair_is_still_judged_in_full() -> None:
+    legal = _legal_two_legs()
+    first = legal.legs[0]
     memo = DriveMemo()
     assert _verdict(legal, memo) is None and memo.passed(legal, TurnCapability.CURVE)
     # The same drives, then back onto the first leg's segment the other way: not connected.
@@ -89,8 +95,9 @@ def test_a_plan_that_ends_as_the_last_one_passed_gets_the_same_verdict(
         legs = plan.legs
         skip = data.draw(st.integers(0, len(legs) - 1))
         fixed = data.draw(st.integers(0, len(legs)))
-        again = tuple(replace(leg, fixed=k < fixed) if k != 0 else leg for k, leg in enumerate(legs[skip:]))
-        variants = [FleetPlan(plan.vehicle_id, (legs[0], *again[1:]) if skip == 0 else again)]
+        variants = [
+            FleetPlan(plan.vehicle_id, tuple(replace(leg, fixed=k < fixed) for k, leg in enumerate(legs[skip:])))
+        ]
         at = data.draw(st.integers(0, len(legs) - 1))
         changed = replace(
             legs[at], progress=Progress.REVERSE if legs[at].progress is Progress.FORWARD else Progress.FORWARD
@@ -101,10 +108,8 @@ def test_a_plan_that_ends_as_the_last_one_passed_gets_the_same_verdict(
 
 
 def test_the_last_plan_that_passed_lets_the_same_route_pass_without_its_drives() -> None:
-    first = START[2]
-    onward = sorted(LAYOUT.successors(first.segment, first.traverse))
-    segment, traverse, _joint = next(step for step in onward if step[2] is JointKind.SAME)
-    legal = FleetPlan(2, (first, FleetLeg(segment, traverse, Progress.FORWARD, fixed=False)))
+    legal = _legal_two_legs()
+    first = legal.legs[0]
     memo = DriveMemo()
     assert _verdict(legal, memo) is None
     memo._legs.clear()  # (forgotten drives: only the last plan can say it passed)
